@@ -1,0 +1,9 @@
+//! imu-attest: dynamic certification of strapdown-IMU sensor blocks on three-axis motion-simulator
+//! stands.
+//!
+//! The core modules (`run`, `stand`, `sim`, `spectral`, `ident`, ...) are plain data in,
+//! `Result<T, Error>` out, and never depend on the GUI. Units are SI throughout (s, rad, rad/s,
+//! m/s^2, m); axes and angle conventions follow `../shared/contract.md` section 1.
+
+pub mod rng;
+pub mod cli;

@@ -5,5 +5,9 @@
 //! `Result<T, Error>` out, and never depend on the GUI. Units are SI throughout (s, rad, rad/s,
 //! m/s^2, m); axes and angle conventions follow `../shared/contract.md` section 1.
 
-pub mod rng;
 pub mod cli;
+pub mod fourier;
+pub mod output;
+pub mod rng;
+pub mod sim;
+pub mod stand;

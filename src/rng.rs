@@ -23,7 +23,10 @@ impl Rng {
             z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
             z ^ (z >> 31)
         };
-        Self { s: [next(), next(), next(), next()], spare_normal: None }
+        Self {
+            s: [next(), next(), next(), next()],
+            spare_normal: None,
+        }
     }
 
     /// An independent generator derived from this one's seed and a stream label, so that adding
@@ -35,7 +38,9 @@ impl Rng {
 
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        let result = (self.s[0].wrapping_add(self.s[3])).rotate_left(23).wrapping_add(self.s[0]);
+        let result = (self.s[0].wrapping_add(self.s[3]))
+            .rotate_left(23)
+            .wrapping_add(self.s[0]);
         let t = self.s[1] << 17;
         self.s[2] ^= self.s[0];
         self.s[3] ^= self.s[1];
@@ -97,15 +102,15 @@ mod tests {
         let mut r = Rng::new(42);
         let n = 200_000;
         let xs: Vec<f64> = (0..n).map(|_| r.normal()).collect();
-        let mean = xs.iter().sum::<f64>() / n as f64;
-        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
-        let kurt = xs.iter().map(|x| (x - mean).powi(4)).sum::<f64>() / n as f64 / (var * var);
+        let mean = xs.iter().sum::<f64>() / f64::from(n);
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / f64::from(n);
+        let kurt = xs.iter().map(|x| (x - mean).powi(4)).sum::<f64>() / f64::from(n) / (var * var);
         assert!(mean.abs() < 0.01, "mean {mean}");
         assert!((var - 1.0).abs() < 0.01, "var {var}");
         assert!((kurt - 3.0).abs() < 0.05, "kurtosis {kurt}");
         let u: Vec<f64> = (0..n).map(|_| r.uniform()).collect();
         assert!(u.iter().all(|&x| (0.0..1.0).contains(&x)));
-        let below = u.iter().filter(|&&x| x < 0.25).count() as f64 / n as f64;
+        let below = u.iter().filter(|&&x| x < 0.25).count() as f64 / f64::from(n);
         assert!((below - 0.25).abs() < 0.005);
     }
 }

@@ -1,10 +1,79 @@
-//! The command line (contract section 3). Exit status: 0 done, 2 bad input or arguments, 1 internal.
+//! The command line (contract section 3).
+//!
+//! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
+
+mod args;
+mod simulate;
 
 use std::process::ExitCode;
 
-/// Entry point of the binary.
+pub use args::Args;
+
+/// A command's failure, classified by exit status.
+#[derive(Debug)]
+pub enum CliError {
+    /// Bad arguments or bad input: exit status 2.
+    Input(String),
+    /// A failure of the program itself: exit status 1.
+    Internal(anyhow::Error),
+}
+
+impl CliError {
+    fn exit_code(&self) -> ExitCode {
+        match self {
+            CliError::Input(_) => ExitCode::from(2),
+            CliError::Internal(_) => ExitCode::from(1),
+        }
+    }
+}
+
+impl std::fmt::Display for CliError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CliError::Input(m) => f.write_str(m),
+            CliError::Internal(e) => write!(f, "internal error: {e:#}"),
+        }
+    }
+}
+
+/// Usage text.
+pub const USAGE: &str = "\
+usage:
+  imu-attest [gui] [RUN...]                       open the GUI (with these runs loaded)
+  imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
+                      [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
+";
+
+/// Entry point of the binary: runs the command named by the process arguments.
 #[must_use]
 pub fn main() -> ExitCode {
-    eprintln!("imu-attest: no command yet");
-    ExitCode::from(2)
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    match run(&argv) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("imu-attest: {e}");
+            e.exit_code()
+        }
+    }
+}
+
+/// Runs one command line (without the program name).
+///
+/// # Errors
+/// [`CliError::Input`] for bad arguments or input, [`CliError::Internal`] otherwise.
+pub fn run(argv: &[String]) -> Result<(), CliError> {
+    let (command, rest) = match argv.split_first() {
+        Some((c, rest)) if !c.starts_with('-') => (c.as_str(), rest),
+        _ => ("gui", argv),
+    };
+    match command {
+        "simulate" => simulate::run(&Args::parse(rest)?),
+        "help" | "--help" | "-h" => {
+            eprint!("{USAGE}");
+            Ok(())
+        }
+        other => Err(CliError::Input(format!(
+            "unknown command '{other}' (try 'imu-attest help')"
+        ))),
+    }
 }

@@ -1,0 +1,47 @@
+//! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
+//! [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv`
+
+use std::path::Path;
+
+use super::{Args, CliError};
+use crate::sim::effect::{Block, EffectSpec};
+use crate::sim::regime::Regime;
+use crate::sim::write::write_run;
+use crate::sim::{SimConfig, simulate};
+
+pub(super) fn run(args: &Args) -> Result<(), CliError> {
+    let regime: Regime = args
+        .required("regime")?
+        .parse()
+        .map_err(|e| CliError::Input(format!("--regime: {e}")))?;
+    let mut config = SimConfig::new(regime);
+    config.duration_s = args.parsed_or("duration", config.duration_s)?;
+    config.rate_hz = args.parsed_or("rate", config.rate_hz)?;
+    config.seed = args.parsed_or("seed", config.seed)?;
+    for spec in args.all("effect") {
+        config.effects.push(
+            spec.parse::<EffectSpec>()
+                .map_err(|e| CliError::Input(format!("--effect {spec}: {e}")))?,
+        );
+    }
+    if let Some(list) = args.get("blocks") {
+        config.blocks = list
+            .split(',')
+            .map(|name| {
+                Block::BOTH.into_iter().find(|b| b.name() == name).ok_or_else(|| {
+                    CliError::Input(format!("--blocks: unknown block '{name}' (known: gyro, accel)"))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+    }
+    let out = args.required("out")?;
+    args.reject_unknown()?;
+    if !args.positional.is_empty() {
+        return Err(CliError::Input(format!(
+            "simulate takes no positional argument, got '{}'",
+            args.positional[0]
+        )));
+    }
+    let run = simulate(&config).map_err(|e| CliError::Input(e.to_string()))?;
+    write_run(&run, Path::new(out)).map_err(|e| CliError::Input(e.to_string()))
+}

@@ -1,0 +1,92 @@
+//! Writing a simulated run as a contract run: `RUN.csv` (or `RUN.csv.gz`, gzipped when the name
+//! ends in `.gz`) plus the sidecar `RUN.json`, both atomically.
+//!
+//! Numbers are written with 7 significant digits (`%.6e`), far below every noise level of the
+//! simulation; times with microsecond resolution.
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use flate2::Compression;
+use flate2::write::GzEncoder;
+
+use super::SimulatedRun;
+use crate::output::{OutputError, write_atomic};
+
+/// The sidecar path of a run file: `cruise.csv` and `cruise.csv.gz` both give `cruise.json`.
+#[must_use]
+pub fn sidecar_path_for(run: &Path) -> PathBuf {
+    let name = run
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = name.strip_suffix(".gz").unwrap_or(&name);
+    let stem = stem.strip_suffix(".csv").unwrap_or(stem);
+    run.with_file_name(format!("{stem}.json"))
+}
+
+/// Writes the CSV (gzipped if `path` ends in `.gz`) and its sidecar.
+///
+/// # Errors
+/// [`OutputError`] when either file cannot be written; neither is then left half-written.
+pub fn write_run(run: &SimulatedRun, path: &Path) -> Result<(), OutputError> {
+    let gz = path.extension().is_some_and(|e| e == "gz");
+    write_atomic(path, |w| {
+        if gz {
+            let mut enc = GzEncoder::new(w, Compression::best());
+            write_csv(run, &mut enc)?;
+            enc.finish()?.flush()
+        } else {
+            write_csv(run, w)
+        }
+    })?;
+    let sidecar = sidecar_path_for(path);
+    write_atomic(&sidecar, |w| {
+        serde_json::to_writer_pretty(&mut *w, &run.sidecar).map_err(io::Error::other)?;
+        w.write_all(b"\n")
+    })
+}
+
+fn write_csv(run: &SimulatedRun, w: &mut impl Write) -> io::Result<()> {
+    let mut header = vec!["t", "roll", "yaw", "pitch"];
+    let mut cols: Vec<&[f64]> = run.angles.iter().map(Vec::as_slice).collect();
+    if let Some(g) = &run.gyro {
+        header.extend(["gx", "gy", "gz"]);
+        cols.extend(g.iter().map(Vec::as_slice));
+    }
+    if let Some(a) = &run.accel {
+        header.extend(["ax", "ay", "az"]);
+        cols.extend(a.iter().map(Vec::as_slice));
+    }
+    writeln!(w, "{}", header.join(","))?;
+    let mut line = String::with_capacity(16 * header.len());
+    for (n, t) in run.time_s.iter().enumerate() {
+        use std::fmt::Write as _;
+        line.clear();
+        let _ = write!(line, "{t:.6}");
+        for c in &cols {
+            let _ = write!(line, ",{:.6e}", c[n]);
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sidecar_names() {
+        assert_eq!(
+            sidecar_path_for(Path::new("a/cruise.csv")),
+            Path::new("a/cruise.json")
+        );
+        assert_eq!(
+            sidecar_path_for(Path::new("a/cruise.csv.gz")),
+            Path::new("a/cruise.json")
+        );
+        assert_eq!(sidecar_path_for(Path::new("run")), Path::new("run.json"));
+    }
+}

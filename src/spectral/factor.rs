@@ -28,7 +28,7 @@
 //! - Near-singular bins are regularised (eigenvalues clamped up to a floor, reported), and
 //!   non-convergence is reported in [`SpectralFactor`] rather than being an error.
 
-use nalgebra::{Cholesky, DMatrix, SMatrix};
+use nalgebra::{DMatrix, SMatrix};
 use num_complex::Complex64;
 
 use super::causal::{CausalError, CausalProjector};
@@ -167,7 +167,7 @@ pub fn wilson<const D: usize>(
     let input = validated(s, settings.hermitian_tolerance)?;
     let mut projector = CausalProjector::new(input.len())?;
     let (floored, floored_bins, max_loading) = apply_floor(&input, settings.eigen_floor);
-    let psi0 = Cholesky::new(mean(&floored)).ok_or(FactorError::SingularCovariance)?.l();
+    let psi0 = cholesky_lower(&mean(&floored)).ok_or(FactorError::SingularCovariance)?;
 
     let n = floored.len();
     let identity = SMatrix::<Complex64, D, D>::identity();
@@ -280,7 +280,7 @@ fn apply_floor<const D: usize>(
         .iter()
         .map(|m| {
             // Cheap test first: S - floor I positive definite means nothing to clamp.
-            if floor > 0.0 && Cholesky::new(m - shift).is_some() {
+            if floor > 0.0 && cholesky_lower(&(m - shift)).is_some() {
                 return *m;
             }
             let eig = DMatrix::from_column_slice(D, D, m.as_slice()).symmetric_eigen();
@@ -319,13 +319,33 @@ fn lower_rule<const D: usize>(m: &SMatrix<Complex64, D, D>) -> SMatrix<Complex64
 /// unchanged if `F_0` is singular.
 fn normalise_zero_lag<const D: usize>(f: &mut [SMatrix<Complex64, D, D>]) {
     let f0 = mean(f);
-    let (Some(inv), Some(chol)) = (f0.try_inverse(), Cholesky::new(f0 * f0.adjoint())) else {
+    let (Some(inv), Some(l)) = (f0.try_inverse(), cholesky_lower(&(f0 * f0.adjoint()))) else {
         return;
     };
-    let u = inv * chol.l();
+    let u = inv * l;
     for fk in f {
         *fk *= u;
     }
+}
+
+/// The lower Cholesky factor `L` (`L L^H = m`, real positive diagonal) of a Hermitian `m`, read
+/// from its lower triangle; `None` unless `m` is positive definite. (nalgebra's `Cholesky` takes
+/// complex square roots of negative pivots, so it does not detect indefinite complex matrices.)
+fn cholesky_lower<const D: usize>(m: &SMatrix<Complex64, D, D>) -> Option<SMatrix<Complex64, D, D>> {
+    let mut l = SMatrix::<Complex64, D, D>::zeros();
+    for j in 0..D {
+        let pivot = m[(j, j)].re - (0..j).map(|k| l[(j, k)].norm_sqr()).sum::<f64>();
+        if !(pivot > 0.0 && pivot.is_finite()) {
+            return None;
+        }
+        let diag = pivot.sqrt();
+        l[(j, j)] = Complex64::from(diag);
+        for i in j + 1..D {
+            let dot: Complex64 = (0..j).map(|k| l[(i, k)] * l[(j, k)].conj()).sum();
+            l[(i, j)] = (m[(i, j)] - dot) / diag;
+        }
+    }
+    Some(l)
 }
 
 fn hermitian_part<const D: usize>(m: &SMatrix<Complex64, D, D>) -> SMatrix<Complex64, D, D> {

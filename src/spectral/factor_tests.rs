@@ -3,7 +3,8 @@
 
 use super::*;
 use crate::rng::Rng;
-use nalgebra::{DMatrix, Matrix3};
+use crate::spectral::cepstral::min_phase_scalar_cepstral;
+use nalgebra::{DMatrix, Matrix3, Matrix3x2};
 use std::f64::consts::PI;
 
 type M3 = Matrix3<Complex64>;
@@ -166,4 +167,172 @@ fn var1_factor_is_recovered() {
 fn var1_near_unit_root_converges_with_grid() {
     let errors: Vec<f64> = var1_case(78, 0.95, &[256, 1024, 4096]).into_iter().map(|(_, e)| e).collect();
     assert!(errors.windows(2).all(|w| w[1] < w[0]), "error should fall with N: {errors:?}");
+}
+
+type S1 = SMatrix<Complex64, 1, 1>;
+
+/// Scalar Wilson on `s` vs the cepstral factor; returns the Wilson result and their difference.
+fn scalar_vs_cepstral(s: &[f64], label: &str) -> (SpectralFactor<1>, Vec<Complex64>, f64) {
+    let grid: Vec<S1> = s.iter().map(|&v| S1::new(c(v))).collect();
+    let f = wilson(&grid, &WilsonSettings::default()).expect("valid density");
+    let d = min_phase_scalar_cepstral(s).expect("positive density");
+    let reference: Vec<S1> = d.iter().map(|&z| S1::new(z)).collect();
+    let err = rel_diff(&f.factor, &reference);
+    eprintln!(
+        "{label}: {} iterations, converged {}, reconstruction {:.1e}, |Wilson - cepstral| {err:.1e}",
+        f.iterations, f.converged, f.reconstruction_error
+    );
+    assert!(f.converged && f.reconstruction_error < 1e-10, "{label}");
+    assert_eq!(f.floored_bins, 0, "{label}");
+    (f, d, err)
+}
+
+#[test]
+fn scalar_wilson_matches_cepstral_and_closed_form() {
+    // AR(1): d(z) = sigma / (1 - a z^-1), the closed-form minimum-phase factor.
+    let (n, a, sigma) = (256, 0.8, 1.5);
+    let exact: Vec<Complex64> = (0..n).map(|k| c(sigma) / (c(1.0) - z_pow(k, 1, n) * a)).collect();
+    let s: Vec<f64> = exact.iter().map(Complex64::norm_sqr).collect();
+    let (f, d, err) = scalar_vs_cepstral(&s, "AR(1) a=0.8 N=256");
+    assert!(err < 1e-10);
+    let scale = exact.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    for k in 0..n {
+        assert!((f.factor[k][0] - exact[k]).norm() < 1e-10 * scale, "Wilson vs closed form, bin {k}");
+        assert!((d[k] - exact[k]).norm() < 1e-10 * scale, "cepstral vs closed form, bin {k}");
+    }
+
+    // AR(2) with a sharp resonance: poles at radius 0.98, angle 0.3 pi (peak/valley ~ 1e4).
+    let n = 4096;
+    let (r, theta) = (0.98_f64, 0.3 * PI);
+    let s: Vec<f64> = (0..n)
+        .map(|k| 1.0 / (c(1.0) - z_pow(k, 1, n) * (2.0 * r * theta.cos()) + z_pow(k, 2, n) * (r * r)).norm_sqr())
+        .collect();
+    assert!(scalar_vs_cepstral(&s, "AR(2) r=0.98 N=4096").2 < 1e-8);
+
+    // Digital 4th-order Butterworth lowpass (|H|^2 = 1 / (1 + (tan(pi f) / tan(pi fc))^8), a
+    // rational function of z, fc = fs/8) on a 1e-6 floor: a 60 dB stop band.
+    let n = 2048;
+    let s: Vec<f64> = (0..n)
+        .map(|k| {
+            let f = crate::spectral::grid::bin_frequency(k, n, 1.0);
+            let t = (PI * f).tan() / (PI * 0.125).tan();
+            1.0 / (1.0 + t.powi(8)) + 1e-6
+        })
+        .collect();
+    assert!(scalar_vs_cepstral(&s, "Butterworth on 1e-6 floor N=2048").2 < 1e-8);
+}
+
+/// No NaN; every non-finite or unbounded figure is a failure.
+fn assert_finite<const D: usize>(f: &SpectralFactor<D>) {
+    assert!(f.factor.iter().all(|m| m.iter().all(|z| z.re.is_finite() && z.im.is_finite())));
+    assert!(f.reconstruction_error.is_finite() && f.max_loading.is_finite());
+}
+
+/// Reconstruction error bound on floored input: the clamp moves each bin by at most
+/// `sqrt(D) * max_loading` in Frobenius norm.
+fn assert_error_within_loading(f: &SpectralFactor<3>, s: &[M3], label: &str) {
+    let smallest = s.iter().map(M3::norm).fold(f64::INFINITY, f64::min);
+    let bound = 3.0_f64.sqrt() * f.max_loading / smallest + 1e-9;
+    eprintln!(
+        "{label}: {} iterations, converged {}, floored {} of {} bins, max loading {:.1e}, \
+         reconstruction {:.1e} (bound {bound:.1e})",
+        f.iterations, f.converged, f.floored_bins, s.len(), f.max_loading, f.reconstruction_error
+    );
+    assert!(f.reconstruction_error <= bound, "{label}");
+}
+
+#[test]
+fn rank_deficient_density_is_floored() {
+    let mut rng = Rng::new(9);
+    let n = 512;
+    let c0 = Matrix3x2::from_fn(|_, _| c(rng.normal()));
+    let c1 = Matrix3x2::from_fn(|_, _| c(0.3 * rng.normal()));
+    let s: Vec<M3> = (0..n)
+        .map(|k| {
+            let d = c0 + c1 * z_pow(k, 1, n);
+            d * d.adjoint()
+        })
+        .collect();
+    let f = wilson(&s, &WilsonSettings::default()).expect("valid density");
+    assert_finite(&f);
+    assert_eq!(f.floored_bins, n, "every bin is rank 2");
+    let max_trace = s.iter().map(|m| m.trace().re).fold(0.0, f64::max);
+    assert!(f.max_loading > 0.0 && f.max_loading <= 1e-9 * max_trace * (1.0 + 1e-6));
+    assert!(f.converged);
+    assert_error_within_loading(&f, &s, "rank 2");
+}
+
+#[test]
+fn deep_valley_is_floored() {
+    // A zero at radius 1 - 1e-7 on channel 1: |1 - a z^-1|^2 = 1e-14 at DC.
+    let mut rng = Rng::new(10);
+    let n = 1024;
+    let b0 = random_lower(&mut rng);
+    let b1 = random_real(&mut rng, 0.2);
+    let a = 1.0 - 1e-7;
+    let s: Vec<M3> = (0..n)
+        .map(|k| {
+            let d = b0 + b1 * z_pow(k, 1, n);
+            let valley = c(1.0) - z_pow(k, 1, n) * a;
+            let d = M3::from_diagonal(&nalgebra::Vector3::new(valley, c(1.0), c(1.0))) * d;
+            d * d.adjoint()
+        })
+        .collect();
+    let f = wilson(&s, &WilsonSettings::default()).expect("valid density");
+    assert_finite(&f);
+    assert!(f.floored_bins > 0, "the valley must be floored");
+    assert!(f.floored_bins < n, "only the valley");
+    assert_error_within_loading(&f, &s, "1e-14 valley");
+}
+
+#[test]
+fn non_convergence_is_reported_not_an_error() {
+    let n = 1024;
+    let s: Vec<S1> = (0..n).map(|k| S1::new(c(1.0 / (c(1.0) - z_pow(k, 1, n) * 0.99).norm_sqr()))).collect();
+    let settings = WilsonSettings { max_iter: 1, ..WilsonSettings::default() };
+    let f = wilson(&s, &settings).expect("valid density");
+    assert_eq!(f.iterations, 1);
+    assert!(!f.converged);
+    assert!(f.reconstruction_error > settings.tolerance && f.reconstruction_error.is_finite());
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let ok = || vec![M3::identity(); 8];
+    let run = |s: &[M3]| wilson(s, &WilsonSettings::default()).map(|_| ());
+    assert_eq!(run(&[]), Err(FactorError::Empty));
+    assert_eq!(run(&ok()[..7]), Err(FactorError::OddLength { len: 7 }));
+    let mut s = ok();
+    s[3][(1, 2)] = c(f64::NAN);
+    assert_eq!(run(&s), Err(FactorError::NonFinite { bin: 3 }));
+    let mut s = ok();
+    s[5][(0, 0)] = c(f64::INFINITY);
+    assert_eq!(run(&s), Err(FactorError::NonFinite { bin: 5 }));
+    let mut s = ok();
+    s[2] = M3::zeros();
+    assert_eq!(run(&s), Err(FactorError::ZeroBin { bin: 2 }));
+    let mut s = ok();
+    s[6][(2, 0)] = c(0.1);
+    assert!(matches!(run(&s), Err(FactorError::NonHermitian { bin: 6, asymmetry }) if asymmetry > 0.05));
+    // Scalar and NaN in the first bin: an error, not a panic.
+    let scalar = [S1::new(c(f64::NAN)), S1::new(c(1.0))];
+    assert_eq!(wilson(&scalar, &WilsonSettings::default()), Err(FactorError::NonFinite { bin: 0 }));
+}
+
+#[test]
+fn bad_settings_and_singular_covariance_are_errors() {
+    let s = vec![M3::identity(); 4];
+    for (settings, name) in [
+        (WilsonSettings { tolerance: f64::NAN, ..WilsonSettings::default() }, "tolerance"),
+        (WilsonSettings { eigen_floor: -1.0, ..WilsonSettings::default() }, "eigen_floor"),
+        (WilsonSettings { hermitian_tolerance: f64::INFINITY, ..WilsonSettings::default() }, "hermitian_tolerance"),
+        (WilsonSettings { max_iter: 0, ..WilsonSettings::default() }, "max_iter"),
+    ] {
+        assert!(matches!(wilson(&s, &settings), Err(FactorError::BadSetting { name: got, .. }) if got == name));
+    }
+    // Exactly rank one everywhere, no floor: the lag-0 covariance has a zero pivot.
+    let v = nalgebra::Vector3::new(c(1.0), c(2.0), c(0.0));
+    let singular = vec![v * v.adjoint(); 4];
+    let no_floor = WilsonSettings { eigen_floor: 0.0, ..WilsonSettings::default() };
+    assert_eq!(wilson(&singular, &no_floor), Err(FactorError::SingularCovariance));
 }

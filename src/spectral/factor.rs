@@ -14,7 +14,27 @@
 //! `Delta` causal and `Delta + Delta^H = g - I`, `g = psi^-1 S psi^-H`: `Delta` is the strictly
 //! causal part of `g - I`, half of its Nyquist lag, and at lag 0 the lower triangle of the lag-0
 //! term with half its diagonal (so that the lag-0 term of `psi` stays lower triangular with a
-//! positive diagonal). Convergence is quadratic near the solution.
+//! positive diagonal). Convergence is quadratic near the solution: 6-8 steps for well-conditioned
+//! 3x3 densities, 11-17 with a 60 dB dynamic range or floored bins, from `N = 64` to `4096`.
+//!
+//! # Accuracy on a finite grid
+//! The grid is periodic, so "causal" means "lags `0..N/2`". A factor whose impulse response (or
+//! whose inverse's) decays like `rho^n` (`rho` = largest pole or zero radius) is recovered only up
+//! to its wrap-around, about `rho^(N/2)` relative: pick `N` so that is negligible. Measured
+//! (tests): `rho = 0.5`, `N = 64`: `1.4e-10`; `rho = 0.95`, `N = 256 / 1024 / 4096`:
+//! `7.8e-4 / 3.3e-12 / 1e-13`; otherwise ~`1e-15`. A density whose periodic extension is not
+//! smooth (e.g. a kink at Nyquist) has a slowly decaying cepstrum and no grid method resolves its
+//! factor well: for `1 / (1 + (f / 0.125 fs)^8) + 1e-6` on `N = 2048` this and the cepstral method
+//! differ by `1.4e-7` (for the smooth digital-Butterworth version of the same shape: `2e-12`).
+//!
+//! # Convergence
+//! The iteration stops when the reconstruction error (against the floored density) or the largest
+//! relative step falls to [`WilsonSettings::tolerance`]; either counts as converged (a small step
+//! means `psi^-1 S psi^-H ~ I`, i.e. a whitened residual at rounding level, which for an
+//! ill-conditioned density can leave a relative reconstruction error somewhat above the
+//! tolerance: judge by [`SpectralFactor::reconstruction_error`]). If an iterate turns singular or
+//! non-finite the iteration stops unconverged. The iterate with the smallest reconstruction error
+//! is returned.
 //!
 //! # Conventions
 //! - Grid of [`super::grid`]: `N` bins (`N` even) in FFT order; use the **two-sided** density (the
@@ -27,6 +47,8 @@
 //!   first offending bin); nothing panics and no NaN is returned.
 //! - Near-singular bins are regularised (eigenvalues clamped up to a floor, reported), and
 //!   non-convergence is reported in [`SpectralFactor`] rather than being an error.
+//! - Allocation: the work arrays are allocated once per call; only bins that need the eigenvalue
+//!   floor go through a (heap) `DMatrix` eigendecomposition, once, before the iteration.
 
 use nalgebra::{DMatrix, SMatrix};
 use num_complex::Complex64;

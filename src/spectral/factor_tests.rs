@@ -336,3 +336,32 @@ fn bad_settings_and_singular_covariance_are_errors() {
     let no_floor = WilsonSettings { eigen_floor: 0.0, ..WilsonSettings::default() };
     assert_eq!(wilson(&singular, &no_floor), Err(FactorError::SingularCovariance));
 }
+
+#[test]
+fn inverse_reports_the_singular_bin() {
+    let mut factor = vec![M3::identity(); 4];
+    factor[2] = M3::from_diagonal(&nalgebra::Vector3::new(c(1.0), c(0.0), c(1.0)));
+    let f = SpectralFactor {
+        factor,
+        iterations: 0,
+        converged: true,
+        reconstruction_error: 0.0,
+        floored_bins: 0,
+        max_loading: 0.0,
+    };
+    assert_eq!(f.inverse(), Err(FactorError::SingularFactor { bin: 2 }));
+}
+
+#[test]
+fn slightly_non_hermitian_input_uses_its_hermitian_part() {
+    let mut rng = Rng::new(12);
+    let n = 128;
+    let b = [random_lower(&mut rng), random_real(&mut rng, 0.2)];
+    let s = density(&ma_on_grid(&b, n));
+    let skewed: Vec<M3> = s.iter().map(|m| m + M3::from_fn(|i, j| c(if i > j { 1e-9 } else { 0.0 }))).collect();
+    let f = wilson(&skewed, &WilsonSettings::default()).expect("within the Hermitian tolerance");
+    let exact = wilson(&s, &WilsonSettings::default()).expect("valid");
+    assert!(rel_diff(&f.factor, &exact.factor) < 1e-8);
+    let strict = WilsonSettings { hermitian_tolerance: 1e-12, ..WilsonSettings::default() };
+    assert!(matches!(wilson(&skewed, &strict), Err(FactorError::NonHermitian { bin: 0, .. })));
+}

@@ -10,4 +10,5 @@ pub mod fourier;
 pub mod output;
 pub mod rng;
 pub mod sim;
+pub mod spectral;
 pub mod stand;

@@ -7,3 +7,4 @@
 
 pub mod rng;
 pub mod cli;
+pub mod spectral;

@@ -121,8 +121,9 @@ impl WelchPlanner {
                 }
             }
         }
-        let df = sample_rate_hz / seg as f64;
-        let frequency_hz = (0..n_bins).map(|k| k as f64 * df).collect();
+        let frequency_hz = (0..n_bins)
+            .map(|k| k as f64 * sample_rate_hz / seg as f64)
+            .collect();
         SpectralMatrix::from_parts(sample_rate_hz, seg, n, n_segments, frequency_hz, data)
     }
 }

@@ -1,0 +1,52 @@
+//! Helpers shared by the spectral integration tests.
+
+use imu_attest::rng::Rng;
+use imu_attest::spectral::SpectralMatrix;
+
+/// `n_channels` seeded, cross-correlated channels of `len` samples with offsets and trends:
+/// channel 0 is white noise, channel `c` mixes channel `c - 1` (delayed by `c` samples) with fresh
+/// noise, an offset `c` and a slope `0.001 c` per sample.
+pub fn correlated_channels(seed: u64, n_channels: usize, len: usize) -> Vec<Vec<f64>> {
+    let mut rng = Rng::new(seed);
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(n_channels);
+    for c in 0..n_channels {
+        let ch = (0..len)
+            .map(|t| {
+                let driven = match out.last() {
+                    Some(prev) if t >= c => 0.7 * prev[t - c],
+                    _ => 0.0,
+                };
+                driven + rng.normal() + c as f64 * (1.0 + 0.001 * t as f64)
+            })
+            .collect();
+        out.push(ch);
+    }
+    out
+}
+
+/// Borrowed views of the channels, as `welch_matrix` takes them.
+pub fn views(channels: &[Vec<f64>]) -> Vec<&[f64]> {
+    channels.iter().map(Vec::as_slice).collect()
+}
+
+/// The largest difference between `a` and `b` over all bins and elements, each bin's difference
+/// relative to that bin's largest |b|, floored at `1e-12` of the largest |b| overall.
+pub fn max_rel_diff(a: &SpectralMatrix, b: &SpectralMatrix) -> f64 {
+    assert_eq!(
+        (a.n_bins(), a.n_channels),
+        (b.n_bins(), b.n_channels),
+        "shapes differ"
+    );
+    let bin_max = |f: usize| b.bin(f).iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let floor = 1e-12 * (0..b.n_bins()).map(bin_max).fold(0.0, f64::max);
+    (0..b.n_bins())
+        .map(|f| {
+            let scale = bin_max(f).max(floor);
+            a.bin(f)
+                .iter()
+                .zip(b.bin(f))
+                .map(|(x, y)| (x - y).norm() / scale)
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
+}

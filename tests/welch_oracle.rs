@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{correlated_channels, max_rel_diff, views};
+use common::{correlated_channels, settings, views};
 use imu_attest::spectral::{Detrend, SpectralMatrix, WelchPlanner, WelchSettings, Window};
 use num_complex::Complex64;
 use std::f64::consts::TAU;
@@ -58,13 +58,26 @@ fn oracle(channels: &[&[f64]], fs: f64, s: &WelchSettings) -> SpectralMatrix {
     SpectralMatrix::from_parts(fs, big_n, n, n_seg as usize, freqs, data).expect("oracle shape")
 }
 
-fn settings(segment_len: usize, overlap: f64, window: Window, detrend: Detrend) -> WelchSettings {
-    WelchSettings {
-        segment_len,
-        overlap,
-        window,
-        detrend,
-    }
+/// The largest difference between `a` and `b` over all bins and elements, each bin's difference
+/// relative to that bin's largest |b|, floored at `1e-12` of the largest |b| overall.
+fn max_rel_diff(a: &SpectralMatrix, b: &SpectralMatrix) -> f64 {
+    assert_eq!(
+        (a.n_bins(), a.n_channels),
+        (b.n_bins(), b.n_channels),
+        "shapes differ"
+    );
+    let bin_max = |f: usize| b.bin(f).iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let floor = 1e-12 * (0..b.n_bins()).map(bin_max).fold(0.0, f64::max);
+    (0..b.n_bins())
+        .map(|f| {
+            let scale = bin_max(f).max(floor);
+            a.bin(f)
+                .iter()
+                .zip(b.bin(f))
+                .map(|(x, y)| (x - y).norm() / scale)
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
 }
 
 #[test]

@@ -114,7 +114,8 @@ impl WelchPlanner {
                 2.0 * base
             };
             for i in 0..n {
-                for j in i..n {
+                bin[i * n + i] *= scale; // real, with +0 imaginary part
+                for j in i + 1..n {
                     let s = bin[i * n + j] * scale;
                     bin[i * n + j] = s;
                     bin[j * n + i] = s.conj();

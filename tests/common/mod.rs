@@ -1,7 +1,7 @@
 //! Helpers shared by the spectral integration tests.
 
 use imu_attest::rng::Rng;
-use imu_attest::spectral::SpectralMatrix;
+use imu_attest::spectral::{Detrend, WelchSettings, Window};
 
 /// `n_channels` seeded, cross-correlated channels of `len` samples with offsets and trends:
 /// channel 0 is white noise, channel `c` mixes channel `c - 1` (delayed by `c` samples) with fresh
@@ -29,24 +29,12 @@ pub fn views(channels: &[Vec<f64>]) -> Vec<&[f64]> {
     channels.iter().map(Vec::as_slice).collect()
 }
 
-/// The largest difference between `a` and `b` over all bins and elements, each bin's difference
-/// relative to that bin's largest |b|, floored at `1e-12` of the largest |b| overall.
-pub fn max_rel_diff(a: &SpectralMatrix, b: &SpectralMatrix) -> f64 {
-    assert_eq!(
-        (a.n_bins(), a.n_channels),
-        (b.n_bins(), b.n_channels),
-        "shapes differ"
-    );
-    let bin_max = |f: usize| b.bin(f).iter().map(|v| v.norm()).fold(0.0, f64::max);
-    let floor = 1e-12 * (0..b.n_bins()).map(bin_max).fold(0.0, f64::max);
-    (0..b.n_bins())
-        .map(|f| {
-            let scale = bin_max(f).max(floor);
-            a.bin(f)
-                .iter()
-                .zip(b.bin(f))
-                .map(|(x, y)| (x - y).norm() / scale)
-                .fold(0.0, f64::max)
-        })
-        .fold(0.0, f64::max)
+/// Settings from their four fields, in declaration order.
+pub fn settings(segment_len: usize, overlap: f64, window: Window, detrend: Detrend) -> WelchSettings {
+    WelchSettings {
+        segment_len,
+        overlap,
+        window,
+        detrend,
+    }
 }

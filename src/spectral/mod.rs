@@ -23,7 +23,7 @@
 //!   sample rate, or any NaN/inf sample give a [`SpectralError`] naming the numbers involved. Valid
 //!   input gives finite output. Signals carry any unit `U`; `S` is in `U^2/Hz`, frequencies in Hz.
 //! - **Determinism.** Results depend on the inputs and settings only, not on the rayon thread
-//!   count (see [`welch`](self::welch)).
+//!   count (see [`welch`]).
 //!
 //! # Example
 //! ```

@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod fourier;
+pub mod ident;
 pub mod output;
 pub mod rng;
 pub mod sim;

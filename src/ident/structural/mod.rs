@@ -1,0 +1,2 @@
+//! Structural identification: fitting `K e^(-tau s)` and richer rational models to a frequency
+//! response estimate.

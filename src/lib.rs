@@ -6,4 +6,5 @@
 //! m/s^2, m); axes and angle conventions follow `../shared/contract.md` section 1.
 
 pub mod rng;
+pub mod run;
 pub mod cli;

@@ -1,0 +1,289 @@
+//! The data rows: chunks of whole lines are cut into pieces at newlines, the pieces are parsed in
+//! parallel (rayon) into per-piece column vectors, then appended in order to the run's columns.
+//!
+//! Each piece reports faults relative to its own first line; the merge adds the lines of the
+//! pieces before it, so errors name the exact line of the file. Cells are trimmed of spaces and
+//! tabs, a trailing `\r` (CRLF) is dropped, numbers may carry a leading `+` and exponents. NaN and
+//! infinities are refused ([`LoadError::NonFinite`]). Blank lines are allowed only at the end.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use super::LoadError;
+use super::header::Layout;
+use super::number::fast_row;
+
+/// Pieces per rayon thread in one chunk, for load balance.
+const PIECES_PER_THREAD: usize = 4;
+/// Longest cell kept in an error message, in characters.
+const MAX_CELL_CHARS: usize = 64;
+
+/// What went wrong on a line, relative to its piece.
+#[derive(Debug)]
+enum Fault {
+    NotText,
+    Blank,
+    FieldCount { found: usize, unterminated: bool },
+    NotNumeric { column: usize, cell: String },
+    NonFinite { column: usize, cell: String },
+}
+
+/// What parsing one piece found (its values are in its column buffers).
+struct Piece {
+    lines: usize,
+    rows: usize,
+    /// Relative line of the first of the blank lines that end the piece.
+    trailing_blank: Option<usize>,
+}
+
+/// Accumulates the columns of a run from successive chunks.
+pub(super) struct Rows {
+    path: PathBuf,
+    layout: Layout,
+    /// 1-based line number of the next line to be fed.
+    pub next_line: usize,
+    /// Absolute line of the first blank line of the current trailing run of blank lines.
+    pending_blank: Option<usize>,
+    /// One vector per header column.
+    cols: Vec<Vec<f64>>,
+    /// Column buffers of the pieces, reused from chunk to chunk.
+    spare: Vec<Vec<Vec<f64>>>,
+}
+
+impl Rows {
+    /// An empty accumulator whose first line will be `first_line`.
+    pub fn new(path: &Path, layout: Layout, first_line: usize) -> Self {
+        let cols = vec![Vec::new(); layout.width()];
+        Self {
+            path: path.to_owned(),
+            layout,
+            next_line: first_line,
+            pending_blank: None,
+            cols,
+            spare: Vec::new(),
+        }
+    }
+
+    /// The layout and one vector per header column.
+    pub fn into_parts(self) -> (Layout, Vec<Vec<f64>>) {
+        (self.layout, self.cols)
+    }
+
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Rows so far.
+    pub fn len(&self) -> usize {
+        self.cols.first().map_or(0, Vec::len)
+    }
+
+    /// Reserves room for `rows` more rows in every column.
+    pub fn reserve(&mut self, rows: usize) {
+        for col in &mut self.cols {
+            col.reserve_exact(rows);
+        }
+    }
+
+    /// Parses whole lines (the last may lack its newline) and appends them.
+    ///
+    /// # Errors
+    /// [`LoadError::NotText`], [`LoadError::BlankLine`], [`LoadError::WrongFieldCount`],
+    /// [`LoadError::NotNumeric`], [`LoadError::NonFinite`], at the first bad line of the text.
+    pub fn feed(&mut self, text: &[u8]) -> Result<(), LoadError> {
+        let width = self.layout.width();
+        let pieces = split_at_newlines(text, rayon::current_num_threads() * PIECES_PER_THREAD);
+        let mut buffers = std::mem::take(&mut self.spare);
+        buffers.resize_with(buffers.len().max(pieces.len()), || vec![Vec::new(); width]);
+        let parsed: Vec<Result<Piece, (usize, Fault)>> = pieces
+            .par_iter()
+            .zip(buffers.par_iter_mut())
+            .map(|(p, cols)| parse_piece(p, cols))
+            .collect();
+        for (piece, part) in parsed.into_iter().zip(&mut buffers) {
+            if let Some(line) = self.pending_blank
+                && piece.as_ref().map_or(true, |p| p.rows > 0)
+            {
+                return Err(self.error(line, Fault::Blank));
+            }
+            let piece = piece.map_err(|(rel, fault)| self.error(self.next_line + rel, fault))?;
+            let trailing_blank = piece.trailing_blank.map(|rel| self.next_line + rel);
+            self.pending_blank = if piece.rows > 0 {
+                trailing_blank
+            } else {
+                self.pending_blank.or(trailing_blank)
+            };
+            for (all, part) in self.cols.iter_mut().zip(part.iter_mut()) {
+                all.extend_from_slice(part);
+                part.clear();
+            }
+            self.next_line += piece.lines;
+        }
+        self.spare = buffers;
+        Ok(())
+    }
+
+    /// The load error for `fault` on 1-based `line`.
+    fn error(&self, line: usize, fault: Fault) -> LoadError {
+        let path = self.path.clone();
+        let name = |column: usize| self.layout.names.get(column).cloned().unwrap_or_default();
+        match fault {
+            Fault::NotText => LoadError::NotText { path, line },
+            Fault::Blank => LoadError::BlankLine { path, line },
+            Fault::FieldCount { found, unterminated } => {
+                let expected = self.layout.width();
+                LoadError::WrongFieldCount {
+                    path,
+                    line,
+                    expected,
+                    found,
+                    truncated: unterminated && found < expected,
+                }
+            }
+            Fault::NotNumeric { column, cell } => LoadError::NotNumeric {
+                path,
+                line,
+                column: column + 1,
+                name: name(column),
+                cell,
+            },
+            Fault::NonFinite { column, cell } => LoadError::NonFinite {
+                path,
+                line,
+                column: column + 1,
+                name: name(column),
+                cell,
+            },
+        }
+    }
+}
+
+/// Cuts `text` into about `n` pieces, each ending just after a newline (the last at the end).
+fn split_at_newlines(text: &[u8], n: usize) -> Vec<&[u8]> {
+    let target = text.len() / n.max(1) + 1;
+    let mut pieces = Vec::with_capacity(n + 1);
+    let mut rest = text;
+    while rest.len() > target {
+        let Some(nl) = memchr::memchr(b'\n', &rest[target..]) else {
+            break;
+        };
+        let (piece, tail) = rest.split_at(target + nl + 1);
+        pieces.push(piece);
+        rest = tail;
+    }
+    if !rest.is_empty() {
+        pieces.push(rest);
+    }
+    pieces
+}
+
+/// The relative line holding byte `offset` of `bytes`.
+fn line_of(bytes: &[u8], offset: usize) -> usize {
+    memchr::memchr_iter(b'\n', &bytes[..offset]).count()
+}
+
+/// Parses one piece of whole lines into `cols` (one empty vector per column).
+fn parse_piece(bytes: &[u8], cols: &mut [Vec<f64>]) -> Result<Piece, (usize, Fault)> {
+    if let Some(nul) = memchr::memchr(0, bytes) {
+        return Err((line_of(bytes, nul), Fault::NotText));
+    }
+    let text = std::str::from_utf8(bytes).map_err(|e| (line_of(bytes, e.valid_up_to()), Fault::NotText))?;
+    let width = cols.len();
+    for col in cols.iter_mut() {
+        col.reserve(bytes.len() / (2 * width) + 1);
+    }
+    let mut lines = 0;
+    let mut rows = 0;
+    let mut trailing_blank = None;
+    let mut pos = 0;
+    while pos < bytes.len() {
+        if let Some(next) = fast_row(bytes, pos, cols) {
+            if let Some(blank) = trailing_blank {
+                return Err((blank, Fault::Blank));
+            }
+            pos = next;
+            rows += 1;
+            lines += 1;
+            continue;
+        }
+        for col in cols.iter_mut() {
+            col.truncate(rows);
+        }
+        let (line, next, terminated) = match memchr::memchr(b'\n', &bytes[pos..]) {
+            Some(nl) => (&text[pos..pos + nl], pos + nl + 1, true),
+            None => (&text[pos..], bytes.len(), false),
+        };
+        pos = next;
+        let line = line.strip_suffix('\r').unwrap_or(line);
+        if line.trim_ascii().is_empty() {
+            trailing_blank = trailing_blank.or(Some(lines));
+        } else {
+            if let Some(blank) = trailing_blank {
+                return Err((blank, Fault::Blank));
+            }
+            parse_row(line, cols)
+                .map_err(|fault| (lines, truncation_first(line, fault, !terminated, width)))?;
+            rows += 1;
+        }
+        lines += 1;
+    }
+    Ok(Piece {
+        lines,
+        rows,
+        trailing_blank,
+    })
+}
+
+/// Parses one non-blank line and pushes one value onto each column.
+fn parse_row(line: &str, cols: &mut [Vec<f64>]) -> Result<(), Fault> {
+    let mut found = 0;
+    for (column, cell) in line.split(',').enumerate() {
+        found += 1;
+        let Some(col) = cols.get_mut(column) else { continue };
+        let cell = cell.trim_ascii();
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => col.push(v),
+            Ok(_) => {
+                return Err(Fault::NonFinite {
+                    column,
+                    cell: clip(cell),
+                });
+            }
+            Err(_) => {
+                return Err(Fault::NotNumeric {
+                    column,
+                    cell: clip(cell),
+                });
+            }
+        }
+    }
+    if found == cols.len() {
+        Ok(())
+    } else {
+        Err(Fault::FieldCount {
+            found,
+            unterminated: false,
+        })
+    }
+}
+
+/// On an unterminated (last) line that is short, the short count explains a bad cell best: the
+/// recording was cut off mid-number.
+fn truncation_first(line: &str, fault: Fault, unterminated: bool, width: usize) -> Fault {
+    if !unterminated {
+        return fault;
+    }
+    let found = line.split(',').count();
+    if found < width {
+        Fault::FieldCount { found, unterminated }
+    } else {
+        fault
+    }
+}
+
+/// A cell cut to [`MAX_CELL_CHARS`] characters for an error message.
+fn clip(cell: &str) -> String {
+    cell.chars().take(MAX_CELL_CHARS).collect()
+}

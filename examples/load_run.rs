@@ -1,25 +1,12 @@
 //! Loads one run and reports how long it took and the peak memory, for measuring the loader:
-//! `cargo run --release --example load_run -- big.csv [repeats]`.
+//! `cargo build --release --example load_run && /usr/bin/time -v target/release/examples/load_run big.csv`
+//! (`Maximum resident set size` is the peak memory).
 
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use imu_attest::run::{LoadOptions, load_with_progress};
-
-/// Peak resident memory of this process (`VmHWM`), bytes, where `/proc` has it.
-fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line
-        .trim_start_matches("VmHWM:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kib * 1024)
-}
 
 fn main() -> std::process::ExitCode {
     let mut args = std::env::args().skip(1);
@@ -40,15 +27,12 @@ fn main() -> std::process::ExitCode {
             Ok(run) => {
                 let columns = 4 + 3 * run.blocks().len() + run.extra.len();
                 let decoded = (run.len() * columns * 8) as f64;
-                let peak = peak_rss_bytes().map_or(f64::NAN, |b| b as f64);
                 eprintln!(
                     "{}: {} rows x {columns} columns in {seconds:.3} s ({:.0} MB/s), {calls} progress calls, \
-                     peak RSS {:.0} MB = {:.2} x decoded {:.0} MB, sha256 {}",
+                     decoded {:.0} MB, sha256 {}",
                     path.display(),
                     run.len(),
                     run.source.size_bytes as f64 / seconds / 1e6,
-                    peak / 1e6,
-                    peak / decoded,
                     decoded / 1e6,
                     run.source.sha256
                 );

@@ -32,21 +32,27 @@ fn digits(b: &[u8], mut i: usize, mantissa: &mut u64) -> usize {
     i
 }
 
+/// Skips an optional sign at `*i`; true for `-`.
+#[inline]
+fn sign(b: &[u8], i: &mut usize) -> bool {
+    match b.get(*i) {
+        Some(b'-') => {
+            *i += 1;
+            true
+        }
+        Some(b'+') => {
+            *i += 1;
+            false
+        }
+        _ => false,
+    }
+}
+
 /// Reads `[+-]digits[.digits][(e|E)[+-]digits]` at `i`; `None` when it is not of that form or
 /// not exactly representable on the fast path. Returns the value and the index after it.
 #[inline]
 fn fast_number(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
-    let negative = match b.get(i) {
-        Some(b'-') => {
-            i += 1;
-            true
-        }
-        Some(b'+') => {
-            i += 1;
-            false
-        }
-        _ => false,
-    };
+    let negative = sign(b, &mut i);
     let mut mantissa = 0_u64;
     let int_start = i;
     i = digits(b, i, &mut mantissa);
@@ -63,17 +69,7 @@ fn fast_number(b: &[u8], mut i: usize) -> Option<(f64, usize)> {
     }
     if matches!(b.get(i), Some(b'e' | b'E')) {
         i += 1;
-        let negative_exp = match b.get(i) {
-            Some(b'-') => {
-                i += 1;
-                true
-            }
-            Some(b'+') => {
-                i += 1;
-                false
-            }
-            _ => false,
-        };
+        let negative_exp = sign(b, &mut i);
         let exp_start = i;
         let mut e = 0_u64;
         i = digits(b, i, &mut e);

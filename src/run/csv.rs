@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use super::LoadError;
 use super::header::Layout;
 use super::number::fast_row;
+use super::stream::MAX_LINE_BYTES;
 
 /// Pieces per rayon thread in one chunk, for load balance.
 const PIECES_PER_THREAD: usize = 4;
@@ -24,6 +25,7 @@ const MAX_CELL_CHARS: usize = 64;
 enum Fault {
     NotText,
     Blank,
+    TooLong,
     FieldCount { found: usize, unterminated: bool },
     NotNumeric { column: usize, cell: String },
     NonFinite { column: usize, cell: String },
@@ -132,6 +134,11 @@ impl Rows {
         match fault {
             Fault::NotText => LoadError::NotText { path, line },
             Fault::Blank => LoadError::BlankLine { path, line },
+            Fault::TooLong => LoadError::LineTooLong {
+                path,
+                line,
+                limit: MAX_LINE_BYTES,
+            },
             Fault::FieldCount { found, unterminated } => {
                 let expected = self.layout.width();
                 LoadError::WrongFieldCount {
@@ -217,6 +224,9 @@ fn parse_piece(bytes: &[u8], cols: &mut [Vec<f64>]) -> Result<Piece, (usize, Fau
         };
         pos = next;
         let line = line.strip_suffix('\r').unwrap_or(line);
+        if line.len() > MAX_LINE_BYTES {
+            return Err((lines, Fault::TooLong));
+        }
         if line.trim_ascii().is_empty() {
             trailing_blank = trailing_blank.or(Some(lines));
         } else {

@@ -133,11 +133,17 @@ pub fn parse_sidecar(
     notices: &mut Vec<String>,
 ) -> Result<Sidecar, LoadError> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    let raw: RawSidecar = serde_json::from_slice(bytes).map_err(|e| LoadError::Sidecar {
-        path: path.to_owned(),
-        line: e.line(),
-        column: e.column(),
-        detail: e.to_string(),
+    let raw: RawSidecar = serde_json::from_slice(bytes).map_err(|e| {
+        let (line, column) = (e.line(), e.column());
+        let message = e.to_string();
+        let position = format!(" at line {line} column {column}");
+        let detail = message.strip_suffix(&position).unwrap_or(&message).to_owned();
+        LoadError::Sidecar {
+            path: path.to_owned(),
+            line,
+            column,
+            detail,
+        }
     })?;
     let value_error = |field, detail: String| LoadError::SidecarValue {
         path: path.to_owned(),

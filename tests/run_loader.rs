@@ -387,7 +387,7 @@ fn lines_err(dir: &Path, name: &str, lines: &[String]) -> LoadError {
 fn with_cell(line: usize, column: usize, value: &str) -> Vec<String> {
     let mut lines = gyro_lines();
     let mut cells: Vec<String> = lines[line - 1].split(',').map(str::to_owned).collect();
-    cells[column] = value.to_owned();
+    value.clone_into(&mut cells[column]);
     lines[line - 1] = cells.join(",");
     lines
 }

@@ -104,7 +104,7 @@ impl Rows {
             .zip(buffers.par_iter_mut())
             .map(|(p, cols)| parse_piece(p, cols))
             .collect();
-        for (piece, part) in parsed.into_iter().zip(&mut buffers) {
+        for piece in parsed {
             if let Some(line) = self.pending_blank
                 && piece.as_ref().map_or(true, |p| p.rows > 0)
             {
@@ -117,12 +117,16 @@ impl Rows {
             } else {
                 self.pending_blank.or(trailing_blank)
             };
-            for (all, part) in self.cols.iter_mut().zip(part.iter_mut()) {
-                all.extend_from_slice(part);
-                part.clear();
-            }
             self.next_line += piece.lines;
         }
+        // All pieces are good: append them column by column, the columns in parallel.
+        let parts = &buffers[..pieces.len()];
+        self.cols.par_iter_mut().enumerate().for_each(|(j, all)| {
+            for part in parts {
+                all.extend_from_slice(&part[j]);
+            }
+        });
+        buffers.iter_mut().flatten().for_each(Vec::clear);
         self.spare = buffers;
         Ok(())
     }

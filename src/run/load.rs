@@ -5,11 +5,10 @@
 use std::fs::File;
 use std::ops::ControlFlow;
 use std::path::Path;
-use std::sync::mpsc::{Receiver, sync_channel};
 
 use super::csv::Rows;
 use super::header::Layout;
-use super::stream::{self, Chunk, SourceError, TextChunk};
+use super::stream::{self, Chunk, Pipe, SourceError, TextChunk};
 use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing};
 
 /// Fewest data rows a run may have.
@@ -79,20 +78,16 @@ pub fn load_with_progress(
     let mut notices = Vec::new();
     let sidecar = sidecar::read_sidecar(path, &mut notices)?;
     let file = File::open(path).map_err(io)?;
-    let (tx, rx) = sync_channel(1);
     let (sha256, rows) = std::thread::scope(|scope| {
-        let reader = std::thread::Builder::new()
-            .name("run-reader".to_owned())
-            .spawn_scoped(scope, move || stream::produce(file, options.chunk_bytes, &tx))
-            .map_err(io)?;
+        let (pipe, reader) = stream::spawn(scope, file, options.chunk_bytes).map_err(io)?;
         let parsed = Parse {
             path,
             options,
             bytes_total: meta.len(),
             notices: &mut notices,
         }
-        .run(&rx, progress);
-        drop(rx);
+        .run(&pipe, progress);
+        drop(pipe);
         // The reader never panics on input; should it, the error is reported, not propagated.
         reader
             .join()
@@ -156,10 +151,10 @@ impl Parse<'_> {
     /// Receives chunks until the final one; returns the hash and the parsed rows.
     fn run(
         mut self,
-        rx: &Receiver<Chunk>,
+        pipe: &Pipe,
         progress: &mut dyn FnMut(LoadProgress) -> ControlFlow<()>,
     ) -> Result<(String, Rows), LoadError> {
-        let mut chunk = self.recv(rx, 1)?;
+        let mut chunk = self.recv(pipe, 1)?;
         let (layout, body_start) = self.header(&chunk.text)?;
         let mut rows = Rows::new(self.path, layout, 2);
         rows.feed(&chunk.text[body_start..])?;
@@ -178,15 +173,16 @@ impl Parse<'_> {
             if let Some(sha256) = chunk.sha256 {
                 return Ok((sha256, rows));
             }
-            chunk = self.recv(rx, rows.next_line)?;
+            pipe.recycle(std::mem::take(&mut chunk.text));
+            chunk = self.recv(pipe, rows.next_line)?;
             rows.feed(&chunk.text)?;
         }
     }
 
     /// The next text chunk; `next_line` is the line it starts with.
-    fn recv(&self, rx: &Receiver<Chunk>, next_line: usize) -> Result<TextChunk, LoadError> {
+    fn recv(&self, pipe: &Pipe, next_line: usize) -> Result<TextChunk, LoadError> {
         let path = self.path.to_owned();
-        match rx.recv() {
+        match pipe.chunks.recv() {
             Ok(Chunk::Text(chunk)) => Ok(chunk),
             Ok(Chunk::Overlong(head)) => {
                 let binary = memchr::memchr(0, &head).is_some() || std::str::from_utf8(&head).is_err();

@@ -7,7 +7,8 @@
 
 use std::fs::File;
 use std::io::{self, BufReader, Read, Seek, SeekFrom};
-use std::sync::mpsc::SyncSender;
+use std::sync::mpsc::{Receiver, Sender, SyncSender, channel, sync_channel};
+use std::thread::{Scope, ScopedJoinHandle};
 
 use flate2::read::MultiGzDecoder;
 use sha2::{Digest, Sha256};
@@ -120,9 +121,42 @@ fn open(mut file: File) -> io::Result<Source> {
     })
 }
 
+/// The consuming end of a reading thread.
+pub(super) struct Pipe {
+    /// The chunks, in file order.
+    pub chunks: Receiver<Chunk>,
+    /// Used chunk buffers going back to the reader, so that their pages are reused.
+    recycle: Sender<Vec<u8>>,
+}
+
+impl Pipe {
+    /// Hands a chunk's buffer back for reuse.
+    pub fn recycle(&self, buffer: Vec<u8>) {
+        // The reader may have finished already; the buffer is then simply dropped.
+        let _ = self.recycle.send(buffer);
+    }
+}
+
+/// Starts the named reading thread on `file` within `scope`.
+///
+/// # Errors
+/// When the operating system cannot start a thread.
+pub(super) fn spawn<'scope>(
+    scope: &'scope Scope<'scope, '_>,
+    file: File,
+    chunk_bytes: usize,
+) -> io::Result<(Pipe, ScopedJoinHandle<'scope, ()>)> {
+    let (tx, chunks) = sync_channel(1);
+    let (recycle, recycled) = channel();
+    let handle = std::thread::Builder::new()
+        .name("run-reader".to_owned())
+        .spawn_scoped(scope, move || produce(file, chunk_bytes, &tx, &recycled))?;
+    Ok((Pipe { chunks, recycle }, handle))
+}
+
 /// The reading thread's body: sends chunks of about `chunk_bytes` until the end, an error, or the
 /// receiver hanging up (cancel).
-pub(super) fn produce(file: File, chunk_bytes: usize, tx: &SyncSender<Chunk>) {
+fn produce(file: File, chunk_bytes: usize, tx: &SyncSender<Chunk>, recycled: &Receiver<Vec<u8>>) {
     let mut source = match open(file) {
         Ok(source) => source,
         Err(e) => {
@@ -133,7 +167,9 @@ pub(super) fn produce(file: File, chunk_bytes: usize, tx: &SyncSender<Chunk>) {
     let chunk_bytes = chunk_bytes.max(1);
     let mut carry: Vec<u8> = Vec::new();
     loop {
-        let mut buf = Vec::with_capacity(carry.len() + chunk_bytes + 64);
+        let mut buf = recycled.try_recv().unwrap_or_default();
+        buf.clear();
+        buf.reserve(carry.len() + chunk_bytes + 64);
         buf.append(&mut carry);
         let at_end = match source.fill(&mut buf, chunk_bytes) {
             Ok(at_end) => at_end,

@@ -67,8 +67,9 @@ impl Rows {
         }
     }
 
-    /// The layout and one vector per header column.
-    pub fn into_parts(self) -> (Layout, Vec<Vec<f64>>) {
+    /// The layout and one vector per header column, without spare capacity.
+    pub fn into_parts(mut self) -> (Layout, Vec<Vec<f64>>) {
+        self.cols.iter_mut().for_each(Vec::shrink_to_fit);
         (self.layout, self.cols)
     }
 

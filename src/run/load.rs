@@ -11,6 +11,10 @@ use super::header::Layout;
 use super::stream::{self, Chunk, Pipe, SourceError, TextChunk};
 use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing};
 
+/// Capacity reserved per estimated row: the estimate from the first block is rough for gzip
+/// (read-ahead) and for files whose numbers grow longer.
+const RESERVE_MARGIN: f64 = 1.25;
+
 /// Fewest data rows a run may have.
 pub const MIN_SAMPLES: usize = 16;
 
@@ -254,8 +258,8 @@ impl Parse<'_> {
     fn reserve(&self, rows: &mut Rows, raw_done: u64) -> Result<(), LoadError> {
         let parsed = rows.len().max(1) as f64;
         let share = raw_done.max(1) as f64 / self.bytes_total.max(1) as f64;
-        let estimate = (parsed / share.min(1.0) * 1.02) as u64 + 1024;
-        let needed_bytes = estimate.saturating_mul(rows.width() as u64 * 8);
+        let estimate = parsed / share.min(1.0);
+        let needed_bytes = (estimate as u64).saturating_mul(rows.width() as u64 * 8);
         let available = self.options.memory_limit_bytes.or_else(mem_available_bytes);
         if let Some(available_bytes) = available
             && needed_bytes > available_bytes
@@ -266,7 +270,10 @@ impl Parse<'_> {
                 available_bytes,
             });
         }
-        rows.reserve((estimate as usize).saturating_sub(rows.len()));
+        // Generous: untouched capacity costs address space only, and the columns are shrunk at
+        // the end, whereas an estimate too small would copy every column once more.
+        let room = (estimate * RESERVE_MARGIN) as usize + 1024;
+        rows.reserve(room.saturating_sub(rows.len()));
         Ok(())
     }
 }

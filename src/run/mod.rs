@@ -104,7 +104,7 @@ impl Run {
         self.time_s.len()
     }
 
-    /// True when there are no samples (never for a run returned by [`load`]).
+    /// True when there are no samples (never for a run returned by [`load()`]).
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.time_s.is_empty()

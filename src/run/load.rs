@@ -8,47 +8,13 @@ use std::path::Path;
 
 use super::csv::Rows;
 use super::header::Layout;
+use super::options::{LoadOptions, LoadProgress, MIN_SAMPLES, mem_available_bytes};
 use super::stream::{self, Chunk, Pipe, SourceError, TextChunk};
 use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing};
 
 /// Capacity reserved per estimated row: the estimate from the first block is rough for gzip
 /// (read-ahead) and for files whose numbers grow longer.
 const RESERVE_MARGIN: f64 = 1.25;
-
-/// Fewest data rows a run may have.
-pub const MIN_SAMPLES: usize = 16;
-
-/// How to load a run. `LoadOptions::default()` is what the app and the command line use.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LoadOptions {
-    /// Size of the blocks read and parsed at a time, bytes (default 8 MiB). Smaller values only
-    /// make tests cross chunk boundaries; progress is reported once per block.
-    pub chunk_bytes: usize,
-    /// Largest relative deviation of a time step from the nominal step (default 0.01).
-    pub sampling_tolerance: f64,
-    /// Memory the decoded columns may take, bytes; `None`: `MemAvailable` of `/proc/meminfo`
-    /// where readable, otherwise no limit.
-    pub memory_limit_bytes: Option<u64>,
-}
-
-impl Default for LoadOptions {
-    fn default() -> Self {
-        Self {
-            chunk_bytes: 8 << 20,
-            sampling_tolerance: 0.01,
-            memory_limit_bytes: None,
-        }
-    }
-}
-
-/// How far loading has got: bytes of the file read (compressed bytes for a gzip file).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LoadProgress {
-    /// Bytes of the file read so far.
-    pub bytes_done: u64,
-    /// Size of the file, bytes.
-    pub bytes_total: u64,
-}
 
 /// Loads a run (CSV or gzipped CSV) and its sidecar.
 ///
@@ -276,18 +242,4 @@ impl Parse<'_> {
         rows.reserve(room.saturating_sub(rows.len()));
         Ok(())
     }
-}
-
-/// `MemAvailable` from `/proc/meminfo`, bytes; `None` where unreadable.
-fn mem_available_bytes() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line
-        .trim_start_matches("MemAvailable:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kib.saturating_mul(1024))
 }

@@ -29,6 +29,8 @@ mod error;
 mod header;
 mod load;
 mod number;
+mod options;
+mod piece;
 mod sidecar;
 mod stream;
 mod timing;
@@ -38,7 +40,8 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 pub use error::LoadError;
-pub use load::{LoadOptions, LoadProgress, MIN_SAMPLES, load, load_with_progress};
+pub use load::{load, load_with_progress};
+pub use options::{LoadOptions, LoadProgress, MIN_SAMPLES};
 pub use sidecar::{SIDECAR_FORMAT, STANDARD_G_MPS2, Sidecar, parse_sidecar, run_stem, sidecar_path};
 pub use timing::{NOMINAL_STEPS, nominal_step};
 

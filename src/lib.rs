@@ -5,11 +5,13 @@
 //! `Result<T, Error>` out, and never depend on the GUI. Units are SI throughout (s, rad, rad/s,
 //! m/s^2, m); axes and angle conventions follow `../shared/contract.md` section 1.
 
+pub mod block;
 pub mod cli;
 pub mod fourier;
 pub mod ident;
 pub mod output;
 pub mod rng;
+pub mod run;
 pub mod sim;
 pub mod spectral;
 pub mod stand;

@@ -10,29 +10,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-/// A sensor block on the platform.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Block {
-    /// The gyro triad.
-    Gyro,
-    /// The accelerometer triad.
-    Accel,
-}
-
-impl Block {
-    /// Both blocks, gyro first.
-    pub const BOTH: [Block; 2] = [Block::Gyro, Block::Accel];
-
-    /// The contract's name of the block.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Block::Gyro => "gyro",
-            Block::Accel => "accel",
-        }
-    }
-}
+pub use crate::block::Block;
 
 /// The catalogue's effects; ids are stable (contract section 5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -5,25 +5,14 @@
 //! simulation; times with microsecond resolution.
 
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use flate2::Compression;
 use flate2::write::GzEncoder;
 
 use super::SimulatedRun;
 use crate::output::{OutputError, write_atomic};
-
-/// The sidecar path of a run file: `cruise.csv` and `cruise.csv.gz` both give `cruise.json`.
-#[must_use]
-pub fn sidecar_path_for(run: &Path) -> PathBuf {
-    let name = run
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let stem = name.strip_suffix(".gz").unwrap_or(&name);
-    let stem = stem.strip_suffix(".csv").unwrap_or(stem);
-    run.with_file_name(format!("{stem}.json"))
-}
+use crate::run::sidecar_path;
 
 /// Writes the CSV (gzipped if `path` ends in `.gz`) and its sidecar.
 ///
@@ -40,7 +29,7 @@ pub fn write_run(run: &SimulatedRun, path: &Path) -> Result<(), OutputError> {
             write_csv(run, w)
         }
     })?;
-    let sidecar = sidecar_path_for(path);
+    let sidecar = sidecar_path(path);
     write_atomic(&sidecar, |w| {
         serde_json::to_writer_pretty(&mut *w, &run.sidecar).map_err(io::Error::other)?;
         w.write_all(b"\n")
@@ -71,22 +60,4 @@ fn write_csv(run: &SimulatedRun, w: &mut impl Write) -> io::Result<()> {
         w.write_all(line.as_bytes())?;
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sidecar_names() {
-        assert_eq!(
-            sidecar_path_for(Path::new("a/cruise.csv")),
-            Path::new("a/cruise.json")
-        );
-        assert_eq!(
-            sidecar_path_for(Path::new("a/cruise.csv.gz")),
-            Path::new("a/cruise.json")
-        );
-        assert_eq!(sidecar_path_for(Path::new("run")), Path::new("run.json"));
-    }
 }

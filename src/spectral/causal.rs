@@ -60,7 +60,9 @@ pub struct CausalProjector {
 
 impl std::fmt::Debug for CausalProjector {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("CausalProjector").field("n", &self.n).finish_non_exhaustive()
+        f.debug_struct("CausalProjector")
+            .field("n", &self.n)
+            .finish_non_exhaustive()
     }
 }
 
@@ -83,8 +85,16 @@ impl CausalProjector {
         }
         let forward = planner.plan_fft_forward(n);
         let inverse = planner.plan_fft_inverse(n);
-        let scratch_len = forward.get_inplace_scratch_len().max(inverse.get_inplace_scratch_len());
-        Ok(Self { n, forward, inverse, buffer: Vec::new(), scratch: vec![Complex64::ZERO; scratch_len] })
+        let scratch_len = forward
+            .get_inplace_scratch_len()
+            .max(inverse.get_inplace_scratch_len());
+        Ok(Self {
+            n,
+            forward,
+            inverse,
+            buffer: Vec::new(),
+            scratch: vec![Complex64::ZERO; scratch_len],
+        })
     }
 
     /// The grid length `N` this projector was planned for.
@@ -141,7 +151,8 @@ impl CausalProjector {
         f: &[SMatrix<Complex64, R, C>],
     ) -> Result<Vec<SMatrix<Complex64, R, C>>, CausalError> {
         self.load(f)?;
-        self.inverse.process_with_scratch(&mut self.buffer, &mut self.scratch);
+        self.inverse
+            .process_with_scratch(&mut self.buffer, &mut self.scratch);
         let scale = 1.0 / self.n as f64;
         let mut out = f.to_vec();
         self.store(&mut out, scale);
@@ -175,14 +186,16 @@ impl CausalProjector {
         let n = self.n;
         let half = n / 2;
         let scale = 1.0 / n as f64;
-        self.inverse.process_with_scratch(&mut self.buffer, &mut self.scratch);
+        self.inverse
+            .process_with_scratch(&mut self.buffer, &mut self.scratch);
         for lags in self.buffer.chunks_exact_mut(n) {
             lags[0] *= zero_lag_weight * scale;
             lags[1..half].iter_mut().for_each(|h| *h *= scale);
             lags[half] *= 0.5 * scale;
             lags[half + 1..].fill(Complex64::ZERO);
         }
-        self.forward.process_with_scratch(&mut self.buffer, &mut self.scratch);
+        self.forward
+            .process_with_scratch(&mut self.buffer, &mut self.scratch);
         self.store(f, 1.0);
         Ok(())
     }
@@ -193,7 +206,10 @@ impl CausalProjector {
         f: &[SMatrix<Complex64, R, C>],
     ) -> Result<(), CausalError> {
         if f.len() != self.n {
-            return Err(CausalError::LengthMismatch { expected: self.n, found: f.len() });
+            return Err(CausalError::LengthMismatch {
+                expected: self.n,
+                found: f.len(),
+            });
         }
         let n = self.n;
         self.buffer.resize(R * C * n, Complex64::ZERO);
@@ -223,13 +239,17 @@ mod tests {
     use std::f64::consts::PI;
 
     fn random_function(rng: &mut Rng, n: usize) -> Vec<Matrix2x3<Complex64>> {
-        (0..n).map(|_| Matrix2x3::from_fn(|_, _| Complex64::new(rng.normal(), rng.normal()))).collect()
+        (0..n)
+            .map(|_| Matrix2x3::from_fn(|_, _| Complex64::new(rng.normal(), rng.normal())))
+            .collect()
     }
 
     /// O(N^2) reference: naive inverse DFT, lag weights, naive forward DFT.
     fn naive_projection(f: &[Matrix2x3<Complex64>], zero_lag_weight: f64) -> Vec<Matrix2x3<Complex64>> {
         let n = f.len();
-        let w = |k: usize, l: usize, sign: f64| Complex64::from_polar(1.0, sign * 2.0 * PI * (k * l % n) as f64 / n as f64);
+        let w = |k: usize, l: usize, sign: f64| {
+            Complex64::from_polar(1.0, sign * 2.0 * PI * (k * l % n) as f64 / n as f64)
+        };
         let lags: Vec<Matrix2x3<Complex64>> = (0..n)
             .map(|l| {
                 let h: Matrix2x3<Complex64> = (0..n).map(|k| f[k] * w(k, l, 1.0)).sum();
@@ -242,7 +262,9 @@ mod tests {
                 h * Complex64::from(weight / n as f64)
             })
             .collect();
-        (0..n).map(|k| (0..n).map(|l| lags[l] * w(k, l, -1.0)).sum()).collect()
+        (0..n)
+            .map(|k| (0..n).map(|l| lags[l] * w(k, l, -1.0)).sum())
+            .collect()
     }
 
     fn max_diff(a: &[Matrix2x3<Complex64>], b: &[Matrix2x3<Complex64>]) -> f64 {
@@ -287,9 +309,15 @@ mod tests {
             let mut g = f.clone();
             p.causal_part(&mut g).expect("right length");
             let want: Vec<_> = f.iter().map(|m| m * Complex64::from(expected_gain)).collect();
-            assert!(max_diff(&g, &want) < 1e-13, "delay {d}: gain should be {expected_gain}");
+            assert!(
+                max_diff(&g, &want) < 1e-13,
+                "delay {d}: gain should be {expected_gain}"
+            );
             let neg = p.negative_lag_fraction(&f).expect("right length");
-            assert!((neg - if 2 * lag > n { 1.0 } else { 0.0 }).abs() < 1e-13, "delay {d}: {neg}");
+            assert!(
+                (neg - if 2 * lag > n { 1.0 } else { 0.0 }).abs() < 1e-13,
+                "delay {d}: {neg}"
+            );
         }
     }
 
@@ -313,11 +341,23 @@ mod tests {
 
     #[test]
     fn bad_lengths_are_errors() {
-        assert_eq!(CausalProjector::new(0).err(), Some(CausalError::BadGridLength { len: 0 }));
-        assert_eq!(CausalProjector::new(7).err(), Some(CausalError::BadGridLength { len: 7 }));
+        assert_eq!(
+            CausalProjector::new(0).err(),
+            Some(CausalError::BadGridLength { len: 0 })
+        );
+        assert_eq!(
+            CausalProjector::new(7).err(),
+            Some(CausalError::BadGridLength { len: 7 })
+        );
         let mut p = CausalProjector::new(8).expect("even n");
         let mut short = vec![Matrix2x3::<Complex64>::zeros(); 6];
-        assert_eq!(p.causal_part(&mut short), Err(CausalError::LengthMismatch { expected: 8, found: 6 }));
+        assert_eq!(
+            p.causal_part(&mut short),
+            Err(CausalError::LengthMismatch {
+                expected: 8,
+                found: 6
+            })
+        );
         assert!(p.lags(&short).is_err());
         let mut empty: Vec<Matrix2x3<Complex64>> = Vec::new();
         assert!(p.strictly_causal_part(&mut empty).is_err());

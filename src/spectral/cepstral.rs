@@ -62,8 +62,10 @@ pub fn min_phase_scalar_cepstral(s: &[f64]) -> Result<Vec<Complex64>, CepstralEr
     if let Some((bin, &value)) = s.iter().enumerate().find(|&(_, v)| !(v.is_finite() && *v > 0.0)) {
         return Err(CepstralError::NotPositive { bin, value });
     }
-    let mut log_s: Vec<SMatrix<Complex64, 1, 1>> =
-        s.iter().map(|&v| SMatrix::from_element(Complex64::new(v.ln(), 0.0))).collect();
+    let mut log_s: Vec<SMatrix<Complex64, 1, 1>> = s
+        .iter()
+        .map(|&v| SMatrix::from_element(Complex64::new(v.ln(), 0.0)))
+        .collect();
     projector.causal_part_half_zero_lag(&mut log_s)?;
     Ok(log_s.iter().map(|m| m[0].exp()).collect())
 }
@@ -85,15 +87,25 @@ mod tests {
                 .collect();
             let s: Vec<f64> = exact.iter().map(Complex64::norm_sqr).collect();
             let d = min_phase_scalar_cepstral(&s).expect("positive density");
-            let err = d.iter().zip(&exact).map(|(x, y)| (x - y).norm() / y.norm()).fold(0.0, f64::max);
+            let err = d
+                .iter()
+                .zip(&exact)
+                .map(|(x, y)| (x - y).norm() / y.norm())
+                .fold(0.0, f64::max);
             assert!(err < 1e-12, "n={n} a={a}: relative error {err}");
         }
     }
 
     #[test]
     fn bad_inputs_are_errors() {
-        assert_eq!(min_phase_scalar_cepstral(&[]), Err(CepstralError::BadGridLength { len: 0 }));
-        assert_eq!(min_phase_scalar_cepstral(&[1.0; 5]), Err(CepstralError::BadGridLength { len: 5 }));
+        assert_eq!(
+            min_phase_scalar_cepstral(&[]),
+            Err(CepstralError::BadGridLength { len: 0 })
+        );
+        assert_eq!(
+            min_phase_scalar_cepstral(&[1.0; 5]),
+            Err(CepstralError::BadGridLength { len: 5 })
+        );
         assert_eq!(
             min_phase_scalar_cepstral(&[1.0, 2.0, 0.0, 1.0]),
             Err(CepstralError::NotPositive { bin: 2, value: 0.0 })

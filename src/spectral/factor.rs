@@ -75,7 +75,12 @@ pub struct WilsonSettings {
 
 impl Default for WilsonSettings {
     fn default() -> Self {
-        Self { tolerance: 1e-10, max_iter: 500, eigen_floor: 1e-9, hermitian_tolerance: 1e-6 }
+        Self {
+            tolerance: 1e-10,
+            max_iter: 500,
+            eigen_floor: 1e-9,
+            hermitian_tolerance: 1e-6,
+        }
     }
 }
 
@@ -253,7 +258,10 @@ fn check_settings(settings: &WilsonSettings) -> Result<(), FactorError> {
         }
     }
     if settings.max_iter == 0 {
-        return Err(FactorError::BadSetting { name: "max_iter", value: 0.0 });
+        return Err(FactorError::BadSetting {
+            name: "max_iter",
+            value: 0.0,
+        });
     }
     Ok(())
 }
@@ -322,8 +330,14 @@ fn apply_floor<const D: usize>(
 }
 
 /// `max_f ||F F^H - S||_F / ||S||_F`.
-fn reconstruction_error<const D: usize>(f: &[SMatrix<Complex64, D, D>], s: &[SMatrix<Complex64, D, D>]) -> f64 {
-    f.iter().zip(s).map(|(fk, sk)| (fk * fk.adjoint() - sk).norm() / sk.norm()).fold(0.0, f64::max)
+fn reconstruction_error<const D: usize>(
+    f: &[SMatrix<Complex64, D, D>],
+    s: &[SMatrix<Complex64, D, D>],
+) -> f64 {
+    f.iter()
+        .zip(s)
+        .map(|(fk, sk)| (fk * fk.adjoint() - sk).norm() / sk.norm())
+        .fold(0.0, f64::max)
 }
 
 /// The lag-0 term of `Delta` from the (Hermitian) lag-0 term `m` of `g - I`: the strict lower

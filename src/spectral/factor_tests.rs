@@ -32,7 +32,9 @@ fn random_lower(rng: &mut Rng) -> M3 {
 
 /// `sum_l B_l z^-l` on the grid.
 fn ma_on_grid(b: &[M3], n: usize) -> Vec<M3> {
-    (0..n).map(|k| b.iter().enumerate().map(|(l, bl)| bl * z_pow(k, l, n)).sum()).collect()
+    (0..n)
+        .map(|k| b.iter().enumerate().map(|(l, bl)| bl * z_pow(k, l, n)).sum())
+        .collect()
 }
 
 fn density(d: &[M3]) -> Vec<M3> {
@@ -57,9 +59,15 @@ fn assert_structure(f: &SpectralFactor<3>, label: &str) {
     assert!(causal < 1e-20, "{label}: F not causal ({causal:e})");
     assert!(inv_causal < 1e-20, "{label}: F^-1 not causal ({inv_causal:e})");
     for i in 0..3 {
-        assert!(f0[(i, i)].re > 0.0 && f0[(i, i)].im.abs() < 1e-12 * f0.norm(), "{label}: diag {f0}");
+        assert!(
+            f0[(i, i)].re > 0.0 && f0[(i, i)].im.abs() < 1e-12 * f0.norm(),
+            "{label}: diag {f0}"
+        );
         for j in i + 1..3 {
-            assert!(f0[(i, j)].norm() < 1e-12 * f0.norm(), "{label}: upper triangle {f0}");
+            assert!(
+                f0[(i, j)].norm() < 1e-12 * f0.norm(),
+                "{label}: upper triangle {f0}"
+            );
         }
     }
 }
@@ -67,11 +75,21 @@ fn assert_structure(f: &SpectralFactor<3>, label: &str) {
 #[test]
 fn vector_ma2_factor_is_recovered() {
     let mut rng = Rng::new(2024);
-    let b = [random_lower(&mut rng), random_real(&mut rng, 0.25), random_real(&mut rng, 0.15)];
+    let b = [
+        random_lower(&mut rng),
+        random_real(&mut rng, 0.25),
+        random_real(&mut rng, 0.15),
+    ];
     // Brute-force minimum-phase check of the *true* factor on a fine grid: D^-1 causal.
     let fine = ma_on_grid(&b, 8192);
-    let inverse: Vec<M3> = fine.iter().map(|d| d.try_inverse().expect("invertible")).collect();
-    let neg = CausalProjector::new(8192).expect("even").negative_lag_fraction(&inverse).expect("len");
+    let inverse: Vec<M3> = fine
+        .iter()
+        .map(|d| d.try_inverse().expect("invertible"))
+        .collect();
+    let neg = CausalProjector::new(8192)
+        .expect("even")
+        .negative_lag_fraction(&inverse)
+        .expect("len");
     assert!(neg < 1e-24, "test factor is not minimum phase: {neg:e}");
 
     let r = max_zero_radius(&b);
@@ -105,7 +123,13 @@ fn max_zero_radius(b: &[M3]) -> f64 {
     let values: Vec<Complex64> = ma_on_grid(b, points).iter().map(M3::determinant).collect();
     // ma_on_grid evaluates at w = e^{-2 pi i k / P}; coefficient j = (1/P) sum_k p_k w_k^{-j}.
     let coeff: Vec<f64> = (0..=degree)
-        .map(|j| (0..points).map(|k| values[k] * z_pow(k, j, points).conj()).sum::<Complex64>().re / points as f64)
+        .map(|j| {
+            (0..points)
+                .map(|k| values[k] * z_pow(k, j, points).conj())
+                .sum::<Complex64>()
+                .re
+                / points as f64
+        })
         .collect();
     let companion = DMatrix::from_fn(degree, degree, |i, j| {
         if i == 0 {
@@ -116,18 +140,31 @@ fn max_zero_radius(b: &[M3]) -> f64 {
             0.0
         }
     });
-    companion.complex_eigenvalues().iter().map(|w| 1.0 / w.norm()).fold(0.0, f64::max)
+    companion
+        .complex_eigenvalues()
+        .iter()
+        .map(|w| 1.0 / w.norm())
+        .fold(0.0, f64::max)
 }
 
 /// `(I - A z^-1)^-1 B0` on the grid.
 fn var1_on_grid(a: &M3, b0: &M3, n: usize) -> Vec<M3> {
     (0..n)
-        .map(|k| (M3::identity() - a * z_pow(k, 1, n)).try_inverse().expect("stable") * b0)
+        .map(|k| {
+            (M3::identity() - a * z_pow(k, 1, n))
+                .try_inverse()
+                .expect("stable")
+                * b0
+        })
         .collect()
 }
 
 fn scaled_to_radius(a: Matrix3<f64>, radius: f64) -> M3 {
-    let rho = a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+    let rho = a
+        .complex_eigenvalues()
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max);
     (a * (radius / rho)).map(c)
 }
 
@@ -149,7 +186,10 @@ fn var1_case(seed: u64, radius: f64, ns: &[usize]) -> Vec<(SpectralFactor<3>, f6
             );
             assert!(f.converged && f.reconstruction_error < 1e-9, "rho={radius} N={n}");
             let alias = radius.powi(n as i32 / 2);
-            assert!(err < 1e-8 + 10.0 * alias, "rho={radius} N={n}: factor error {err:e}");
+            assert!(
+                err < 1e-8 + 10.0 * alias,
+                "rho={radius} N={n}: factor error {err:e}"
+            );
             if alias < 1e-12 {
                 assert_structure(&f, &format!("VAR(1) rho={radius} N={n}"));
             }
@@ -165,8 +205,14 @@ fn var1_factor_is_recovered() {
 
 #[test]
 fn var1_near_unit_root_converges_with_grid() {
-    let errors: Vec<f64> = var1_case(78, 0.95, &[256, 1024, 4096]).into_iter().map(|(_, e)| e).collect();
-    assert!(errors.windows(2).all(|w| w[1] < w[0]), "error should fall with N: {errors:?}");
+    let errors: Vec<f64> = var1_case(78, 0.95, &[256, 1024, 4096])
+        .into_iter()
+        .map(|(_, e)| e)
+        .collect();
+    assert!(
+        errors.windows(2).all(|w| w[1] < w[0]),
+        "error should fall with N: {errors:?}"
+    );
 }
 
 type S1 = SMatrix<Complex64, 1, 1>;
@@ -197,15 +243,23 @@ fn scalar_wilson_matches_cepstral_and_closed_form() {
     assert!(err < 1e-10);
     let scale = exact.iter().map(|z| z.norm()).fold(0.0, f64::max);
     for k in 0..n {
-        assert!((f.factor[k][0] - exact[k]).norm() < 1e-10 * scale, "Wilson vs closed form, bin {k}");
-        assert!((d[k] - exact[k]).norm() < 1e-10 * scale, "cepstral vs closed form, bin {k}");
+        assert!(
+            (f.factor[k][0] - exact[k]).norm() < 1e-10 * scale,
+            "Wilson vs closed form, bin {k}"
+        );
+        assert!(
+            (d[k] - exact[k]).norm() < 1e-10 * scale,
+            "cepstral vs closed form, bin {k}"
+        );
     }
 
     // AR(2) with a sharp resonance: poles at radius 0.98, angle 0.3 pi (peak/valley ~ 1e4).
     let n = 4096;
     let (r, theta) = (0.98_f64, 0.3 * PI);
     let s: Vec<f64> = (0..n)
-        .map(|k| 1.0 / (c(1.0) - z_pow(k, 1, n) * (2.0 * r * theta.cos()) + z_pow(k, 2, n) * (r * r)).norm_sqr())
+        .map(|k| {
+            1.0 / (c(1.0) - z_pow(k, 1, n) * (2.0 * r * theta.cos()) + z_pow(k, 2, n) * (r * r)).norm_sqr()
+        })
         .collect();
     assert!(scalar_vs_cepstral(&s, "AR(2) r=0.98 N=4096").2 < 1e-8);
 
@@ -224,7 +278,11 @@ fn scalar_wilson_matches_cepstral_and_closed_form() {
 
 /// No NaN; every non-finite or unbounded figure is a failure.
 fn assert_finite<const D: usize>(f: &SpectralFactor<D>) {
-    assert!(f.factor.iter().all(|m| m.iter().all(|z| z.re.is_finite() && z.im.is_finite())));
+    assert!(
+        f.factor
+            .iter()
+            .all(|m| m.iter().all(|z| z.re.is_finite() && z.im.is_finite()))
+    );
     assert!(f.reconstruction_error.is_finite() && f.max_loading.is_finite());
 }
 
@@ -236,7 +294,12 @@ fn assert_error_within_loading(f: &SpectralFactor<3>, s: &[M3], label: &str) {
     eprintln!(
         "{label}: {} iterations, converged {}, floored {} of {} bins, max loading {:.1e}, \
          reconstruction {:.1e} (bound {bound:.1e})",
-        f.iterations, f.converged, f.floored_bins, s.len(), f.max_loading, f.reconstruction_error
+        f.iterations,
+        f.converged,
+        f.floored_bins,
+        s.len(),
+        f.max_loading,
+        f.reconstruction_error
     );
     assert!(f.reconstruction_error <= bound, "{label}");
 }
@@ -288,8 +351,13 @@ fn deep_valley_is_floored() {
 #[test]
 fn non_convergence_is_reported_not_an_error() {
     let n = 1024;
-    let s: Vec<S1> = (0..n).map(|k| S1::new(c(1.0 / (c(1.0) - z_pow(k, 1, n) * 0.99).norm_sqr()))).collect();
-    let settings = WilsonSettings { max_iter: 1, ..WilsonSettings::default() };
+    let s: Vec<S1> = (0..n)
+        .map(|k| S1::new(c(1.0 / (c(1.0) - z_pow(k, 1, n) * 0.99).norm_sqr())))
+        .collect();
+    let settings = WilsonSettings {
+        max_iter: 1,
+        ..WilsonSettings::default()
+    };
     let f = wilson(&s, &settings).expect("valid density");
     assert_eq!(f.iterations, 1);
     assert!(!f.converged);
@@ -316,24 +384,56 @@ fn bad_inputs_are_errors() {
     assert!(matches!(run(&s), Err(FactorError::NonHermitian { bin: 6, asymmetry }) if asymmetry > 0.05));
     // Scalar and NaN in the first bin: an error, not a panic.
     let scalar = [S1::new(c(f64::NAN)), S1::new(c(1.0))];
-    assert_eq!(wilson(&scalar, &WilsonSettings::default()), Err(FactorError::NonFinite { bin: 0 }));
+    assert_eq!(
+        wilson(&scalar, &WilsonSettings::default()),
+        Err(FactorError::NonFinite { bin: 0 })
+    );
 }
 
 #[test]
 fn bad_settings_and_singular_covariance_are_errors() {
     let s = vec![M3::identity(); 4];
     for (settings, name) in [
-        (WilsonSettings { tolerance: f64::NAN, ..WilsonSettings::default() }, "tolerance"),
-        (WilsonSettings { eigen_floor: -1.0, ..WilsonSettings::default() }, "eigen_floor"),
-        (WilsonSettings { hermitian_tolerance: f64::INFINITY, ..WilsonSettings::default() }, "hermitian_tolerance"),
-        (WilsonSettings { max_iter: 0, ..WilsonSettings::default() }, "max_iter"),
+        (
+            WilsonSettings {
+                tolerance: f64::NAN,
+                ..WilsonSettings::default()
+            },
+            "tolerance",
+        ),
+        (
+            WilsonSettings {
+                eigen_floor: -1.0,
+                ..WilsonSettings::default()
+            },
+            "eigen_floor",
+        ),
+        (
+            WilsonSettings {
+                hermitian_tolerance: f64::INFINITY,
+                ..WilsonSettings::default()
+            },
+            "hermitian_tolerance",
+        ),
+        (
+            WilsonSettings {
+                max_iter: 0,
+                ..WilsonSettings::default()
+            },
+            "max_iter",
+        ),
     ] {
-        assert!(matches!(wilson(&s, &settings), Err(FactorError::BadSetting { name: got, .. }) if got == name));
+        assert!(
+            matches!(wilson(&s, &settings), Err(FactorError::BadSetting { name: got, .. }) if got == name)
+        );
     }
     // Exactly rank one everywhere, no floor: the lag-0 covariance has a zero pivot.
     let v = nalgebra::Vector3::new(c(1.0), c(2.0), c(0.0));
     let singular = vec![v * v.adjoint(); 4];
-    let no_floor = WilsonSettings { eigen_floor: 0.0, ..WilsonSettings::default() };
+    let no_floor = WilsonSettings {
+        eigen_floor: 0.0,
+        ..WilsonSettings::default()
+    };
     assert_eq!(wilson(&singular, &no_floor), Err(FactorError::SingularCovariance));
 }
 
@@ -358,10 +458,19 @@ fn slightly_non_hermitian_input_uses_its_hermitian_part() {
     let n = 128;
     let b = [random_lower(&mut rng), random_real(&mut rng, 0.2)];
     let s = density(&ma_on_grid(&b, n));
-    let skewed: Vec<M3> = s.iter().map(|m| m + M3::from_fn(|i, j| c(if i > j { 1e-9 } else { 0.0 }))).collect();
+    let skewed: Vec<M3> = s
+        .iter()
+        .map(|m| m + M3::from_fn(|i, j| c(if i > j { 1e-9 } else { 0.0 })))
+        .collect();
     let f = wilson(&skewed, &WilsonSettings::default()).expect("within the Hermitian tolerance");
     let exact = wilson(&s, &WilsonSettings::default()).expect("valid");
     assert!(rel_diff(&f.factor, &exact.factor) < 1e-8);
-    let strict = WilsonSettings { hermitian_tolerance: 1e-12, ..WilsonSettings::default() };
-    assert!(matches!(wilson(&skewed, &strict), Err(FactorError::NonHermitian { bin: 0, .. })));
+    let strict = WilsonSettings {
+        hermitian_tolerance: 1e-12,
+        ..WilsonSettings::default()
+    };
+    assert!(matches!(
+        wilson(&skewed, &strict),
+        Err(FactorError::NonHermitian { bin: 0, .. })
+    ));
 }

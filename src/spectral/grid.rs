@@ -46,7 +46,11 @@ pub enum GridError {
 #[must_use]
 pub fn bin_frequency(k: usize, n: usize, fs: f64) -> f64 {
     let k = k % n.max(1);
-    if 2 * k <= n { k as f64 * fs / n as f64 } else { -((n - k) as f64) * fs / n as f64 }
+    if 2 * k <= n {
+        k as f64 * fs / n as f64
+    } else {
+        -((n - k) as f64) * fs / n as f64
+    }
 }
 
 /// The two-sided density on all `N = 2 * (len - 1)` bins from bins `0..=N/2` of a one-sided one.
@@ -68,7 +72,12 @@ pub fn two_sided_from_one_sided<const R: usize, const C: usize>(
     out.push(one_sided[0]);
     out.extend(one_sided[1..m - 1].iter().map(|s| s * Complex64::new(0.5, 0.0)));
     out.push(one_sided[m - 1]);
-    out.extend(one_sided[1..m - 1].iter().rev().map(|s| s.map(|z| z.conj() * 0.5)));
+    out.extend(
+        one_sided[1..m - 1]
+            .iter()
+            .rev()
+            .map(|s| s.map(|z| z.conj() * 0.5)),
+    );
     debug_assert_eq!(out.len(), n);
     Ok(out)
 }
@@ -90,7 +99,13 @@ pub fn one_sided_from_two_sided<const R: usize, const C: usize>(
     Ok(two_sided[..=half]
         .iter()
         .enumerate()
-        .map(|(k, s)| if k == 0 || k == half { *s } else { s * Complex64::new(2.0, 0.0) })
+        .map(|(k, s)| {
+            if k == 0 || k == half {
+                *s
+            } else {
+                s * Complex64::new(2.0, 0.0)
+            }
+        })
         .collect())
 }
 
@@ -110,7 +125,12 @@ mod tests {
             .map(|k| {
                 let edge = k == 0 || k == m - 1;
                 let off = c(rng.normal(), if edge { 0.0 } else { rng.normal() });
-                Matrix2::new(c(1.0 + rng.uniform(), 0.0), off, off.conj(), c(1.0 + rng.uniform(), 0.0))
+                Matrix2::new(
+                    c(1.0 + rng.uniform(), 0.0),
+                    off,
+                    off.conj(),
+                    c(1.0 + rng.uniform(), 0.0),
+                )
             })
             .collect()
     }
@@ -126,7 +146,11 @@ mod tests {
         for k in 1..4 {
             assert_eq!(two[k], one[k] * c(0.5, 0.0), "interior bin {k} halved");
             assert_eq!(two[8 - k], two[k].transpose(), "S(-f) = S(f)^T at bin {k}");
-            assert_eq!(two[8 - k], two[k].map(|z| z.conj()), "S(-f) = conj S(f) at bin {k}");
+            assert_eq!(
+                two[8 - k],
+                two[k].map(|z| z.conj()),
+                "S(-f) = conj S(f) at bin {k}"
+            );
         }
         // The lag-0 covariance (the sum over the two-sided grid) is real: the interior bins'
         // quadrature (imaginary) parts cancel against the negative frequencies, their real parts
@@ -158,12 +182,18 @@ mod tests {
     #[test]
     fn bad_lengths_are_errors() {
         let none: [Matrix2<Complex64>; 0] = [];
-        assert_eq!(two_sided_from_one_sided(&none), Err(GridError::TooShortOneSided { len: 0 }));
+        assert_eq!(
+            two_sided_from_one_sided(&none),
+            Err(GridError::TooShortOneSided { len: 0 })
+        );
         assert_eq!(
             two_sided_from_one_sided(&[Matrix2::identity()]),
             Err(GridError::TooShortOneSided { len: 1 })
         );
-        assert_eq!(one_sided_from_two_sided(&none), Err(GridError::BadTwoSidedLength { len: 0 }));
+        assert_eq!(
+            one_sided_from_two_sided(&none),
+            Err(GridError::BadTwoSidedLength { len: 0 })
+        );
         assert_eq!(
             one_sided_from_two_sided(&[Matrix2::<Complex64>::identity(); 3]),
             Err(GridError::BadTwoSidedLength { len: 3 })

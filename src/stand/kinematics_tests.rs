@@ -134,7 +134,10 @@ fn small_angle_limit_agrees_to_second_order() {
 }
 
 #[test]
-#[expect(clippy::float_cmp, reason = "the series must give the pointwise values bit for bit")]
+#[expect(
+    clippy::float_cmp,
+    reason = "the series must give the pointwise values bit for bit"
+)]
 fn series_evaluation_matches_pointwise() {
     let n = 17;
     let mut s = EulerSeries::default();

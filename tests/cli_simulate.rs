@@ -1,6 +1,9 @@
 //! `imu-attest simulate` through the real binary: contract-conformant files, determinism, and one
 //! clear line with exit status 2 for every bad argument.
-#![expect(clippy::unwrap_used, reason = "test helpers panic on the unexpected, like the tests")]
+#![expect(
+    clippy::unwrap_used,
+    reason = "test helpers panic on the unexpected, like the tests"
+)]
 
 use std::io::Read;
 use std::path::Path;

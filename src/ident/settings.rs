@@ -1,0 +1,308 @@
+//! Identifier settings (contract section 3): every field optional, defaults echoed into every
+//! output.
+//!
+//! `lambda` is three numbers or `"auto"`; `order` is an integer 0..=4 or `"auto"`. Validation
+//! against a run ([`Settings::validate`]) refuses: a band outside `(0, Nyquist]` or empty, a
+//! weight `A` that is not symmetric positive definite, a `lambda` that makes `I - A^-1 Lambda`
+//! singular, an order above 4, a segment longer than the run, a block the run does not have.
+
+use std::fmt;
+use std::path::Path;
+
+use nalgebra::Matrix3;
+use serde::de::{self, Deserializer, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
+
+use crate::block::Block;
+use crate::spectral::WelchSettings;
+
+/// Highest structural order.
+pub const MAX_ORDER: usize = 4;
+
+/// The Lagrange multipliers of the regularising constraint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LambdaSetting {
+    /// Set by hand, one per output channel.
+    Values([f64; 3]),
+    /// Solved from the regularising constraint.
+    Auto,
+}
+
+/// The structural order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OrderSetting {
+    /// A fixed order (0 = `K e^(-tau s)`).
+    Fixed(usize),
+    /// Chosen by the order-selection criterion.
+    Auto,
+}
+
+/// Settings of one identification.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// Welch estimation of the spectral matrices.
+    pub welch: WelchSettings,
+    /// Analysis band `[low, high]`, Hz.
+    pub band_hz: [f64; 2],
+    /// Weight matrix A (symmetric positive definite).
+    #[serde(rename = "weight_A")]
+    pub weight_a: [[f64; 3]; 3],
+    /// Lagrange multipliers.
+    pub lambda: LambdaSetting,
+    /// Structural order.
+    pub order: OrderSetting,
+    /// Blocks to identify (those the run has, when absent from the file).
+    pub blocks: Vec<Block>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            welch: WelchSettings::default(),
+            band_hz: [0.1, 40.0],
+            weight_a: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            lambda: LambdaSetting::Values([0.0; 3]),
+            order: OrderSetting::Auto,
+            blocks: Block::BOTH.to_vec(),
+        }
+    }
+}
+
+/// Why settings were refused.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SettingsError {
+    /// The settings file is not valid JSON or has a wrong field.
+    #[error("{file}:{line}:{column}: {detail}")]
+    Parse {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong.
+        detail: String,
+    },
+    /// The band is empty, non-finite or outside `(0, Nyquist]`.
+    #[error("band_hz [{low}, {high}] is not inside (0, {nyquist}] Hz with low < high")]
+    Band {
+        /// Low edge.
+        low: f64,
+        /// High edge.
+        high: f64,
+        /// The run's Nyquist frequency.
+        nyquist: f64,
+    },
+    /// A is not symmetric positive definite.
+    #[error("weight_A is not symmetric positive definite: {reason}")]
+    WeightNotSpd {
+        /// Which property fails.
+        reason: String,
+    },
+    /// `I - A^-1 Lambda` is singular (or a lambda is not finite).
+    #[error("lambda {lambda:?} makes I - A^-1 Lambda singular (determinant {determinant:.3e})")]
+    SingularLambda {
+        /// The multipliers.
+        lambda: [f64; 3],
+        /// `det(I - A^-1 Lambda)`.
+        determinant: f64,
+    },
+    /// Order above [`MAX_ORDER`].
+    #[error("order {0} is above the highest structural order {MAX_ORDER}")]
+    Order(usize),
+    /// Welch settings refused.
+    #[error("welch: {0}")]
+    Welch(String),
+    /// A block the run does not have.
+    #[error("block '{0}' is not in this run")]
+    MissingBlock(&'static str),
+    /// No block to identify.
+    #[error("blocks is empty: nothing to identify")]
+    NoBlocks,
+}
+
+impl Settings {
+    /// Reads settings from a JSON file's bytes; `file` names it in errors.
+    ///
+    /// # Errors
+    /// [`SettingsError::Parse`] with the line and column of the first problem.
+    pub fn from_json(bytes: &[u8], file: &Path) -> Result<Self, SettingsError> {
+        let parse_error = |path: String, inner: &serde_json::Error| {
+            let what = inner
+                .to_string()
+                .split(" at line ")
+                .next()
+                .unwrap_or_default()
+                .to_owned();
+            SettingsError::Parse {
+                file: file.display().to_string(),
+                line: inner.line(),
+                column: inner.column(),
+                detail: if path == "." {
+                    what
+                } else {
+                    format!("{path}: {what}")
+                },
+            }
+        };
+        let mut de = serde_json::Deserializer::from_slice(bytes);
+        let settings: Self = serde_path_to_error::deserialize(&mut de)
+            .map_err(|e| parse_error(e.path().to_string(), e.inner()))?;
+        de.end().map_err(|e| parse_error(".".into(), &e))?;
+        Ok(settings)
+    }
+
+    /// `A` as a matrix.
+    #[must_use]
+    pub fn weight(&self) -> Matrix3<f64> {
+        Matrix3::from_fn(|i, j| self.weight_a[i][j])
+    }
+
+    /// Checks the settings against a run of `n_samples` at `sample_rate_hz` having `blocks`.
+    ///
+    /// # Errors
+    /// The first violated rule of the module docs.
+    pub fn validate(
+        &self,
+        n_samples: usize,
+        sample_rate_hz: f64,
+        blocks: &[Block],
+    ) -> Result<(), SettingsError> {
+        let nyquist = sample_rate_hz / 2.0;
+        let [low, high] = self.band_hz;
+        if !(low.is_finite() && high.is_finite() && low > 0.0 && low < high && high <= nyquist) {
+            return Err(SettingsError::Band { low, high, nyquist });
+        }
+        self.validate_weight_and_lambda()?;
+        if let OrderSetting::Fixed(n) = self.order
+            && n > MAX_ORDER
+        {
+            return Err(SettingsError::Order(n));
+        }
+        self.welch
+            .validate(n_samples)
+            .map_err(|e| SettingsError::Welch(e.to_string()))?;
+        if self.blocks.is_empty() {
+            return Err(SettingsError::NoBlocks);
+        }
+        if let Some(b) = self.blocks.iter().find(|b| !blocks.contains(b)) {
+            return Err(SettingsError::MissingBlock(b.name()));
+        }
+        Ok(())
+    }
+
+    /// Checks `A` (symmetric positive definite) and `Lambda` (`I - A^-1 Lambda` invertible).
+    ///
+    /// # Errors
+    /// [`SettingsError::WeightNotSpd`] or [`SettingsError::SingularLambda`].
+    pub fn validate_weight_and_lambda(&self) -> Result<(), SettingsError> {
+        let a = self.weight();
+        if a.iter().any(|v| !v.is_finite()) {
+            return Err(SettingsError::WeightNotSpd {
+                reason: "an entry is not a finite number".into(),
+            });
+        }
+        let asym = (a - a.transpose()).abs().max();
+        if asym > 1e-12 * a.abs().max().max(1.0) {
+            return Err(SettingsError::WeightNotSpd {
+                reason: format!("not symmetric (largest |A - A^T| = {asym:.3e})"),
+            });
+        }
+        let eig = a.symmetric_eigen().eigenvalues;
+        let min = eig.min();
+        if min <= 1e-12 * eig.max().abs().max(f64::MIN_POSITIVE) {
+            return Err(SettingsError::WeightNotSpd {
+                reason: format!("smallest eigenvalue {min:.3e} is not positive"),
+            });
+        }
+        if let LambdaSetting::Values(l) = self.lambda {
+            let det = a.try_inverse().map_or(0.0, |inv| {
+                (Matrix3::identity() - inv * Matrix3::from_diagonal(&l.into())).determinant()
+            });
+            if !(det.is_finite() && det.abs() > 1e-9) {
+                return Err(SettingsError::SingularLambda {
+                    lambda: l,
+                    determinant: det,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Serialize for LambdaSetting {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            LambdaSetting::Values(v) => v.serialize(s),
+            LambdaSetting::Auto => s.serialize_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for LambdaSetting {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Values([f64; 3]),
+            Word(String),
+        }
+        match Raw::deserialize(d)
+            .map_err(|_| de::Error::custom("lambda must be three numbers or \"auto\""))?
+        {
+            Raw::Values(v) => Ok(LambdaSetting::Values(v)),
+            Raw::Word(w) if w == "auto" => Ok(LambdaSetting::Auto),
+            Raw::Word(w) => Err(de::Error::custom(format!(
+                "lambda must be three numbers or \"auto\", not \"{w}\""
+            ))),
+        }
+    }
+}
+
+impl Serialize for OrderSetting {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            OrderSetting::Fixed(n) => s.serialize_u64(*n as u64),
+            OrderSetting::Auto => s.serialize_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for OrderSetting {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = OrderSetting;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "an order 0..={MAX_ORDER} or \"auto\"")
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<OrderSetting, E> {
+                usize::try_from(v)
+                    .ok()
+                    .filter(|n| *n <= MAX_ORDER)
+                    .map(OrderSetting::Fixed)
+                    .ok_or_else(|| E::custom(format!("order {v} is above {MAX_ORDER}")))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<OrderSetting, E> {
+                u64::try_from(v)
+                    .map_err(|_| E::custom(format!("order {v} is negative")))
+                    .and_then(|u| self.visit_u64(u))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<OrderSetting, E> {
+                if v == "auto" {
+                    Ok(OrderSetting::Auto)
+                } else {
+                    Err(E::custom(format!(
+                        "order must be 0..={MAX_ORDER} or \"auto\", not \"{v}\""
+                    )))
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[cfg(test)]
+#[path = "settings_tests.rs"]
+mod tests;

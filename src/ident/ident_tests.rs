@@ -1,0 +1,171 @@
+//! The identifier's stages on synthetic systems whose answer is known exactly.
+
+use nalgebra::Matrix3;
+use num_complex::Complex64;
+
+use super::factorisation::factorise;
+use super::settings::LambdaSetting;
+use super::signals::BlockSignals;
+use super::spectra::block_spectra;
+use super::wiener::{band_bins, regularised_wiener};
+use crate::block::Block;
+use crate::rng::Rng;
+use crate::spectral::factor::WilsonSettings;
+use crate::spectral::{WelchPlanner, WelchSettings};
+
+const RATE: f64 = 200.0;
+const DELAY: usize = 3;
+
+/// Inputs: three cross-correlated, mildly coloured noises; outputs `K u(n - DELAY) + noise`.
+fn synthetic(seed: u64, n: usize, k: Matrix3<f64>, noise: f64) -> BlockSignals {
+    let mut rng = Rng::new(seed);
+    let white: Vec<[f64; 3]> = (0..n + 8)
+        .map(|_| [rng.normal(), rng.normal(), rng.normal()])
+        .collect();
+    let mut input: [Vec<f64>; 3] = Default::default();
+    for t in 2..n + 2 {
+        let mix = |i: usize| white[t][i] + 0.5 * white[t - 1][i] - 0.2 * white[t - 2][i];
+        let (a, b, c) = (mix(0), mix(1), mix(2));
+        input[0].push(a);
+        input[1].push(0.6 * a + 0.8 * b);
+        input[2].push(0.3 * b + 0.9 * c);
+    }
+    let output = std::array::from_fn(|i| {
+        (0..n)
+            .map(|t| {
+                if t >= DELAY {
+                    (0..3).map(|j| k[(i, j)] * input[j][t - DELAY]).sum::<f64>() + noise * rng.normal()
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    });
+    BlockSignals {
+        block: Block::Gyro,
+        input,
+        output,
+    }
+}
+
+fn k_true() -> Matrix3<f64> {
+    Matrix3::new(
+        1.001, 0.002, -0.001, -0.0015, 0.998, 0.0005, 0.003, -0.002, 1.0005,
+    )
+}
+
+#[test]
+fn causal_wiener_recovers_a_causal_system_and_the_noise_spectrum() {
+    let k = k_true();
+    let sig = synthetic(1, 120_000, k, 0.05);
+    // Long segments: a delay d within a Hann segment of N samples leaks ~(d/N)^2 of the coherent
+    // power into the residual (the Welch time-delay bias), which would inflate the noise estimate.
+    let settings = WelchSettings {
+        segment_len: 2048,
+        ..WelchSettings::default()
+    };
+    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
+    let fact = factorise(&sp, &WilsonSettings::default()).unwrap();
+    assert!(fact.converged);
+    let band = band_bins(&sp.frequency_hz, [1.0, 80.0]);
+    let w = regularised_wiener(
+        &sp,
+        &fact,
+        &Matrix3::identity(),
+        LambdaSetting::Values([0.0; 3]),
+        [1.0, 80.0],
+    )
+    .unwrap();
+    let mut worst: f64 = 0.0;
+    for &b in &band {
+        let phase = Complex64::from_polar(
+            1.0,
+            -2.0 * std::f64::consts::PI * sp.frequency_hz[b] * DELAY as f64 / RATE,
+        );
+        let expected = k.map(|v| Complex64::from(v) * phase);
+        worst = worst.max((w.w_u[b] - expected).norm() / expected.norm());
+        // H1 agrees as well, and the stated uncertainty covers the error.
+        assert!((fact.h1[b] - expected).norm() < 0.02 * expected.norm());
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!(
+                    (w.w_u[b][(i, j)] - expected[(i, j)]).norm() < 6.0 * w.w_u_std[b][(i, j)] + 1e-3,
+                    "bin {b} ({i},{j})"
+                );
+            }
+        }
+    }
+    assert!(worst < 0.02, "worst relative error of W_u in band {worst}");
+    // The disturbance is white with variance 0.0025: one-sided density 2 * 0.0025 / RATE.
+    let expected_psd = 2.0 * 0.05f64.powi(2) / RATE;
+    let mean_psd: f64 = band.iter().map(|&b| fact.noise_psd[b][(0, 0)].re).sum::<f64>() / band.len() as f64;
+    assert!(
+        (mean_psd / expected_psd - 1.0).abs() < 0.05,
+        "noise psd {mean_psd:e} vs {expected_psd:e}"
+    );
+    // 2 W_psi W_psi^H reproduces the one-sided noise density.
+    for &b in &band {
+        let r = fact.shaping_filter[b] * fact.shaping_filter[b].adjoint() * Complex64::from(2.0);
+        assert!((r - fact.noise_psd[b]).norm() < 1e-6 * fact.noise_psd[b].norm());
+    }
+    // Coherence is near 1 (signal power ~1, noise 0.0025).
+    assert!(band.iter().all(|&b| w.coherence[b].iter().all(|&c| c > 0.99)));
+}
+
+#[test]
+fn auto_lambda_minimises_the_constraint_residual() {
+    let sig = synthetic(2, 40_000, k_true(), 0.3);
+    let settings = WelchSettings {
+        segment_len: 256,
+        ..WelchSettings::default()
+    };
+    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
+    let fact = factorise(&sp, &WilsonSettings::default()).unwrap();
+    for a in [
+        Matrix3::identity(),
+        Matrix3::new(2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 0.5),
+    ] {
+        let auto = regularised_wiener(&sp, &fact, &a, LambdaSetting::Auto, [1.0, 80.0]).unwrap();
+        assert!(auto.lambda_auto);
+        assert!(auto.constraint_residual <= auto.constraint_residual_unregularised + 1e-15);
+        // Brute force: every perturbation of the solved Lambda is worse.
+        for i in 0..3 {
+            for delta in [-1e-3, 1e-3, -1e-2, 1e-2] {
+                let mut l = auto.lambda;
+                l[i] += delta;
+                let other =
+                    regularised_wiener(&sp, &fact, &a, LambdaSetting::Values(l), [1.0, 80.0]).unwrap();
+                assert!(
+                    other.constraint_residual >= auto.constraint_residual - 1e-14,
+                    "A={a}, lambda[{i}]+{delta}"
+                );
+            }
+        }
+        // With Lambda = 0 the weight A has no effect on W_u.
+        let w0 = regularised_wiener(&sp, &fact, &a, LambdaSetting::Values([0.0; 3]), [1.0, 80.0]).unwrap();
+        let w1 = regularised_wiener(
+            &sp,
+            &fact,
+            &Matrix3::identity(),
+            LambdaSetting::Values([0.0; 3]),
+            [1.0, 80.0],
+        )
+        .unwrap();
+        assert_eq!(w0.w_u, w1.w_u);
+    }
+}
+
+#[test]
+fn empty_band_and_singular_weight_are_errors() {
+    let sig = synthetic(3, 8_000, k_true(), 0.1);
+    let settings = WelchSettings {
+        segment_len: 256,
+        ..WelchSettings::default()
+    };
+    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
+    let fact = factorise(&sp, &WilsonSettings::default()).unwrap();
+    let none = regularised_wiener(&sp, &fact, &Matrix3::identity(), LambdaSetting::Auto, [0.1, 0.2]);
+    assert!(matches!(none, Err(super::IdentError::EmptyBand { .. })));
+    let singular = regularised_wiener(&sp, &fact, &Matrix3::zeros(), LambdaSetting::Auto, [1.0, 80.0]);
+    assert!(matches!(singular, Err(super::IdentError::Singular(_))));
+}

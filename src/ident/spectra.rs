@@ -1,0 +1,104 @@
+//! The spectral stage: the 6x6 one-sided Welch matrix of `[u; x]` for a block, split into
+//! `S_uu`, `S_xu`, `S_xx` per bin (`S_xu = E[x u^H]`, so `x = W u` gives `S_xu = W S_uu`), plus
+//! the equivalent number of independent averages of the overlapping segments (Welch 1967), which
+//! sets the confidence of everything estimated from these spectra.
+
+use nalgebra::Matrix3;
+use num_complex::Complex64;
+
+use super::signals::BlockSignals;
+use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
+
+/// One block's spectral matrices on the one-sided Welch grid.
+#[derive(Clone, Debug)]
+pub struct BlockSpectra {
+    /// Bin frequencies `k fs / N`, `k = 0..=N/2`, Hz.
+    pub frequency_hz: Vec<f64>,
+    /// Input spectral matrix per bin.
+    pub s_uu: Vec<Matrix3<Complex64>>,
+    /// Output-input cross-spectral matrix per bin.
+    pub s_xu: Vec<Matrix3<Complex64>>,
+    /// Output spectral matrix per bin.
+    pub s_xx: Vec<Matrix3<Complex64>>,
+    /// Number of segments averaged.
+    pub n_averages: usize,
+    /// Equivalent number of independent averages (overlap-corrected).
+    pub equivalent_averages: f64,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Segment length (the two-sided grid length), samples.
+    pub segment_len: usize,
+}
+
+/// Computes the block's spectra with `planner` (plans and windows are reused across calls).
+///
+/// # Errors
+/// The Welch estimator's errors: bad settings, a run shorter than one segment, NaN samples.
+pub fn block_spectra(
+    planner: &mut WelchPlanner,
+    signals: &BlockSignals,
+    sample_rate_hz: f64,
+    settings: &WelchSettings,
+) -> Result<BlockSpectra, SpectralError> {
+    let channels: Vec<&[f64]> = signals
+        .input
+        .iter()
+        .chain(signals.output.iter())
+        .map(Vec::as_slice)
+        .collect();
+    let m = planner.welch_matrix(&channels, sample_rate_hz, settings)?;
+    let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
+    let bins = m.n_bins();
+    let window = planner.window(settings.window, settings.segment_len);
+    Ok(BlockSpectra {
+        frequency_hz: m.frequency_hz.clone(),
+        s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
+        s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
+        s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
+        n_averages: m.n_averages,
+        equivalent_averages: equivalent_averages(&window, settings.step(), m.n_averages),
+        sample_rate_hz,
+        segment_len: settings.segment_len,
+    })
+}
+
+/// Welch's equivalent number of averages for `k` segments of window `w` stepped by `step`:
+/// `k / (1 + 2 sum_l (1 - l/k) rho(l)^2)`, with `rho(l)` the window's normalised overlap
+/// correlation at a shift of `l` steps.
+#[must_use]
+pub fn equivalent_averages(w: &[f64], step: usize, k: usize) -> f64 {
+    let energy: f64 = w.iter().map(|v| v * v).sum();
+    if k == 0 || energy <= 0.0 || step == 0 {
+        return k as f64;
+    }
+    let mut sum = 0.0;
+    for l in 1..k {
+        let shift = l * step;
+        if shift >= w.len() {
+            break;
+        }
+        let rho: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / energy;
+        sum += (1.0 - l as f64 / k as f64) * rho * rho;
+    }
+    k as f64 / (1.0 + 2.0 * sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectral::Window;
+
+    #[test]
+    fn equivalent_averages_of_known_cases() {
+        // No overlap: independent segments.
+        let w = Window::Hann.coefficients(256);
+        assert!((equivalent_averages(&w, 256, 10) - 10.0).abs() < 1e-12);
+        // Hann at 50 % overlap: rho = 1/6 (closed form for the periodic window), so for many
+        // segments the ratio tends to 1/(1 + 2/36) = 0.947.
+        let ratio = equivalent_averages(&w, 128, 10_000) / 10_000.0;
+        assert!((ratio - 1.0 / (1.0 + 2.0 / 36.0)).abs() < 1e-3, "{ratio}");
+        // Rectangular at 50 %: rho = 1/2, ratio -> 1/1.5.
+        let r = vec![1.0; 256];
+        assert!((equivalent_averages(&r, 128, 10_000) / 10_000.0 - 2.0 / 3.0).abs() < 1e-3);
+    }
+}

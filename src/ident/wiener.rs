@@ -1,0 +1,157 @@
+//! The regularised Wiener-Kolmogorov stage (cheap; recomputed when A or Lambda change):
+//! `W_u = (I - A^-1 Lambda) W0` with `W0 = [S_xu D_u^-H]_+ D_u^-1` from the factorisation stage.
+//!
+//! Lambda `"auto"` solves the regularising constraint (READING.md): the identified model must
+//! reproduce the measured cross-spectrum, `W_u S_uu = S_xu`, which the causal projection alone does
+//! not guarantee. Over the analysis band, with `E = W0 S_uu - S_xu` and `F = W0 S_uu`, the
+//! A-weighted residual `sum_f tr[(E - A^-1 Lambda F)^H A (E - A^-1 Lambda F)]` is quadratic in the
+//! diagonal Lambda; its minimum solves the 3x3 system
+//! `M lambda = v`, `M_ik = (A^-1)_ik sum_f Re(F_k F_i^H)`, `v_i = sum_f Re(E_i F_i^H)`
+//! (rows `E_i`, `F_i`). With `Lambda = 0` the weight A drops out entirely (the multichannel Wiener
+//! filter is optimal for every positive-definite weight): A shapes the result only through
+//! `A^-1 Lambda` and this fit.
+//!
+//! Confidence: the variance of each element of `W_u` is taken as that of the multichannel H1
+//! estimate, `E|dW_ij|^2 = S_psi,ii (S_uu^-1)_jj / (n_eq - 3)`, with `n_eq` the overlap-corrected
+//! number of averages; multiple coherence `gamma_i^2 = 1 - S_psi,ii / S_xx,ii`.
+
+use nalgebra::{Matrix3, Vector3};
+use num_complex::Complex64;
+use serde::Serialize;
+
+use super::IdentError;
+use super::factorisation::Factorisation;
+use super::settings::LambdaSetting;
+use super::spectra::BlockSpectra;
+
+/// The identified frequency response and its quality figures, one-sided grid.
+#[derive(Clone, Debug, Serialize)]
+pub struct WienerEstimate {
+    /// The Lagrange multipliers used.
+    pub lambda: [f64; 3],
+    /// Whether they were solved from the constraint.
+    pub lambda_auto: bool,
+    /// `W_u` per bin.
+    #[serde(skip)]
+    pub w_u: Vec<Matrix3<Complex64>>,
+    /// Standard deviation of each element of `W_u` per bin (complex magnitude).
+    #[serde(skip)]
+    pub w_u_std: Vec<Matrix3<f64>>,
+    /// Multiple coherence of each output with the three inputs, per bin.
+    #[serde(skip)]
+    pub coherence: Vec<[f64; 3]>,
+    /// Band-integrated residual of `W_u S_uu = S_xu`, relative to `S_xu` (A-weighted).
+    pub constraint_residual: f64,
+    /// The same for `Lambda = 0`, for comparison.
+    pub constraint_residual_unregularised: f64,
+}
+
+/// Indices of the bins inside `[low, high]` Hz.
+#[must_use]
+pub fn band_bins(frequency_hz: &[f64], band_hz: [f64; 2]) -> Vec<usize> {
+    (0..frequency_hz.len())
+        .filter(|&k| frequency_hz[k] >= band_hz[0] && frequency_hz[k] <= band_hz[1])
+        .collect()
+}
+
+/// Applies A and Lambda to the factorisation stage's result.
+///
+/// # Errors
+/// [`IdentError::EmptyBand`] when no bin lies in the band; [`IdentError::Singular`] when A cannot be
+/// inverted or the auto-Lambda system is singular (an output or input with no power in the band).
+pub fn regularised_wiener(
+    spectra: &BlockSpectra,
+    fact: &Factorisation,
+    weight_a: &Matrix3<f64>,
+    lambda: LambdaSetting,
+    band_hz: [f64; 2],
+) -> Result<WienerEstimate, IdentError> {
+    let band = band_bins(&spectra.frequency_hz, band_hz);
+    if band.is_empty() {
+        return Err(IdentError::EmptyBand {
+            low: band_hz[0],
+            high: band_hz[1],
+        });
+    }
+    let a_inv = weight_a.try_inverse().ok_or(IdentError::Singular("weight_A"))?;
+    let e: Vec<Matrix3<Complex64>> = band
+        .iter()
+        .map(|&k| fact.causal_wiener[k] * spectra.s_uu[k] - spectra.s_xu[k])
+        .collect();
+    let f: Vec<Matrix3<Complex64>> = band
+        .iter()
+        .map(|&k| fact.causal_wiener[k] * spectra.s_uu[k])
+        .collect();
+    let (values, auto) = match lambda {
+        LambdaSetting::Values(v) => (v, false),
+        LambdaSetting::Auto => (solve_lambda(&e, &f, &a_inv)?, true),
+    };
+    let scale =
+        (Matrix3::identity() - a_inv * Matrix3::from_diagonal(&Vector3::from(values))).map(Complex64::from);
+    let w_u: Vec<Matrix3<Complex64>> = fact.causal_wiener.iter().map(|w| scale * w).collect();
+    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
+    let w_u_std = (0..w_u.len())
+        .map(|k| {
+            Matrix3::from_fn(|i, j| {
+                (fact.noise_psd[k][(i, i)].re.max(0.0) * fact.s_uu_inv[k][(j, j)].re.max(0.0) / dof).sqrt()
+            })
+        })
+        .collect();
+    let coherence = (0..w_u.len())
+        .map(|k| {
+            std::array::from_fn(|i| {
+                let sxx = spectra.s_xx[k][(i, i)].re;
+                if sxx > 0.0 {
+                    (1.0 - fact.noise_psd[k][(i, i)].re / sxx).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+        })
+        .collect();
+    let residual = |lam: [f64; 3]| {
+        let l = a_inv * Matrix3::from_diagonal(&Vector3::from(lam));
+        let (mut num, mut den) = (0.0, 0.0);
+        for (m, &k) in band.iter().enumerate() {
+            let r = e[m] - l.map(Complex64::from) * f[m];
+            num += (r.adjoint() * weight_a.map(Complex64::from) * r).trace().re;
+            den += (spectra.s_xu[k].adjoint() * weight_a.map(Complex64::from) * spectra.s_xu[k])
+                .trace()
+                .re;
+        }
+        if den > 0.0 { (num / den).sqrt() } else { 0.0 }
+    };
+    Ok(WienerEstimate {
+        lambda: values,
+        lambda_auto: auto,
+        w_u,
+        w_u_std,
+        coherence,
+        constraint_residual: residual(values),
+        constraint_residual_unregularised: residual([0.0; 3]),
+    })
+}
+
+/// Solves `M lambda = v` of the module docs.
+fn solve_lambda(
+    e: &[Matrix3<Complex64>],
+    f: &[Matrix3<Complex64>],
+    a_inv: &Matrix3<f64>,
+) -> Result<[f64; 3], IdentError> {
+    let mut ff = Matrix3::<f64>::zeros();
+    let mut v = Vector3::<f64>::zeros();
+    for (em, fm) in e.iter().zip(f) {
+        for i in 0..3 {
+            for k in 0..3 {
+                ff[(i, k)] += (fm.row(k) * fm.row(i).adjoint())[(0, 0)].re;
+            }
+            v[i] += (em.row(i) * fm.row(i).adjoint())[(0, 0)].re;
+        }
+    }
+    let m = a_inv.component_mul(&ff);
+    let sol = m
+        .try_inverse()
+        .ok_or(IdentError::Singular("auto-lambda system"))?
+        * v;
+    Ok([sol[0], sol[1], sol[2]])
+}

@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod inspect;
 mod simulate;
 
 use std::process::ExitCode;
@@ -42,6 +43,7 @@ usage:
   imu-attest [gui] [RUN...]                       open the GUI (with these runs loaded)
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
+  imu-attest inspect RUN...                       check runs against the format, summarise them
 ";
 
 /// Entry point of the binary: runs the command named by the process arguments.
@@ -68,6 +70,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
     };
     match command {
         "simulate" => simulate::run(&Args::parse(rest)?),
+        "inspect" => inspect::run(&Args::parse(rest)?),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");
             Ok(())

@@ -1,0 +1,165 @@
+//! Every kind of bad run of contract section 2, through the real binary: exit status 2 and one
+//! line naming the file (and the line and column where they apply).
+#![expect(
+    clippy::unwrap_used,
+    reason = "test helpers panic on the unexpected, like the tests"
+)]
+
+use std::io::Write;
+use std::path::Path;
+use std::process::Command;
+
+const HEADER: &str = "t,roll,yaw,pitch,gx,gy,gz";
+
+fn good_rows(n: usize) -> String {
+    (0..n)
+        .map(|i| format!("{},0.01,0.02,0.03,0.1,0.2,0.3\n", i as f64 * 0.01))
+        .collect()
+}
+
+fn inspect(path: &Path) -> (Option<i32>, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+        .arg("inspect")
+        .arg(path)
+        .output()
+        .unwrap();
+    (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+#[test]
+fn good_run_is_summarised() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "ok.csv",
+        format!("{HEADER},temp_c\n{}", good_rows(40).replace('\n', ",21.5\n")).as_bytes(),
+    );
+    let (code, err) = inspect(&p);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("ok.csv: 40 samples, 100.000000 Hz"), "{err}");
+    assert!(err.contains("temp_c"), "unknown column noticed: {err}");
+    assert!(err.contains("no sidecar"), "{err}");
+}
+
+#[test]
+fn every_bad_input_exits_2_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rows = good_rows(40);
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(format!("{HEADER}\n{rows}").as_bytes()).unwrap();
+    let mut gz = gz.finish().unwrap();
+    gz.truncate(gz.len() / 2);
+    let irregular: String = (0..40)
+        .map(|i| format!("{},0,0,0,0,0,0\n", if i == 20 { 0.2015 } else { i as f64 * 0.01 }))
+        .collect();
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "missing_column.csv",
+            format!("t,roll,yaw,gx,gy,gz\n{rows}").into_bytes(),
+            "pitch",
+        ),
+        (
+            "no_block.csv",
+            format!("t,roll,yaw,pitch\n{}", "0,0,0,0\n".repeat(20)).into_bytes(),
+            "gx",
+        ),
+        (
+            "partial_block.csv",
+            format!("t,roll,yaw,pitch,gx,gy\n{}", "0,0,0,0,0,0\n".repeat(20)).into_bytes(),
+            "gz",
+        ),
+        (
+            "not_numeric.csv",
+            format!("{HEADER}\n{}0.4,0.01,abc,0.03,0.1,0.2,0.3\n", good_rows(40)).into_bytes(),
+            ":42:3",
+        ),
+        (
+            "nan.csv",
+            format!("{HEADER}\n{}0.4,0.01,0.02,NaN,0.1,0.2,0.3\n", good_rows(40)).into_bytes(),
+            ":42:4",
+        ),
+        (
+            "inf.csv",
+            format!("{HEADER}\n{}0.4,0.01,0.02,0.03,inf,0.2,0.3\n", good_rows(40)).into_bytes(),
+            ":42:5",
+        ),
+        (
+            "not_increasing.csv",
+            format!("{HEADER}\n{}0.385,0,0,0,0,0,0\n", good_rows(40)).into_bytes(),
+            ":42",
+        ),
+        (
+            "irregular.csv",
+            format!("{HEADER}\n{irregular}").into_bytes(),
+            ":22",
+        ),
+        (
+            "too_few.csv",
+            format!("{HEADER}\n{}", good_rows(5)).into_bytes(),
+            "5",
+        ),
+        (
+            "truncated.csv",
+            format!("{HEADER}\n{}0.4,0.01,0.02", good_rows(40)).into_bytes(),
+            "truncated",
+        ),
+        (
+            "semicolon.csv",
+            format!(
+                "{}\n{}",
+                HEADER.replace(',', ";"),
+                good_rows(40).replace(',', ";")
+            )
+            .into_bytes(),
+            "';'",
+        ),
+        (
+            "duplicate.csv",
+            format!(
+                "t,roll,yaw,pitch,gx,gy,gz,gx\n{}",
+                good_rows(40).replace('\n', ",0\n")
+            )
+            .into_bytes(),
+            "gx",
+        ),
+        (
+            "binary.csv",
+            vec![0u8, 159, 146, 150, 0, 1, 2, 3, 10, 0, 0],
+            "text",
+        ),
+        ("broken.csv.gz", gz, "gzip"),
+    ];
+    for (name, bytes, needle) in cases {
+        let p = write(d, name, &bytes);
+        let (code, err) = inspect(&p);
+        assert_eq!(code, Some(2), "{name}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(name), "{name}: the message names the file: {err}");
+        assert!(err.contains(needle), "{name}: expected '{needle}' in: {err}");
+    }
+    // A directory, a missing file, and bad sidecars.
+    let (code, err) = inspect(d);
+    assert_eq!(code, Some(2), "{err}");
+    let (code, err) = inspect(&d.join("absent.csv"));
+    assert_eq!(code, Some(2), "{err}");
+    for (sidecar, needle) in [
+        ("{\"g_mps2\": -9.8}", "g_mps2"),
+        ("{\"accel_lever_arm_m\": [0.1, 0.2]}", "lever"),
+        ("{\"regime\": 3}", ":1:"),
+        ("{\"notes\": ", "side.json"),
+    ] {
+        write(d, "side.csv", format!("{HEADER}\n{rows}").as_bytes());
+        write(d, "side.json", sidecar.as_bytes());
+        let (code, err) = inspect(&d.join("side.csv"));
+        assert_eq!(code, Some(2), "{sidecar}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "{sidecar}: expected '{needle}' in {err}");
+    }
+}

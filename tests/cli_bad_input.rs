@@ -1,6 +1,10 @@
 //! Every kind of bad run of contract section 2, through the real binary: exit status 2 and one
 //! line naming the file (and the line and column where they apply).
 #![expect(
+    clippy::format_collect,
+    reason = "small test fixtures read best as formatted rows"
+)]
+#![expect(
     clippy::unwrap_used,
     reason = "test helpers panic on the unexpected, like the tests"
 )]
@@ -57,7 +61,12 @@ fn every_bad_input_exits_2_with_one_line() {
     let mut gz = gz.finish().unwrap();
     gz.truncate(gz.len() / 2);
     let irregular: String = (0..40)
-        .map(|i| format!("{},0,0,0,0,0,0\n", if i == 20 { 0.2015 } else { i as f64 * 0.01 }))
+        .map(|i| {
+            format!(
+                "{},0,0,0,0,0,0\n",
+                if i == 20 { 0.2015 } else { f64::from(i) * 0.01 }
+            )
+        })
         .collect();
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         (

@@ -11,17 +11,20 @@
 //! 2. Refinement: variable projection. For given `(d, tau)` each element's numerator is the
 //!    exact weighted least-squares solution (a `max(n,1)`-square normal system), so the
 //!    Levenberg–Marquardt iteration runs over the `n + 1` nonlinear parameters only, with a
-//!    central-difference Jacobian of the projected residual vector.
+//!    forward-difference Jacobian of the projected residual vector.
 //!
 //! Several starts are refined (SK at the previous order's delay; the previous order's
 //! denominator times a far pole `1 + sigma / 10`, whose projected residual cannot exceed the
 //! previous order's from order 2 on, since the numerator space then holds the previous numerator
 //! times the same factor); the smallest residual wins, stable or not: an unstable best fit is
-//! returned and flagged as such by the caller, never swapped silently for a worse stable one. The
-//! best is also refined once more from its mirror image `d(-s)` (same magnitude response): a
-//! right-half-plane pole and a delay are otherwise easy to confuse with a stable pole.
+//! returned and flagged as such by the caller, never swapped silently for a worse stable one. At
+//! order 1 the best is also refined once more from its mirror image `1 - T s` (same magnitude
+//! response): a right-half-plane pole plus delay is otherwise easy to confuse with a stable pole.
 
+use faer::prelude::SolveLstsq;
 use nalgebra::{DMatrix, DVector};
+
+use super::project::Projector;
 use num_complex::Complex64;
 
 use super::model::{ELEMENTS, Model, Prepared};
@@ -54,10 +57,10 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
     for (den, tau) in starts {
         consider(data, den, tau, max_iter, &mut best);
     }
-    // The mirror image of the best, d(-s), with the delay moved by 2 d_1 to keep the phase
-    // slope: a pole and its mirror have the same magnitude response, so each is a local optimum
-    // the other start can miss.
-    let mirror = best.as_ref().map(|(m, _)| {
+    // Order 1: the mirror image of the best, 1 - T s, with the delay moved by 2 T to keep the
+    // phase slope: a pole and its mirror have the same magnitude response, so each is a local
+    // optimum the other start can miss.
+    let mirror = best.as_ref().filter(|_| order == 1).map(|(m, _)| {
         let den = m.den.iter().enumerate();
         let den: Vec<f64> = den.map(|(i, c)| if i % 2 == 0 { -c } else { *c }).collect();
         (den, m.tau + 2.0 * m.den[0] / data.omega_ref)
@@ -178,7 +181,6 @@ fn sk_denominator(data: &Prepared, order: usize, tau: f64) -> Option<Vec<f64>> {
                 rhs[(e * (order + 1) + i, 0)] = r[(n_num + i, cols - 1)];
             }
         }
-        use faer::prelude::SolveLstsq;
         let next = reduced.col_piv_qr().solve_lstsq(&rhs);
         let next: Vec<f64> = (0..order).map(|m| next[(m, 0)]).collect();
         if next.iter().any(|c| !c.is_finite()) {
@@ -197,160 +199,88 @@ fn sk_denominator(data: &Prepared, order: usize, tau: f64) -> Option<Vec<f64>> {
     Some(den)
 }
 
-/// The projected numerator for `(den, tau)` and, into `out`, the weighted real residuals.
-/// `None` when a normal system is singular beyond repair.
-pub(super) fn project(
-    data: &Prepared,
-    n_num: usize,
-    den: &[f64],
-    tau: f64,
-    out: &mut [f64],
-) -> Option<Vec<[f64; ELEMENTS]>> {
-    let model = Model {
-        num: Vec::new(),
-        den: den.to_vec(),
-        tau,
-    };
-    let mut gram = vec![DMatrix::<f64>::zeros(n_num, n_num); ELEMENTS];
-    let mut rhs = vec![DVector::<f64>::zeros(n_num); ELEMENTS];
-    let mut u = [Complex64::new(0.0, 0.0); 4];
-    for k in 0..data.bins() {
-        basis(&model, data, k, &mut u[..n_num]);
-        for e in 0..ELEMENTS {
-            let w = data.w[k][e];
-            for m in 0..n_num {
-                rhs[e][m] += w * (u[m].conj() * data.h[k][e]).re;
-                for l in 0..=m {
-                    gram[e][(m, l)] += w * (u[m].conj() * u[l]).re;
-                }
-            }
-        }
-    }
-    let mut num = vec![[0.0; ELEMENTS]; n_num];
-    for e in 0..ELEMENTS {
-        let g = &mut gram[e];
-        for m in 0..n_num {
-            for l in 0..m {
-                g[(l, m)] = g[(m, l)];
-            }
-        }
-        let b = solve_spd(g, &rhs[e])?;
-        for m in 0..n_num {
-            num[m][e] = b[m];
-        }
-    }
-    for k in 0..data.bins() {
-        basis(&model, data, k, &mut u[..n_num]);
-        for e in 0..ELEMENTS {
-            let fit: Complex64 = (0..n_num).map(|m| u[m] * num[m][e]).sum();
-            let r = (data.h[k][e] - fit) * (2.0 * data.w[k][e]).sqrt();
-            out[2 * (k * ELEMENTS + e)] = r.re;
-            out[2 * (k * ELEMENTS + e) + 1] = r.im;
-        }
-    }
-    Some(num)
-}
-
-/// `u_m = sigma^m e^(-j w tau) / d(sigma)` at bin `k`.
-fn basis(model: &Model, data: &Prepared, k: usize, u: &mut [Complex64]) {
-    let x = data.x[k];
-    let mut p = Complex64::from_polar(1.0, -data.omega[k] * model.tau) / model.den_at(x);
-    for um in u.iter_mut() {
-        *um = p;
-        p *= Complex64::new(0.0, x);
-    }
-}
-
-/// Solves a small symmetric positive (semi)definite system, with Jacobi scaling and a tiny ridge
-/// when Cholesky fails.
-fn solve_spd(g: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
-    let d = g.diagonal().map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 1.0 });
-    let scaled = DMatrix::from_fn(g.nrows(), g.ncols(), |i, j| g[(i, j)] * d[i] * d[j]);
-    let sb = b.component_mul(&d);
-    for ridge in [0.0, 1e-13, 1e-10] {
-        let mut a = scaled.clone();
-        for i in 0..a.nrows() {
-            a[(i, i)] += ridge;
-        }
-        if let Some(ch) = a.cholesky() {
-            let y = ch.solve(&sb).component_mul(&d);
-            if y.iter().all(|v| v.is_finite()) {
-                return Some(y);
-            }
-        }
-    }
-    None
-}
-
-/// Levenberg–Marquardt over `(den, tau omega_ref)` with the numerator projected out.
+/// Levenberg–Marquardt over `(den, tau omega_ref)` with the numerator projected out, with a
+/// forward-difference Jacobian of the projected residual (step `1e-7 max(|theta|, 0.1)`). Stops
+/// when the undamped Gauss–Newton step predicts a decrease of chi2 below `1e-10 chi2 + 1e-20`
+/// (converged), after ten rejected steps in a row (nothing left at machine precision), when
+/// chi2 has reached the noise level (`chi2 > 0.1 * 18 n_bins`) and five iterations together
+/// lowered it by less than `1e-3` (a statistically irrelevant crawl along the flat valley of an
+/// over-parameterised order), or after `max_iter` iterations.
 fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<Model> {
     let n = den.len();
-    let n_num = n.max(1);
     let rows = data.real_data();
     let w_ref = data.omega_ref;
+    let mut projector = Projector::new(data, n.max(1));
     let mut theta: Vec<f64> = den;
     theta.push(tau * w_ref);
     let mut r = vec![0.0; rows];
-    let eval = |t: &[f64], out: &mut [f64]| -> Option<f64> {
-        project(data, n_num, &t[..n], t[n] / w_ref, out)?;
+    let mut eval = |t: &[f64], out: &mut [f64]| -> Option<f64> {
+        projector.project(&t[..n], t[n] / w_ref, out)?;
         let c: f64 = out.iter().map(|v| v * v).sum();
         c.is_finite().then_some(c)
     };
     let mut cost = eval(&theta, &mut r)?;
     let mut jac = vec![vec![0.0; rows]; n + 1];
-    let (mut plus, mut minus) = (vec![0.0; rows], vec![0.0; rows]);
+    let mut plus = vec![0.0; rows];
     let mut lambda = 1e-3;
+    let mut history = vec![cost];
+    let noise_level = 0.1 * rows as f64;
     'outer: for _ in 0..max_iter {
         for (i, col) in jac.iter_mut().enumerate() {
-            let h = 1e-5 * theta[i].abs().max(0.1);
+            let h = 1e-7 * theta[i].abs().max(0.1);
             let mut t = theta.clone();
             t[i] = theta[i] + h;
             eval(&t, &mut plus)?;
-            t[i] = theta[i] - h;
-            eval(&t, &mut minus)?;
-            for ((c, p), m) in col.iter_mut().zip(&plus).zip(&minus) {
-                *c = (p - m) / (2.0 * h);
+            for ((c, p), r0) in col.iter_mut().zip(&plus).zip(&r) {
+                *c = (p - r0) / h;
             }
         }
         let a = DMatrix::from_fn(n + 1, n + 1, |i, j| dot(&jac[i], &jac[j]));
         let g = DVector::from_fn(n + 1, |i, _| dot(&jac[i], &r));
+        let predicted = a.clone().cholesky().map(|c| g.dot(&c.solve(&g)));
+        if predicted.is_some_and(|p| p <= 1e-10 * cost + 1e-20) {
+            break;
+        }
+        let mut rejected = 0;
         loop {
+            if rejected >= 10 {
+                break 'outer;
+            }
             let mut damped = a.clone();
             for i in 0..=n {
                 damped[(i, i)] += lambda * a[(i, i)].max(1e-30);
             }
-            let step = damped.cholesky().map(|c| c.solve(&(-&g)));
-            let Some(step) = step.filter(|s| s.iter().all(|v| v.is_finite())) else {
-                lambda *= 10.0;
-                if lambda > 1e12 {
-                    break 'outer;
-                }
+            let trial: Option<Vec<f64>> = damped
+                .cholesky()
+                .map(|c| c.solve(&(-&g)))
+                .filter(|s| s.iter().all(|v| v.is_finite()))
+                .map(|s| theta.iter().zip(s.iter()).map(|(t, s)| t + s).collect());
+            let Some(trial) = trial else {
+                lambda *= 4.0;
+                rejected += 1;
                 continue;
             };
-            let trial: Vec<f64> = theta.iter().zip(step.iter()).map(|(t, s)| t + s).collect();
             match eval(&trial, &mut plus) {
                 Some(c) if c < cost => {
-                    let small = step.norm() <= 1e-13 * (1.0 + norm(&theta));
-                    let flat = cost - c <= 1e-15 * cost;
                     theta = trial;
                     cost = c;
                     std::mem::swap(&mut r, &mut plus);
                     lambda = (lambda / 3.0).max(1e-12);
-                    if small || flat {
-                        break 'outer;
-                    }
+                    history.push(cost);
                     break;
                 }
                 _ => {
                     lambda *= 4.0;
-                    if lambda > 1e12 {
-                        break 'outer;
-                    }
+                    rejected += 1;
                 }
             }
         }
+        let stalled = history.len() > 5 && history[history.len() - 6] - cost < 1e-3;
+        if cost > noise_level && stalled {
+            break;
+        }
     }
-    let num = project(data, n_num, &theta[..n], theta[n] / w_ref, &mut r)?;
+    let num = projector.project(&theta[..n], theta[n] / w_ref, &mut r)?;
     Some(Model {
         num,
         den: theta[..n].to_vec(),
@@ -360,8 +290,4 @@ fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<M
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn norm(a: &[f64]) -> f64 {
-    dot(a, a).sqrt()
 }

@@ -9,18 +9,29 @@ use super::model::{ELEMENTS, Prepared, parameter_count};
 use super::order::Selection;
 use super::{InformationCriterion, StructuralFit, rational};
 
-/// Scale-factor errors and misalignments from a gain and its standard deviations:
-/// `(ppm, ppm std, mrad, mrad std)`; the diagonal of the misalignment matrices is 0.
-pub(super) fn ieee_units(
-    k: &[[f64; 3]; 3],
-    k_std: &[[f64; 3]; 3],
-) -> ([f64; 3], [f64; 3], [[f64; 3]; 3], [[f64; 3]; 3]) {
-    let ppm = std::array::from_fn(|i| (k[i][i] - 1.0) * 1e6);
-    let ppm_std = std::array::from_fn(|i| k_std[i][i] * 1e6);
+/// Scale-factor errors and misalignments of a gain, with their standard deviations.
+pub(super) struct IeeeUnits {
+    /// `(K_ii - 1) 1e6`, ppm.
+    pub ppm: [f64; 3],
+    /// Its standard deviation, ppm.
+    pub ppm_std: [f64; 3],
+    /// `K_ij 1e3`, mrad, 0 on the diagonal.
+    pub mrad: [[f64; 3]; 3],
+    /// Its standard deviation, mrad, 0 on the diagonal.
+    pub mrad_std: [[f64; 3]; 3],
+}
+
+/// The IEEE units of `k` and its standard deviations `k_std`.
+pub(super) fn ieee_units(k: &[[f64; 3]; 3], k_std: &[[f64; 3]; 3]) -> IeeeUnits {
     let off = |m: &[[f64; 3]; 3]| {
         std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 0.0 } else { m[i][j] * 1e3 }))
     };
-    (ppm, ppm_std, off(k), off(k_std))
+    IeeeUnits {
+        ppm: std::array::from_fn(|i| (k[i][i] - 1.0) * 1e6),
+        ppm_std: std::array::from_fn(|i| k_std[i][i] * 1e6),
+        mrad: off(k),
+        mrad_std: off(k_std),
+    }
 }
 
 /// Builds the output. The covariance is that of the Gauss–Newton approximation, scaled by
@@ -59,7 +70,7 @@ pub(super) fn assemble(
         .iter()
         .map(|r| [r.re * w_ref, r.im * w_ref])
         .collect();
-    let (ppm, ppm_std, mrad, mrad_std) = ieee_units(&k, &k_std);
+    let ieee = ieee_units(&k, &k_std);
     StructuralFit {
         order,
         k,
@@ -75,10 +86,10 @@ pub(super) fn assemble(
         stable: rational::is_stable(&model.den),
         criterion,
         candidates: selection.candidates.clone(),
-        scale_factor_error_ppm: ppm,
-        scale_factor_error_std_ppm: ppm_std,
-        misalignment_mrad: mrad,
-        misalignment_std_mrad: mrad_std,
+        scale_factor_error_ppm: ieee.ppm,
+        scale_factor_error_std_ppm: ieee.ppm_std,
+        misalignment_mrad: ieee.mrad,
+        misalignment_std_mrad: ieee.mrad_std,
     }
 }
 

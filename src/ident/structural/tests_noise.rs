@@ -142,3 +142,24 @@ fn bic_finds_the_sensor_pole() {
         }
     }
 }
+
+#[test]
+#[ignore = "timing: cargo test --release --lib structural -- --ignored --nocapture"]
+fn timing_of_order_0_and_auto() {
+    let mut rng = Rng::new(500);
+    let truth = Truth { num: vec![random_gain(&mut rng)], den: vec![0.003], tau: 0.004 };
+    let data = synthesise(&truth, &mut rng, 1.0);
+    let time = |order| {
+        let start = std::time::Instant::now();
+        let reps = 5;
+        for _ in 0..reps {
+            fit(&data, order).expect("fit");
+        }
+        start.elapsed().as_secs_f64() / f64::from(reps)
+    };
+    let (t0, ta) = (time(OrderChoice::Fixed(0)), time(OrderChoice::Auto));
+    eprintln!("order 0: {:.2} ms, auto: {:.2} ms", t0 * 1e3, ta * 1e3);
+    if !cfg!(debug_assertions) {
+        assert!(t0 < 0.010 && ta < 0.100, "order 0 {t0} s, auto {ta} s");
+    }
+}

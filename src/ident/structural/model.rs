@@ -152,6 +152,9 @@ impl Model {
                 put(p - 1, -sigma * n * e);
             }
         }
+        if (0..p).any(|c| jac.col(c).iter().any(|v| !v.is_finite())) {
+            return vec![f64::INFINITY; p];
+        }
         let qr = jac.qr();
         let r = qr.thin_R();
         let r = DMatrix::from_fn(p, p, |i, j| r[(i, j)]);

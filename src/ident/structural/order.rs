@@ -50,7 +50,8 @@ pub(super) fn fit_orders(
         // `models` holds orders 0..n here: the loop stops at the first failure.
         match rational::fit(data, n, &models[n - 1], settings.max_iterations) {
             Some(model) => models.push(model),
-            None if choice == OrderChoice::Fixed(n) => {
+            // Fixed: every order below the requested one is its starting point.
+            None if matches!(choice, OrderChoice::Fixed(_)) => {
                 return Err(StructuralError::NumericalFailure { order: n });
             }
             None => break,

@@ -1,0 +1,298 @@
+//! Orders 1..=4: `W(s) = N(s) / d(s) e^(-tau s)` with a common denominator.
+//!
+//! Everything is computed in `sigma = s / omega_ref` (`omega_ref` the band's top) so that the
+//! monomials stay within `[0, 1]` in modulus.
+//!
+//! 1. Start: Sanathanan–Koerner iterations at a fixed delay. Each iteration solves the linearised
+//!    weighted least squares `sum w |N_e - d H_e|^2 / |d_prev|^2` (`H = W e^(s tau)`, real
+//!    unknowns, rows the real and imaginary parts) by eliminating each element's numerator with a
+//!    faer QR of its block and solving the stacked reduced rows for `d`. A start with unstable
+//!    roots is refined both as it is and with those roots reflected into the left half-plane.
+//! 2. Refinement: variable projection. For given `(d, tau)` each element's numerator is the
+//!    exact weighted least-squares solution (a `max(n,1)`-square normal system), so the
+//!    Levenberg–Marquardt iteration runs over the `n + 1` nonlinear parameters only, with a
+//!    forward-difference Jacobian of the projected residual vector.
+//!
+//! Several starts are refined (SK at the previous order's delay; the previous order's
+//! denominator times a far pole `1 + sigma / 10`, whose projected residual cannot exceed the
+//! previous order's from order 2 on, since the numerator space then holds the previous numerator
+//! times the same factor); the smallest residual wins, stable or not: an unstable best fit is
+//! returned and flagged as such by the caller, never swapped silently for a worse stable one. At
+//! order 1 the best is also refined once more from its mirror image `1 - T s` (same magnitude
+//! response): a right-half-plane pole plus delay is otherwise easy to confuse with a stable pole.
+
+use faer::prelude::SolveLstsq;
+use nalgebra::{DMatrix, DVector};
+
+use super::project::Projector;
+use num_complex::Complex64;
+
+use super::model::{ELEMENTS, Model, Prepared};
+
+/// Sanathanan–Koerner iterations per start.
+const SK_ITERATIONS: usize = 8;
+
+/// Fits order `order >= 1` starting from `prev` (the best fit of order `order - 1`).
+pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) -> Option<Model> {
+    let mut starts = Vec::new();
+    if let Some(den) = sk_denominator(data, order, prev.tau) {
+        let reflected = reflect_unstable(&den);
+        if reflected != den {
+            starts.push((den, prev.tau));
+        }
+        starts.push((reflected, prev.tau));
+    }
+    {
+        let mut den = prev.den.clone();
+        den.push(0.0);
+        // d(sigma) (1 + sigma / 10): a pole ten times above the band.
+        let mut extended = den.clone();
+        extended[0] += 0.1;
+        for m in 1..order {
+            extended[m] += 0.1 * den[m - 1];
+        }
+        starts.push((extended, prev.tau));
+    }
+    let mut best: Option<(Model, f64)> = None;
+    for (den, tau) in starts {
+        consider(data, den, tau, max_iter, &mut best);
+    }
+    // Order 1: the mirror image of the best, 1 - T s, with the delay moved by 2 T to keep the
+    // phase slope: a pole and its mirror have the same magnitude response, so each is a local
+    // optimum the other start can miss.
+    let mirror = best.as_ref().filter(|_| order == 1).map(|(m, _)| {
+        let den = m.den.iter().enumerate();
+        let den: Vec<f64> = den.map(|(i, c)| if i % 2 == 0 { -c } else { *c }).collect();
+        (den, m.tau + 2.0 * m.den[0] / data.omega_ref)
+    });
+    if let Some((den, tau)) = mirror {
+        consider(data, den, tau, max_iter, &mut best);
+    }
+    best.map(|b| b.0)
+}
+
+/// Refines from `(den, tau)` and keeps the result in `best` if its chi2 is smaller.
+fn consider(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, best: &mut Option<(Model, f64)>) {
+    let Some(model) = refine(data, den, tau, max_iter) else {
+        return;
+    };
+    let chi2 = model.chi2(data);
+    if chi2.is_finite() && best.as_ref().is_none_or(|b| chi2 < b.1) {
+        *best = Some((model, chi2));
+    }
+}
+
+/// Whether every root of `1 + sum den[m-1] sigma^m` has a negative real part.
+pub(super) fn is_stable(den: &[f64]) -> bool {
+    den.iter().all(|c| c.is_finite()) && roots(den).iter().all(|r| r.re < 0.0)
+}
+
+/// The finite roots of `1 + sum den[m-1] sigma^m` (a vanishing leading coefficient sends its
+/// root to infinity, which is not listed); NaN for non-finite coefficients, which the caller's
+/// final check turns into an error.
+pub(super) fn roots(den: &[f64]) -> Vec<Complex64> {
+    if !den.iter().all(|c| c.is_finite()) {
+        return vec![Complex64::new(f64::NAN, f64::NAN); den.len()];
+    }
+    let scale = den.iter().fold(1.0_f64, |a, c| a.max(c.abs()));
+    let Some(deg) = den.iter().rposition(|c| c.abs() > 1e-14 * scale) else {
+        return Vec::new();
+    };
+    let n = deg + 1;
+    let lead = den[deg];
+    // Companion matrix of the monic polynomial sigma^n + ... + 1 / lead.
+    let companion = DMatrix::from_fn(n, n, |i, j| {
+        if i == 0 {
+            let m = n - 1 - j; // coefficient of sigma^m
+            let c = if m == 0 { 1.0 } else { den[m - 1] };
+            -c / lead
+        } else if i == j + 1 {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    companion.complex_eigenvalues().iter().copied().collect()
+}
+
+/// The denominator with each right-half-plane root mirrored to the left.
+fn reflect_unstable(den: &[f64]) -> Vec<f64> {
+    let r = roots(den);
+    if r.len() != den.len() || r.iter().all(|z| z.re < 0.0) {
+        return den.to_vec();
+    }
+    // prod (1 - sigma / r_i), with r_i -> -conj(r_i) where Re r_i >= 0.
+    let mut coef = vec![Complex64::new(1.0, 0.0)];
+    for z in r {
+        let z = if z.re >= 0.0 { -z.conj() } else { z };
+        if z.norm() == 0.0 {
+            return den.to_vec();
+        }
+        let mut next = vec![Complex64::new(0.0, 0.0); coef.len() + 1];
+        for (m, c) in coef.iter().enumerate() {
+            next[m] += c;
+            next[m + 1] -= c / z;
+        }
+        coef = next;
+    }
+    coef[1..].iter().map(|c| c.re).collect()
+}
+
+/// Sanathanan–Koerner estimate of the denominator at a fixed delay.
+fn sk_denominator(data: &Prepared, order: usize, tau: f64) -> Option<Vec<f64>> {
+    let n_num = order;
+    let cols = n_num + order + 1;
+    let rows = 2 * data.bins();
+    if rows < cols {
+        return None;
+    }
+    let mut den = vec![0.0; order];
+    for _ in 0..SK_ITERATIONS {
+        let prev = Model {
+            num: Vec::new(),
+            den: den.clone(),
+            tau,
+        };
+        let mut reduced = faer::Mat::<f64>::zeros(ELEMENTS * (order + 1), order);
+        let mut rhs = faer::Mat::<f64>::zeros(ELEMENTS * (order + 1), 1);
+        let mut block = faer::Mat::<f64>::zeros(rows, cols);
+        for e in 0..ELEMENTS {
+            for k in 0..data.bins() {
+                let x = data.x[k];
+                let sigma = Complex64::new(0.0, x);
+                let q = (data.w[k][e] / prev.den_at(x).norm_sqr()).sqrt();
+                let h = data.h[k][e] * Complex64::from_polar(q, data.omega[k] * tau);
+                let mut pw = Complex64::new(1.0, 0.0);
+                for c in 0..cols {
+                    let z = if c < n_num {
+                        pw * q
+                    } else if c < cols - 1 {
+                        -h * pw
+                    } else {
+                        h
+                    };
+                    block[(2 * k, c)] = z.re;
+                    block[(2 * k + 1, c)] = z.im;
+                    pw = if c + 1 == n_num { sigma } else { pw * sigma };
+                }
+            }
+            let qr = block.qr();
+            let r = qr.thin_R();
+            for i in 0..=order {
+                for c in 0..order {
+                    reduced[(e * (order + 1) + i, c)] = r[(n_num + i, n_num + c)];
+                }
+                rhs[(e * (order + 1) + i, 0)] = r[(n_num + i, cols - 1)];
+            }
+        }
+        let next = reduced.col_piv_qr().solve_lstsq(&rhs);
+        let next: Vec<f64> = (0..order).map(|m| next[(m, 0)]).collect();
+        if next.iter().any(|c| !c.is_finite()) {
+            return None;
+        }
+        let change = next
+            .iter()
+            .zip(&den)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        den = next;
+        if change <= 1e-12 {
+            break;
+        }
+    }
+    Some(den)
+}
+
+/// Levenberg–Marquardt over `(den, tau omega_ref)` with the numerator projected out, with a
+/// forward-difference Jacobian of the projected residual (step `1e-7 max(|theta|, 0.1)`). Stops
+/// when the undamped Gauss–Newton step predicts a decrease of chi2 below `1e-10 chi2 + 1e-20`
+/// (converged), after ten rejected steps in a row (nothing left at machine precision), when
+/// chi2 has reached the noise level (`chi2 > 0.1 * 18 n_bins`) and five iterations together
+/// lowered it by less than `0.05` (a crawl along the flat valley of an over-parameterised order:
+/// such a difference is far below the criterion's penalty of `~8.7` per parameter and moves a
+/// parameter by well under its standard deviation), or after `max_iter` iterations.
+fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<Model> {
+    let n = den.len();
+    let rows = data.real_data();
+    let w_ref = data.omega_ref;
+    let mut projector = Projector::new(data, n.max(1));
+    let mut theta: Vec<f64> = den;
+    theta.push(tau * w_ref);
+    let mut r = vec![0.0; rows];
+    let mut eval = |t: &[f64], out: &mut [f64]| -> Option<f64> {
+        projector.project(&t[..n], t[n] / w_ref, out)?;
+        let c: f64 = out.iter().map(|v| v * v).sum();
+        c.is_finite().then_some(c)
+    };
+    let mut cost = eval(&theta, &mut r)?;
+    let mut jac = vec![vec![0.0; rows]; n + 1];
+    let mut plus = vec![0.0; rows];
+    let mut lambda = 1e-3;
+    let mut history = vec![cost];
+    let noise_level = 0.1 * rows as f64;
+    'outer: for _ in 0..max_iter {
+        for (i, col) in jac.iter_mut().enumerate() {
+            let h = 1e-7 * theta[i].abs().max(0.1);
+            let mut t = theta.clone();
+            t[i] = theta[i] + h;
+            eval(&t, &mut plus)?;
+            for ((c, p), r0) in col.iter_mut().zip(&plus).zip(&r) {
+                *c = (p - r0) / h;
+            }
+        }
+        let a = DMatrix::from_fn(n + 1, n + 1, |i, j| dot(&jac[i], &jac[j]));
+        let g = DVector::from_fn(n + 1, |i, _| dot(&jac[i], &r));
+        let predicted = a.clone().cholesky().map(|c| g.dot(&c.solve(&g)));
+        if predicted.is_some_and(|p| p <= 1e-10 * cost + 1e-20) {
+            break;
+        }
+        let mut rejected = 0;
+        loop {
+            if rejected >= 10 {
+                break 'outer;
+            }
+            let mut damped = a.clone();
+            for i in 0..=n {
+                damped[(i, i)] += lambda * a[(i, i)].max(1e-30);
+            }
+            let trial: Option<Vec<f64>> = damped
+                .cholesky()
+                .map(|c| c.solve(&(-&g)))
+                .filter(|s| s.iter().all(|v| v.is_finite()))
+                .map(|s| theta.iter().zip(s.iter()).map(|(t, s)| t + s).collect());
+            let Some(trial) = trial else {
+                lambda *= 4.0;
+                rejected += 1;
+                continue;
+            };
+            match eval(&trial, &mut plus) {
+                Some(c) if c < cost => {
+                    theta = trial;
+                    cost = c;
+                    std::mem::swap(&mut r, &mut plus);
+                    lambda = (lambda / 3.0).max(1e-12);
+                    history.push(cost);
+                    break;
+                }
+                _ => {
+                    lambda *= 4.0;
+                    rejected += 1;
+                }
+            }
+        }
+        let stalled = history.len() > 5 && history[history.len() - 6] - cost < 0.05;
+        if cost > noise_level && stalled {
+            break;
+        }
+    }
+    let num = projector.project(&theta[..n], theta[n] / w_ref, &mut r)?;
+    Some(Model {
+        num,
+        den: theta[..n].to_vec(),
+        tau: theta[n] / w_ref,
+    })
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

@@ -1,0 +1,169 @@
+//! Noisy data: honest uncertainties and order selection, over seeded replicates.
+
+use nalgebra::Matrix3;
+
+use super::tests::{Truth, fit, random_gain, synthesise};
+use super::*;
+use crate::rng::Rng;
+
+/// Running check of reported against empirical scatter for one scalar parameter.
+#[derive(Default)]
+struct Scatter {
+    errors: Vec<f64>,
+    reported: Vec<f64>,
+}
+
+impl Scatter {
+    fn push(&mut self, estimate: f64, truth: f64, std: f64) {
+        self.errors.push(estimate - truth);
+        self.reported.push(std);
+    }
+
+    /// Empirical std (about the truth) over mean reported std.
+    fn ratio(&self) -> f64 {
+        let n = self.errors.len() as f64;
+        let emp = (self.errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+        emp / (self.reported.iter().sum::<f64>() / n)
+    }
+
+    /// How many errors lie within 3 reported sigmas.
+    fn within_3_sigma(&self) -> usize {
+        self.errors.iter().zip(&self.reported).filter(|(e, s)| e.abs() <= 3.0 * **s).count()
+    }
+}
+
+/// Checks every parameter's ratio within 25 % and the 3-sigma coverage over all of them.
+fn assert_honest(name: &str, params: &[Scatter]) {
+    let mut inside = 0;
+    let mut total = 0;
+    for (i, p) in params.iter().enumerate() {
+        let r = p.ratio();
+        eprintln!("{name} parameter {i}: empirical / reported std = {r:.3}");
+        assert!((0.75..=1.25).contains(&r), "{name} parameter {i}: ratio {r}");
+        inside += p.within_3_sigma();
+        total += p.errors.len();
+    }
+    let coverage = inside as f64 / total as f64;
+    eprintln!("{name}: {inside} of {total} within 3 sigma ({coverage:.4})");
+    assert!(coverage >= 0.985, "{name}: coverage {coverage}");
+}
+
+#[test]
+fn order0_uncertainties_are_honest() {
+    let mut rng = Rng::new(100);
+    let k = random_gain(&mut rng);
+    let tau = 0.003_7;
+    let truth = Truth::gain_delay(k, tau);
+    let mut params: Vec<Scatter> = (0..10).map(|_| Scatter::default()).collect();
+    for _ in 0..200 {
+        let data = synthesise(&truth, &mut rng, 1.0);
+        let fit = fit(&data, OrderChoice::Fixed(0)).expect("fit");
+        for e in 0..9 {
+            let (i, j) = (e / 3, e % 3);
+            params[e].push(fit.k[i][j], k[(i, j)], fit.k_std[i][j]);
+        }
+        params[9].push(fit.tau_s, tau, fit.tau_std_s);
+    }
+    assert_honest("order 0", &params);
+}
+
+#[test]
+fn order1_uncertainties_are_honest() {
+    let mut rng = Rng::new(200);
+    let k = random_gain(&mut rng);
+    let (t, tau) = (0.004, 0.002_9);
+    let truth = Truth { num: vec![k], den: vec![t], tau };
+    // K's diagonal, one coupling, T and tau.
+    let mut params: Vec<Scatter> = (0..5).map(|_| Scatter::default()).collect();
+    for _ in 0..120 {
+        let data = synthesise(&truth, &mut rng, 1.0);
+        let fit = fit(&data, OrderChoice::Fixed(1)).expect("fit");
+        for i in 0..3 {
+            params[i].push(fit.k[i][i], k[(i, i)], fit.k_std[i][i]);
+        }
+        params[3].push(fit.denominator[0], t, fit.denominator_std[0]);
+        params[4].push(fit.tau_s, tau, fit.tau_std_s);
+    }
+    assert_honest("order 1", &params);
+}
+
+fn auto_fit(truth: &Truth, seed: u64, criterion: InformationCriterion) -> StructuralFit {
+    let mut rng = Rng::new(seed);
+    let data = synthesise(truth, &mut rng, 1.0);
+    let input = ResponseEstimate {
+        frequency_hz: &data.0,
+        response: &data.1,
+        variance: &data.2,
+    };
+    let settings = StructuralSettings { criterion, ..Default::default() };
+    fit_structure(&input, OrderChoice::Auto, &settings).expect("fit")
+}
+
+#[test]
+fn bic_chooses_order_0_for_a_gain_and_delay() {
+    let mut rng = Rng::new(300);
+    let (mut bic_zero, mut aic_zero) = (0, 0);
+    for seed in 0..20 {
+        let truth = Truth::gain_delay(random_gain(&mut rng), rng.uniform_in(0.002, 0.006));
+        let bic = auto_fit(&truth, 1000 + seed, InformationCriterion::Bic);
+        let aic = auto_fit(&truth, 1000 + seed, InformationCriterion::Aic);
+        assert_eq!(bic.candidates.len(), 5);
+        bic_zero += usize::from(bic.order == 0);
+        aic_zero += usize::from(aic.order == 0);
+        let c = &bic.candidates;
+        // From order 2 on the previous fit times a far pole is a start: chi2 cannot rise.
+        for n in 2..c.len() {
+            assert!(c[n].chi2 <= c[n - 1].chi2 + 1e-9, "seed {seed}: {c:?}");
+        }
+        eprintln!(
+            "seed {seed}: BIC order {}, AIC order {}, chi2 {:.1} {:.1} {:.1}, dof {}",
+            bic.order, aic.order, c[0].chi2, c[1].chi2, c[2].chi2, bic.dof
+        );
+    }
+    eprintln!("order 0 chosen: BIC {bic_zero} of 20, AIC {aic_zero} of 20");
+    assert!(bic_zero >= 19, "BIC chose order 0 in {bic_zero} of 20 seeds");
+    assert!(aic_zero <= bic_zero);
+}
+
+#[test]
+fn bic_finds_the_sensor_pole() {
+    let mut rng = Rng::new(400);
+    for t in [0.004, 0.002] {
+        for seed in 0..8 {
+            let k: Matrix3<f64> = random_gain(&mut rng);
+            let tau = rng.uniform_in(0.002, 0.006);
+            let truth = Truth { num: vec![k], den: vec![t], tau };
+            let fit = auto_fit(&truth, 2000 + seed, InformationCriterion::Bic);
+            eprintln!(
+                "T {t}: order {}, T {:?}, tau {:.6} (true {tau:.6})",
+                fit.order, fit.denominator, fit.tau_s
+            );
+            assert!(fit.order >= 1, "T = {t}, seed {seed}: order {}", fit.order);
+            if fit.order == 1 {
+                let rel = (fit.denominator[0] - t).abs() / t;
+                assert!(rel < 0.1, "T = {t}: fitted {}", fit.denominator[0]);
+            }
+        }
+    }
+}
+
+#[test]
+#[ignore = "timing: cargo test --release --lib structural -- --ignored --nocapture"]
+fn timing_of_order_0_and_auto() {
+    let mut rng = Rng::new(500);
+    let truth = Truth { num: vec![random_gain(&mut rng)], den: vec![0.003], tau: 0.004 };
+    let data = synthesise(&truth, &mut rng, 1.0);
+    let time = |order| {
+        let start = std::time::Instant::now();
+        let reps = 5;
+        for _ in 0..reps {
+            fit(&data, order).expect("fit");
+        }
+        start.elapsed().as_secs_f64() / f64::from(reps)
+    };
+    let (t0, ta) = (time(OrderChoice::Fixed(0)), time(OrderChoice::Auto));
+    eprintln!("order 0: {:.2} ms, auto: {:.2} ms", t0 * 1e3, ta * 1e3);
+    if !cfg!(debug_assertions) {
+        assert!(t0 < 0.010 && ta < 0.100, "order 0 {t0} s, auto {ta} s");
+    }
+}

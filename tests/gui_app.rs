@@ -1,0 +1,110 @@
+//! The desktop app driven through AccessKit (egui_kittest), no GPU: the worker runs in synchronous
+//! mode so every frame sees finished results and the tests are deterministic.
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use imu_attest::gui::{App, AppOptions, Command, WorkerMode, sample_run_path};
+
+fn app_on_sample() -> Harness<'static, App> {
+    let paths = vec![sample_run_path().expect("sample run written")];
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::vec2(1400.0, 900.0))
+        .build_eframe(|cc| {
+            App::new(
+                cc,
+                AppOptions {
+                    paths,
+                    mode: WorkerMode::Synchronous,
+                    persist: false,
+                },
+            )
+        });
+    // Repaints keep coming from the worker's waker: step a fixed number of frames.
+    harness.run_steps(3);
+    harness
+}
+
+#[test]
+fn opens_on_the_sample_run_and_lists_it() {
+    let harness = app_on_sample();
+    harness.get_by_label("cruise.csv.gz");
+    harness.get_by_label("regime: cruise");
+    harness.get_by_label("blocks: gyro, accel");
+    let app = harness.state();
+    assert_eq!(app.runs().len(), 1);
+    let run = &app.runs()[0];
+    assert!(run.motion.is_some(), "observer stage done");
+    let spectra = run.spectra.as_ref().expect("spectra computed");
+    assert_eq!(spectra.blocks.len(), 2);
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+}
+
+#[test]
+fn a_broken_file_shows_an_error_and_the_app_keeps_working() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bad = dir.path().join("broken.csv");
+    std::fs::write(
+        &bad,
+        "t,roll,yaw,pitch,gx,gy,gz\n0,0,0,0,0,0,0\n0.002,0,abc,0,0,0,0\n",
+    )
+    .expect("write");
+    let mut harness = app_on_sample();
+    harness.state_mut().push_command(Command::Open(vec![bad]));
+    harness.run_steps(2);
+    let app = harness.state();
+    assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
+    assert!(app.errors()[0].contains("broken.csv"), "{}", app.errors()[0]);
+    assert_eq!(app.runs().len(), 1, "the broken run is not listed");
+    assert!(app.runs()[0].spectra.is_some(), "the sample run stays");
+    harness.get_by_label_contains("broken.csv");
+    harness.get_by_label("cruise.csv.gz");
+    // Still usable: switch tab and dismiss the error.
+    harness.get_by_label("Spectra").click();
+    harness.run_steps(2);
+    harness.get_by_label("frequency × channel pair");
+    harness.get_by_label("dismiss").click();
+    harness.run_steps(2);
+    assert!(harness.state().errors().is_empty());
+}
+
+#[test]
+fn a_new_segment_length_recomputes_the_spectra_only() {
+    let mut harness = app_on_sample();
+    let (g0, motion0) = {
+        let run = &harness.state().runs()[0];
+        (run.spectra_generation, run.motion.clone().expect("motion"))
+    };
+    let mut settings = harness.state().settings().clone();
+    assert_ne!(settings.welch.segment_len, 1024);
+    settings.welch.segment_len = 1024;
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings.clone())));
+    harness.run_steps(2);
+    let run = &harness.state().runs()[0];
+    assert!(run.spectra_generation > g0, "generation advances");
+    let spectra = run.spectra.as_ref().expect("spectra");
+    assert_eq!(spectra.welch.segment_len, 1024);
+    assert_eq!(spectra.blocks[0].matrix.n_bins(), 513);
+    let motion1 = run.motion.as_ref().expect("motion");
+    assert!(
+        std::sync::Arc::ptr_eq(&motion0, motion1),
+        "the observer stage is not redone"
+    );
+
+    // A segment longer than the run: error shown, last good spectra kept.
+    settings.welch.segment_len = 1 << 17;
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings)));
+    harness.run_steps(2);
+    let app = harness.state();
+    let run = &app.runs()[0];
+    assert!(run.analysis_error.is_some());
+    assert_eq!(run.spectra.as_ref().expect("kept").welch.segment_len, 1024);
+    assert!(
+        app.errors().iter().any(|e| e.contains("spectra")),
+        "{:?}",
+        app.errors()
+    );
+}

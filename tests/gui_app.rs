@@ -1,4 +1,4 @@
-//! The desktop app driven through AccessKit (egui_kittest), no GPU: the worker runs in synchronous
+//! The desktop app driven through AccessKit (`egui_kittest`), no GPU: the worker runs in synchronous
 //! mode so every frame sees finished results and the tests are deterministic.
 
 use egui_kittest::Harness;

@@ -83,7 +83,11 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
 
 /// A bare argument naming a run file opens the GUI with it (`imu-attest cruise.csv`).
 fn looks_like_run(arg: &str) -> bool {
-    arg.ends_with(".csv") || arg.ends_with(".csv.gz")
+    use std::path::Path;
+    let has_ext = |p: &Path, e: &str| p.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
+    let path = Path::new(arg);
+    has_ext(path, "csv")
+        || (has_ext(path, "gz") && path.file_stem().is_some_and(|s| has_ext(Path::new(s), "csv")))
 }
 
 /// `imu-attest [gui] [RUN...]`: opens the app with these runs, or the bundled sample run.

@@ -73,7 +73,9 @@ impl App {
                         .filter(|r| r.summary.is_some())
                         .map(|r| r.id)
                         .collect();
-                    ids.into_iter().for_each(|id| self.analyse(id));
+                    for id in ids {
+                        self.analyse(id);
+                    }
                 }
             }
             Command::DismissError(index) => {
@@ -107,6 +109,7 @@ impl App {
         let settings = Box::new(self.prefs.settings.clone());
         if let Some(run) = self.run_mut(id) {
             run.requested_generation = generation;
+            run.analysis_error = None;
         }
         self.worker.submit(Job {
             run: id,

@@ -42,7 +42,9 @@ impl App {
             if commands.is_empty() {
                 break;
             }
-            commands.into_iter().for_each(|c| self.apply(c));
+            for command in commands {
+                self.apply(command);
+            }
         }
         while let Ok(event) = self.worker.events.try_recv() {
             self.handle(event);

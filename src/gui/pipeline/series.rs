@@ -144,12 +144,15 @@ mod tests {
 
     #[test]
     fn raw_when_it_fits_and_envelope_otherwise() {
-        let values: Vec<f64> = (0..100_000).map(|k| (k as f64 * 0.01).sin()).collect();
+        let values: Vec<f64> = (0..100_000).map(|k| (f64::from(k) * 0.01).sin()).collect();
         let s = Series::new("x", 10.0, 0.002, values);
         let mut out = Vec::new();
         s.decimate(10.0, 10.1, 2000, &mut out);
         assert!(out.len() <= 53 && out.len() >= 50, "{}", out.len());
-        assert!((out[1].x - 10.0).abs() < 1e-12);
+        assert!(
+            (out[0].x - 10.0).abs() < 1e-12,
+            "one sample before the window at most"
+        );
         s.decimate(f64::NEG_INFINITY, 1e9, 2000, &mut out);
         assert!(out.is_empty(), "infinite range is refused");
         s.decimate(0.0, 1e9, 2000, &mut out);
@@ -157,6 +160,28 @@ mod tests {
         let hi = out.iter().map(|p| p.y).fold(f64::MIN, f64::max);
         let lo = out.iter().map(|p| p.y).fold(f64::MAX, f64::min);
         assert!(hi > 0.9999 && lo < -0.9999, "the envelope keeps the extremes");
+    }
+
+    #[test]
+    fn any_window_of_a_long_run_costs_at_most_the_budget() {
+        // The 1.8-million-sample benchmark size: the cost of a query is the points it returns.
+        let n: u32 = 1_800_000;
+        let values: Vec<f64> = (0..n).map(|k| f64::from((k % 1000) * 7919 % 1000)).collect();
+        let s = Series::new("long", 0.0, 1.0 / 500.0, values);
+        let mut out = Vec::new();
+        for (lo, hi) in [(0.0, 3600.0), (100.0, 2000.0), (500.0, 530.0), (1000.0, 1000.5)] {
+            s.decimate(lo, hi, 3200, &mut out);
+            assert!(out.len() <= 3200 + 4, "{lo}..{hi}: {} points", out.len());
+            // Within one bucket (at most twice the budget's bucket) of each edge.
+            let tolerance = (hi - lo) / 1600.0 + 0.01;
+            let (first, last) = (out.first().expect("points"), out.last().expect("points"));
+            assert!(first.x <= lo + tolerance, "{lo}..{hi} starts at {}", first.x);
+            assert!(
+                last.x >= hi.min(3599.998) - tolerance,
+                "{lo}..{hi} ends at {}",
+                last.x
+            );
+        }
     }
 
     #[test]

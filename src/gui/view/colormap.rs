@@ -5,8 +5,8 @@ use eframe::egui::{Color32, ColorImage};
 use crate::gui::app::HeatmapMode;
 use crate::gui::pipeline::BlockSpectra;
 
-/// Widest pair-grid texture, columns (bins are merged by maximum beyond this).
-const MAX_COLUMNS: usize = 2048;
+/// Columns of the pair-grid texture, log-spaced in frequency from the first bin to Nyquist.
+pub const COLUMNS: usize = 1024;
 /// Dynamic range of the magnitude scale below its maximum, dB.
 const MAGNITUDE_RANGE_DB: f32 = 100.0;
 
@@ -68,38 +68,46 @@ pub fn normalise(value: f32, (low, high): (f32, f32)) -> f32 {
     }
 }
 
-/// The frequency-by-pair grid as an image: one row per pair, one column per bin (or per group of
-/// bins, keeping the largest value, when there are more than [`MAX_COLUMNS`]).
+/// The bin at position `u` in `[0, 1]` of a log-frequency axis from bin 1 to bin `n_bins - 1`.
+#[must_use]
+pub fn log_bin(u: f64, n_bins: usize) -> usize {
+    let top = n_bins.saturating_sub(1).max(1) as f64;
+    (top.powf(u.clamp(0.0, 1.0)).round() as usize).clamp(1, n_bins.saturating_sub(1).max(1))
+}
+
+/// Position in `[0, 1]` of frequency `hz` on that axis (bin spacing `df_hz`).
+#[must_use]
+pub fn log_position(hz: f64, df_hz: f64, n_bins: usize) -> f64 {
+    let top = n_bins.saturating_sub(1).max(2) as f64;
+    (hz / df_hz).max(1.0).ln() / top.ln()
+}
+
+/// The frequency-by-pair grid as an image: one row per pair, [`COLUMNS`] columns log-spaced in
+/// frequency (above DC); a column spanning several bins shows their largest value.
 #[must_use]
 pub fn pair_image(block: &BlockSpectra, mode: HeatmapMode) -> ColorImage {
     let values = pair_values(block, mode);
     let rows = block.pairs.len().max(1);
     let n_bins = values.len() / rows;
-    if n_bins == 0 {
+    if n_bins < 3 {
         return ColorImage::filled([1, 1], Color32::BLACK);
     }
-    let columns = n_bins.min(MAX_COLUMNS);
     let range = value_range(block, mode);
-    let mut pixels = Vec::with_capacity(columns * rows);
+    let edge = |c: usize| log_bin(c as f64 / COLUMNS as f64, n_bins);
+    let mut pixels = Vec::with_capacity(COLUMNS * rows);
     for row in values.chunks(n_bins) {
-        for c in 0..columns {
-            let (a, b) = (
-                c * n_bins / columns,
-                ((c + 1) * n_bins / columns).max(c * n_bins / columns + 1),
-            );
-            let v = row[a..b.min(n_bins)]
-                .iter()
-                .copied()
-                .fold(f32::NEG_INFINITY, f32::max);
+        for c in 0..COLUMNS {
+            let (a, b) = (edge(c), edge(c + 1).max(edge(c) + 1).min(n_bins));
+            let v = row[a..b].iter().copied().fold(f32::NEG_INFINITY, f32::max);
             pixels.push(color(normalise(v, range)));
         }
     }
-    ColorImage::new([columns, rows], pixels)
+    ColorImage::new([COLUMNS, rows], pixels)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{color, normalise};
+    use super::{color, log_bin, log_position, normalise};
     use eframe::egui::Color32;
 
     #[test]
@@ -109,5 +117,16 @@ mod tests {
         assert_eq!(color(7.0), color(1.0));
         assert_eq!(color(f32::NAN), color(0.0));
         assert!((normalise(-50.0, (-100.0, 0.0)) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn log_axis_round_trip() {
+        let n_bins = 2049;
+        assert_eq!(log_bin(0.0, n_bins), 1);
+        assert_eq!(log_bin(1.0, n_bins), 2048);
+        for bin in [1, 7, 100, 2048] {
+            let u = log_position(bin as f64 * 0.25, 0.25, n_bins);
+            assert_eq!(log_bin(u, n_bins), bin);
+        }
     }
 }

@@ -5,7 +5,7 @@ use eframe::egui::{
     self, Align2, Color32, FontId, Rect, Sense, Stroke, StrokeKind, TextureHandle, pos2, vec2,
 };
 
-use super::colormap::{color, normalise, pair_values, value_range};
+use super::colormap::{color, log_bin, log_position, normalise, pair_values, value_range};
 use crate::gui::app::HeatmapMode;
 use crate::gui::pipeline::BlockSpectra;
 use crate::gui::pipeline::decibels;
@@ -108,7 +108,8 @@ pub fn matrix(ui: &mut egui::Ui, block: &BlockSpectra, f: usize, mode: HeatmapMo
     }
 }
 
-/// Frequency (x, linear from 0 to Nyquist) by channel pair (rows), from a prepared texture.
+/// Frequency (x, logarithmic from the first bin to Nyquist) by channel pair (rows), from a
+/// prepared texture.
 pub fn pair_grid(ui: &mut egui::Ui, block: &BlockSpectra, mode: HeatmapMode, texture: &TextureHandle) {
     let rows = block.pairs.len();
     let width = ui.available_width().max(200.0);
@@ -140,24 +141,30 @@ pub fn pair_grid(ui: &mut egui::Ui, block: &BlockSpectra, mode: HeatmapMode, tex
             text,
         );
     }
+    let (df, n_bins) = (block.matrix.df_hz(), block.matrix.n_bins());
     let nyquist = block.matrix.frequency_hz.last().copied().unwrap_or_default();
-    for k in 0..=4 {
-        let x = image.left() + image.width() * k as f32 / 4.0;
-        let hz = nyquist * f64::from(k) / 4.0;
+    let mut decade = 10f64.powf(df.log10().ceil());
+    while decade <= nyquist {
+        let x = image.left() + image.width() * log_position(decade, df, n_bins) as f32;
+        painter.vline(
+            x,
+            image.y_range(),
+            Stroke::new(1.0, Color32::from_white_alpha(60)),
+        );
         painter.text(
             pos2(x, image.bottom() + 2.0),
             Align2::CENTER_TOP,
-            format!("{hz:.0} Hz"),
+            format!("{decade} Hz"),
             font.clone(),
             text,
         );
+        decade *= 10.0;
     }
     let Some(pos) = response.hover_pos().filter(|p| image.contains(*p)) else {
         return;
     };
     let values = pair_values(block, mode);
-    let n_bins = block.matrix.n_bins();
-    let bin = (((pos.x - image.left()) / image.width()) * n_bins as f32) as usize;
+    let bin = log_bin(f64::from((pos.x - image.left()) / image.width()), n_bins);
     let row = ((pos.y - image.top()) / ROW) as usize;
     if let (Some(&(i, j)), Some(v)) = (
         block.pairs.get(row),

@@ -111,7 +111,12 @@ fn controls(
 }
 
 fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
-    format!("{:.3e}", 10f64.powf(mark.value))
+    let v = 10f64.powf(mark.value);
+    if (mark.value - mark.value.round()).abs() < 1e-9 {
+        format!("{v:.0e}")
+    } else {
+        format!("{v:.2e}")
+    }
 }
 
 fn psd_plot(ui: &mut egui::Ui, block: &BlockSpectra, height: f32, marker_hz: f64) {

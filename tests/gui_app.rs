@@ -108,3 +108,40 @@ fn a_new_segment_length_recomputes_the_spectra_only() {
         app.errors()
     );
 }
+
+#[test]
+fn a_cancelled_load_reports_cancelled_and_loads_nothing() {
+    use imu_attest::gui::pipeline::{Event, Job, JobKind, Worker};
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+
+    let mut worker = Worker::start(WorkerMode::Synchronous, Arc::new(|| {}));
+    let path = sample_run_path().expect("sample run written");
+    let cancel = Arc::new(AtomicBool::new(true));
+    worker.submit(Job {
+        run: 7,
+        generation: 1,
+        kind: JobKind::Load { path, cancel },
+    });
+    let events: Vec<Event> = worker.events.try_iter().collect();
+    assert!(
+        matches!(
+            events.last(),
+            Some(Event::Failed {
+                run: 7,
+                cancelled: true,
+                ..
+            })
+        ),
+        "{events:?}"
+    );
+    // An analysis of a run that never loaded does nothing.
+    worker.submit(Job {
+        run: 7,
+        generation: 2,
+        kind: JobKind::Analyse {
+            settings: Box::default(),
+        },
+    });
+    assert_eq!(worker.events.try_iter().count(), 0);
+}

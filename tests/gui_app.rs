@@ -1,14 +1,20 @@
 //! The desktop app driven through AccessKit (`egui_kittest`), no GPU: the worker runs in synchronous
-//! mode so every frame sees finished results and the tests are deterministic.
+//! mode so every frame sees finished results and the tests are deterministic. One pixel snapshot
+//! runs only with `--features gui-snapshots`.
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use imu_attest::gui::{App, AppOptions, Command, WorkerMode, sample_run_path};
 
 fn app_on_sample() -> Harness<'static, App> {
+    sample_app(Harness::builder())
+}
+
+/// The app on the bundled sample run, three frames in.
+fn sample_app(builder: egui_kittest::HarnessBuilder<App>) -> Harness<'static, App> {
     let paths = vec![sample_run_path().expect("sample run written")];
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::vec2(1400.0, 900.0))
+    let mut harness = builder
+        .with_size(eframe::egui::vec2(1100.0, 720.0))
         .build_eframe(|cc| {
             App::new(
                 cc,
@@ -22,6 +28,18 @@ fn app_on_sample() -> Harness<'static, App> {
     // Repaints keep coming from the worker's waker: step a fixed number of frames.
     harness.run_steps(3);
     harness
+}
+
+/// Pixel snapshot, rendered with wgpu on a software adapter (Mesa lavapipe:
+/// `mesa-vulkan-drivers libvulkan1`); only with `--features gui-snapshots`. Update the stored
+/// image with `UPDATE_SNAPSHOTS=1 cargo test --features gui-snapshots --test gui_app`.
+#[cfg(feature = "gui-snapshots")]
+#[test]
+fn spectra_tab_snapshot() {
+    let mut harness = sample_app(Harness::builder().wgpu());
+    harness.get_by_label("Spectra").click();
+    harness.run_steps(3);
+    harness.snapshot("spectra_tab");
 }
 
 #[test]

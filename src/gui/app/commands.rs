@@ -52,6 +52,9 @@ impl App {
                 }
             }
             Command::Remove(id) => {
+                if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
+                    cancel.store(true, Ordering::Relaxed);
+                }
                 self.runs.retain(|r| r.id != id);
                 let generation = self.next_generation();
                 self.worker.submit(Job {

@@ -76,6 +76,11 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
             .link_axis(link, [true, false])
             .link_cursor(link, [true, false])
             .default_x_bounds(t_start, t_end)
+            // Time only: y stays fitted to the visible samples while panning and zooming.
+            .allow_drag([true, false])
+            .allow_zoom([true, false])
+            .allow_scroll(false)
+            .allow_boxed_zoom(false)
             .legend(Legend::default())
             .y_axis_label(*title)
             .y_axis_min_width(64.0);
@@ -118,9 +123,7 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
 
 fn readout(ui: &mut egui::Ui, groups: &[Group<'_>], t: Option<f64>) {
     let Some(t) = t else {
-        ui.weak(
-            "hover a plot for a read-out; drag to pan, scroll/ctrl-scroll to zoom, double-click to reset",
-        );
+        ui.weak("hover a plot for a read-out; drag to pan, ctrl+scroll to zoom time, double-click to reset");
         return;
     };
     let values: Vec<String> = groups

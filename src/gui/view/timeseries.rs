@@ -110,13 +110,20 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
                         .style(style),
                 );
             }
-            plot.response()
+            let cursor = plot
+                .response()
                 .hovered()
                 .then(|| plot.pointer_coordinate())
-                .flatten()
-                .map(|p| p.x)
+                .flatten();
+            (cursor.map(|p| p.x), lo, hi)
         });
-        cursor_t = cursor_t.or(response.inner);
+        let (cursor, lo, hi) = response.inner;
+        // Pan and zoom move the bounds after the points were chosen: draw once more for them.
+        let shown = response.transform.bounds();
+        if (shown.min()[0] - lo).abs() > 1e-9 * (hi - lo) || (shown.max()[0] - hi).abs() > 1e-9 * (hi - lo) {
+            ui.ctx().request_repaint();
+        }
+        cursor_t = cursor_t.or(cursor);
     }
     readout(ui, &groups, cursor_t);
 }

@@ -8,7 +8,7 @@ use crate::gui::pipeline::BlockSpectra;
 /// Columns of the pair-grid texture, log-spaced in frequency from the first bin to Nyquist.
 pub const COLUMNS: usize = 1024;
 /// Dynamic range of the magnitude scale below its maximum, dB.
-const MAGNITUDE_RANGE_DB: f32 = 100.0;
+pub const MAGNITUDE_RANGE_DB: f32 = 100.0;
 
 const STOPS: [[u8; 3]; 5] = [
     [68, 1, 84],

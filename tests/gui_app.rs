@@ -163,3 +163,55 @@ fn a_cancelled_load_reports_cancelled_and_loads_nothing() {
     });
     assert_eq!(worker.events.try_iter().count(), 0);
 }
+
+#[test]
+fn the_worker_thread_delivers_the_newest_analysis() {
+    use imu_attest::gui::pipeline::{Event, Job, JobKind, Worker};
+    use imu_attest::ident::settings::Settings;
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+    use std::time::Duration;
+
+    let mut worker = Worker::start(WorkerMode::Thread, Arc::new(|| {}));
+    let path = sample_run_path().expect("sample run written");
+    let cancel = Arc::new(AtomicBool::new(false));
+    worker.submit(Job {
+        run: 1,
+        generation: 1,
+        kind: JobKind::Load { path, cancel },
+    });
+    let mut short = Settings::default();
+    short.welch.segment_len = 512;
+    worker.submit(Job {
+        run: 1,
+        generation: 2,
+        kind: JobKind::Analyse {
+            settings: Box::new(short),
+        },
+    });
+    worker.submit(Job {
+        run: 1,
+        generation: 3,
+        kind: JobKind::Analyse {
+            settings: Box::default(),
+        },
+    });
+    loop {
+        match worker
+            .events
+            .recv_timeout(Duration::from_mins(2))
+            .expect("worker answers")
+        {
+            Event::Spectra {
+                generation: 3,
+                spectra,
+                ..
+            } => {
+                assert_eq!(spectra.welch.segment_len, Settings::default().welch.segment_len);
+                break;
+            }
+            Event::Failed { message, .. } => panic!("{message}"),
+            _ => {}
+        }
+    }
+}

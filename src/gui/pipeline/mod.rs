@@ -65,6 +65,9 @@ pub enum JobKind {
     },
     /// Drop the run's cached stages.
     Forget,
+    /// Panics inside the worker (unit tests of the panic guard only).
+    #[cfg(test)]
+    PanicForTest,
 }
 
 /// The pipeline stage a result or failure belongs to.

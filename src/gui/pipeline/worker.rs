@@ -151,6 +151,8 @@ impl Pipeline {
             JobKind::Forget => {
                 self.runs.remove(&run);
             }
+            #[cfg(test)]
+            JobKind::PanicForTest => panic!("deliberate test panic"),
         }
     }
 
@@ -293,7 +295,8 @@ fn newest_only(batch: Vec<Job>) -> Vec<Job> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Job, JobKind, newest_only};
+    use super::{Event, Job, JobKind, Stage, Worker, WorkerMode, newest_only};
+    use std::sync::Arc;
 
     #[test]
     fn only_the_newest_analysis_per_run_survives() {
@@ -316,5 +319,44 @@ mod tests {
         ];
         let kept: Vec<u64> = newest_only(batch).iter().map(|j| j.generation).collect();
         assert_eq!(kept, vec![2, 3, 4]);
+    }
+
+    #[test]
+    fn a_panicking_job_is_reported_and_the_worker_goes_on() {
+        let mut worker = Worker::start(WorkerMode::Synchronous, Arc::new(|| {}));
+        worker.submit(Job {
+            run: 1,
+            generation: 1,
+            kind: JobKind::PanicForTest,
+        });
+        let events: Vec<Event> = worker.events.try_iter().collect();
+        let [
+            Event::Failed {
+                run: 1,
+                generation: 1,
+                stage: Stage::Load,
+                message,
+                cancelled: false,
+            },
+        ] = &events[..]
+        else {
+            panic!("{events:?}");
+        };
+        assert!(
+            message.contains("panic") && message.contains("deliberate test panic"),
+            "{message}"
+        );
+        // Still serving: a job after the panic runs.
+        worker.submit(Job {
+            run: 2,
+            generation: 2,
+            kind: JobKind::Forget,
+        });
+        worker.submit(Job {
+            run: 1,
+            generation: 3,
+            kind: JobKind::PanicForTest,
+        });
+        assert_eq!(worker.events.try_iter().count(), 1);
     }
 }

@@ -8,6 +8,7 @@
 pub mod block;
 pub mod cli;
 pub mod fourier;
+pub mod gui;
 pub mod ident;
 pub mod output;
 pub mod rng;

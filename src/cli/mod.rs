@@ -66,17 +66,38 @@ pub fn main() -> ExitCode {
 pub fn run(argv: &[String]) -> Result<(), CliError> {
     let (command, rest) = match argv.split_first() {
         Some((c, rest)) if !c.starts_with('-') => (c.as_str(), rest),
+        Some((c, _)) if c == "-h" || c == "--help" => (c.as_str(), &argv[1..]),
         _ => ("gui", argv),
     };
     match command {
         "simulate" => simulate::run(&Args::parse(rest)?),
         "inspect" => inspect::run(&Args::parse(rest)?),
+        "gui" => gui(rest),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");
             Ok(())
         }
+        other if looks_like_run(other) => gui(argv),
         other => Err(CliError::Input(format!(
             "unknown command '{other}' (try 'imu-attest help')"
         ))),
     }
+}
+
+/// A bare argument naming a run file opens the GUI with it (`imu-attest cruise.csv`).
+fn looks_like_run(arg: &str) -> bool {
+    use std::path::Path;
+    let has_ext = |p: &Path, e: &str| p.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
+    let path = Path::new(arg);
+    has_ext(path, "csv")
+        || (has_ext(path, "gz") && path.file_stem().is_some_and(|s| has_ext(Path::new(s), "csv")))
+}
+
+/// `imu-attest [gui] [RUN...]`: opens the app with these runs, or the bundled sample run.
+fn gui(paths: &[String]) -> Result<(), CliError> {
+    if let Some(flag) = paths.iter().find(|p| p.starts_with('-')) {
+        return Err(CliError::Input(format!("gui: unknown option '{flag}'")));
+    }
+    crate::gui::run_app(paths.iter().map(std::path::PathBuf::from).collect())
+        .map_err(|e| CliError::Internal(anyhow::Error::new(e)))
 }

@@ -1,0 +1,123 @@
+//! What widgets ask for. Pushed during `ui`, applied at the start of the next `logic`.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use super::{App, RunEntry, RunState};
+use crate::gui::pipeline::{Job, JobKind, RunId};
+use crate::ident::settings::Settings;
+
+/// A request from the UI.
+#[derive(Debug)]
+#[must_use]
+pub enum Command {
+    /// Show the file dialog and open what is picked.
+    OpenDialog,
+    /// Load these run files.
+    Open(Vec<PathBuf>),
+    /// Stop loading a run.
+    CancelLoad(RunId),
+    /// Remove a run from the list.
+    Remove(RunId),
+    /// Show this run.
+    Select(RunId),
+    /// New identifier settings (Welch, band, A, Lambda, order, blocks).
+    SetSettings(Box<Settings>),
+    /// Forget one error message.
+    DismissError(usize),
+}
+
+impl App {
+    /// Queues a command for the next `logic` pass.
+    pub fn push_command(&mut self, command: Command) {
+        self.commands.push(command);
+    }
+
+    pub(super) fn apply(&mut self, command: Command) {
+        match command {
+            Command::OpenDialog => {
+                let picked = rfd::FileDialog::new()
+                    .set_title("Open stand runs")
+                    .add_filter("stand run (.csv, .csv.gz)", &["csv", "gz"])
+                    .pick_files();
+                for path in picked.unwrap_or_default() {
+                    self.open(path);
+                }
+            }
+            Command::Open(paths) => paths.into_iter().for_each(|p| self.open(p)),
+            Command::CancelLoad(id) => {
+                if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
+                    cancel.store(true, Ordering::Relaxed);
+                }
+            }
+            Command::Remove(id) => {
+                if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
+                    cancel.store(true, Ordering::Relaxed);
+                }
+                self.runs.retain(|r| r.id != id);
+                let generation = self.next_generation();
+                self.worker.submit(Job {
+                    run: id,
+                    generation,
+                    kind: JobKind::Forget,
+                });
+                if self.selected == Some(id) {
+                    self.selected = self.runs.first().map(|r| r.id);
+                }
+            }
+            Command::Select(id) => self.selected = Some(id),
+            Command::SetSettings(settings) => {
+                if *settings != self.prefs.settings {
+                    self.prefs.settings = *settings;
+                    let ids: Vec<RunId> = self
+                        .runs
+                        .iter()
+                        .filter(|r| r.summary.is_some())
+                        .map(|r| r.id)
+                        .collect();
+                    for id in ids {
+                        self.analyse(id);
+                    }
+                }
+            }
+            Command::DismissError(index) => {
+                if index < self.errors.len() {
+                    self.errors.remove(index);
+                }
+            }
+        }
+    }
+
+    fn open(&mut self, path: PathBuf) {
+        let id = self.next_run;
+        self.next_run += 1;
+        let generation = self.next_generation();
+        let cancel = Arc::new(AtomicBool::new(false));
+        self.runs
+            .push(RunEntry::loading(id, path.clone(), generation, cancel.clone()));
+        if self.selected.is_none() {
+            self.selected = Some(id);
+        }
+        self.worker.submit(Job {
+            run: id,
+            generation,
+            kind: JobKind::Load { path, cancel },
+        });
+    }
+
+    /// Asks the worker to bring a loaded run's stages up to date with the current settings.
+    pub(super) fn analyse(&mut self, id: RunId) {
+        let generation = self.next_generation();
+        let settings = Box::new(self.prefs.settings.clone());
+        if let Some(run) = self.run_mut(id) {
+            run.requested_generation = generation;
+            run.analysis_error = None;
+        }
+        self.worker.submit(Job {
+            run: id,
+            generation,
+            kind: JobKind::Analyse { settings },
+        });
+    }
+}

@@ -1,0 +1,158 @@
+//! The non-drawing half of a frame: commands, dropped files, worker events, textures.
+
+use std::time::{Duration, Instant};
+
+use eframe::egui;
+
+use super::{App, Command, HeatmapMode, RunState};
+use crate::block::Block;
+use crate::gui::pipeline::{Event, RunId, Stage};
+use crate::gui::view::colormap;
+
+/// Longest time spent draining worker events in one pass.
+const DRAIN_BUDGET: Duration = Duration::from_millis(10);
+
+/// What the pair-grid texture shows: run, spectra generation, block, mode.
+pub(super) type TextureKey = (RunId, u64, Block, HeatmapMode);
+
+impl App {
+    pub(super) fn logic_pass(&mut self, ctx: &egui::Context) {
+        let dropped: Vec<_> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .filter(|p| !p.as_os_str().is_empty())
+                .collect()
+        });
+        if !dropped.is_empty() {
+            self.push_command(Command::Open(dropped));
+        }
+        for command in std::mem::take(&mut self.commands) {
+            self.apply(command);
+        }
+        self.drain_events(ctx);
+        self.update_pair_texture(ctx);
+    }
+
+    /// Applies pending commands and worker events now (tests with a synchronous worker).
+    pub fn process_pending(&mut self) {
+        for _ in 0..8 {
+            let commands = std::mem::take(&mut self.commands);
+            if commands.is_empty() {
+                break;
+            }
+            for command in commands {
+                self.apply(command);
+            }
+        }
+        while let Ok(event) = self.worker.events.try_recv() {
+            self.handle(event);
+        }
+    }
+
+    fn drain_events(&mut self, ctx: &egui::Context) {
+        let start = Instant::now();
+        while let Ok(event) = self.worker.events.try_recv() {
+            self.handle(event);
+            if start.elapsed() > DRAIN_BUDGET {
+                ctx.request_repaint();
+                break;
+            }
+        }
+    }
+
+    fn handle(&mut self, event: Event) {
+        match event {
+            Event::Progress { run, fraction } => {
+                if let Some(RunState::Loading { fraction: f, .. }) = self.run_mut(run).map(|r| &mut r.state) {
+                    *f = fraction;
+                }
+            }
+            Event::Loaded {
+                run,
+                generation,
+                summary,
+                measured,
+            } => {
+                let Some(entry) = self.run_mut(run).filter(|r| r.load_generation == generation) else {
+                    return;
+                };
+                entry.state = RunState::Loaded;
+                entry.summary = Some(summary);
+                entry.measured = Some(measured);
+                self.analyse(run);
+            }
+            Event::Motion { run, motion, .. } => {
+                if let Some(entry) = self.run_mut(run) {
+                    entry.motion = Some(motion);
+                }
+            }
+            Event::Spectra {
+                run,
+                generation,
+                spectra,
+            } => {
+                let Some(entry) = self.run_mut(run) else { return };
+                if generation >= entry.requested_generation {
+                    entry.spectra = Some(spectra);
+                    entry.spectra_generation = generation;
+                    entry.analysis_error = None;
+                }
+            }
+            Event::Failed {
+                run,
+                generation,
+                stage,
+                message,
+                cancelled,
+            } => self.failed(run, generation, stage, message, cancelled),
+        }
+    }
+
+    fn failed(&mut self, run: RunId, generation: u64, stage: Stage, message: String, cancelled: bool) {
+        let Some(entry) = self.run_mut(run) else { return };
+        if stage == Stage::Load {
+            let name = entry.path.display().to_string();
+            self.runs.retain(|r| r.id != run);
+            if self.selected == Some(run) {
+                self.selected = self.runs.first().map(|r| r.id);
+            }
+            self.errors.push(if cancelled {
+                format!("loading {name} cancelled")
+            } else {
+                message
+            });
+        } else if generation >= entry.requested_generation {
+            let name = entry
+                .summary
+                .as_ref()
+                .map_or_else(String::new, |s| s.file_name.clone());
+            entry.analysis_error = Some(message.clone());
+            self.errors
+                .push(format!("{name}: {} stage: {message}", stage.name()));
+        }
+    }
+
+    /// Builds the frequency-by-pair heatmap texture when its content changed.
+    fn update_pair_texture(&mut self, ctx: &egui::Context) {
+        let view = &self.prefs.view;
+        let Some(run) = self.selected() else { return };
+        let Some(spectra) = &run.spectra else { return };
+        let Some(block) = spectra
+            .blocks
+            .iter()
+            .find(|b| b.block == view.spectra_block)
+            .or(spectra.blocks.first())
+        else {
+            return;
+        };
+        let key = (run.id, run.spectra_generation, block.block, view.heatmap_mode);
+        if self.pair_texture.as_ref().is_some_and(|(k, _)| *k == key) {
+            return;
+        }
+        let image = colormap::pair_image(block, view.heatmap_mode);
+        let texture = ctx.load_texture("pair-heatmap", image, egui::TextureOptions::NEAREST);
+        self.pair_texture = Some((key, texture));
+    }
+}

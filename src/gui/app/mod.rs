@@ -1,0 +1,262 @@
+//! The application: persisted preferences, the runs shown, the worker, and the command queue.
+//!
+//! `logic` (in `logic.rs`) applies the commands the widgets pushed during the previous `ui`
+//! pass and drains the worker's events; `ui` (in `ui.rs`) only draws. Presentation-only state
+//! (tab, overlay toggle, heatmap mode) lives in [`ViewState`] and is edited by the widgets
+//! directly; everything that reaches the pipeline goes through a [`Command`].
+
+mod commands;
+mod logic;
+mod ui;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use eframe::egui;
+use serde::{Deserialize, Serialize};
+
+pub use commands::Command;
+
+use crate::block::Block;
+use crate::gui::pipeline::{Measured, Motion, RunId, RunSummary, Spectra, Worker, WorkerMode};
+use crate::ident::settings::Settings;
+
+/// Storage key of [`Prefs`] (JSON, in eframe's storage).
+const PREFS_KEY: &str = "imu-attest/prefs";
+
+/// How to start the app.
+#[derive(Clone, Debug)]
+pub struct AppOptions {
+    /// Runs to open.
+    pub paths: Vec<PathBuf>,
+    /// Threaded worker, or synchronous for tests.
+    pub mode: WorkerMode,
+    /// Read and write preferences in eframe's storage.
+    pub persist: bool,
+}
+
+/// The central panel's tab.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Tab {
+    /// Measured angles, block inputs and outputs over time.
+    #[default]
+    TimeSeries,
+    /// PSDs and cross-spectral heatmaps.
+    Spectra,
+}
+
+/// What the heatmaps show.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum HeatmapMode {
+    /// `10 log10 |S_ij|`.
+    #[default]
+    Magnitude,
+    /// `|S_ij|^2 / (S_ii S_jj)`.
+    Coherence,
+}
+
+/// Presentation state, persisted.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ViewState {
+    /// Central tab.
+    pub tab: Tab,
+    /// Overlay the plain-differentiation inputs on the observer's.
+    pub show_differentiated: bool,
+    /// Block whose spectra are shown.
+    pub spectra_block: Block,
+    /// Heatmap quantity.
+    pub heatmap_mode: HeatmapMode,
+    /// Frequency of the CSD-matrix heatmap, Hz.
+    pub heatmap_frequency_hz: f64,
+}
+
+impl Default for ViewState {
+    fn default() -> Self {
+        Self {
+            tab: Tab::TimeSeries,
+            show_differentiated: false,
+            spectra_block: Block::Gyro,
+            heatmap_mode: HeatmapMode::Magnitude,
+            heatmap_frequency_hz: 5.0,
+        }
+    }
+}
+
+/// Everything kept between launches.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Prefs {
+    /// Identifier settings.
+    pub settings: Settings,
+    /// Presentation.
+    pub view: ViewState,
+}
+
+/// Where a run is in its life.
+#[derive(Clone, Debug)]
+pub enum RunState {
+    /// Being read.
+    Loading {
+        /// Bytes read / total.
+        fraction: f32,
+        /// Set to cancel.
+        cancel: Arc<AtomicBool>,
+    },
+    /// Loaded.
+    Loaded,
+}
+
+/// One run in the run list, with the newest good result of each stage.
+#[derive(Clone, Debug)]
+pub struct RunEntry {
+    /// Session id.
+    pub id: RunId,
+    /// File.
+    pub path: PathBuf,
+    /// Loading or loaded.
+    pub state: RunState,
+    /// Generation of the load job.
+    pub load_generation: u64,
+    /// Newest analysis requested.
+    pub requested_generation: u64,
+    /// Generation of the spectra shown (0: none yet).
+    pub spectra_generation: u64,
+    /// Summary, once loaded.
+    pub summary: Option<Arc<RunSummary>>,
+    /// Measured series, once loaded.
+    pub measured: Option<Arc<Measured>>,
+    /// Observer and block inputs.
+    pub motion: Option<Arc<Motion>>,
+    /// Spectra (the last good ones).
+    pub spectra: Option<Arc<Spectra>>,
+    /// Why the newest analysis failed, if it did.
+    pub analysis_error: Option<String>,
+}
+
+impl RunEntry {
+    fn loading(id: RunId, path: PathBuf, generation: u64, cancel: Arc<AtomicBool>) -> Self {
+        Self {
+            id,
+            path,
+            state: RunState::Loading {
+                fraction: 0.0,
+                cancel,
+            },
+            load_generation: generation,
+            requested_generation: 0,
+            spectra_generation: 0,
+            summary: None,
+            measured: None,
+            motion: None,
+            spectra: None,
+            analysis_error: None,
+        }
+    }
+
+    /// Computing: loading, or an analysis newer than the spectra shown is under way.
+    #[must_use]
+    pub fn busy(&self) -> bool {
+        matches!(self.state, RunState::Loading { .. })
+            || (self.analysis_error.is_none() && self.spectra_generation < self.requested_generation)
+    }
+}
+
+/// The imu-attest desktop app.
+pub struct App {
+    prefs: Prefs,
+    persist: bool,
+    worker: Worker,
+    runs: Vec<RunEntry>,
+    selected: Option<RunId>,
+    errors: Vec<String>,
+    commands: Vec<Command>,
+    next_run: RunId,
+    generation: u64,
+    pair_texture: Option<(logic::TextureKey, egui::TextureHandle)>,
+}
+
+impl App {
+    /// Builds the app and starts loading `options.paths`.
+    #[must_use]
+    pub fn new(cc: &eframe::CreationContext<'_>, options: AppOptions) -> Self {
+        let prefs = cc
+            .storage
+            .filter(|_| options.persist)
+            .and_then(|s| s.get_string(PREFS_KEY))
+            .and_then(|json| serde_json::from_str::<Prefs>(&json).ok())
+            .unwrap_or_default();
+        let ctx = cc.egui_ctx.clone();
+        let worker = Worker::start(options.mode, Arc::new(move || ctx.request_repaint()));
+        let mut app = Self {
+            prefs,
+            persist: options.persist,
+            worker,
+            runs: Vec::new(),
+            selected: None,
+            errors: Vec::new(),
+            commands: Vec::new(),
+            next_run: 1,
+            generation: 0,
+            pair_texture: None,
+        };
+        app.push_command(Command::Open(options.paths));
+        app
+    }
+
+    /// The runs in the list, loading ones included.
+    #[must_use]
+    pub fn runs(&self) -> &[RunEntry] {
+        &self.runs
+    }
+
+    /// The selected run.
+    #[must_use]
+    pub fn selected(&self) -> Option<&RunEntry> {
+        self.selected.and_then(|id| self.run(id))
+    }
+
+    /// Error messages shown in the error panel.
+    #[must_use]
+    pub fn errors(&self) -> &[String] {
+        &self.errors
+    }
+
+    /// The identifier settings in force.
+    #[must_use]
+    pub fn settings(&self) -> &Settings {
+        &self.prefs.settings
+    }
+
+    fn run(&self, id: RunId) -> Option<&RunEntry> {
+        self.runs.iter().find(|r| r.id == id)
+    }
+
+    fn run_mut(&mut self, id: RunId) -> Option<&mut RunEntry> {
+        self.runs.iter_mut().find(|r| r.id == id)
+    }
+
+    fn next_generation(&mut self) -> u64 {
+        self.generation += 1;
+        self.generation
+    }
+}
+
+impl eframe::App for App {
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.logic_pass(ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.draw(ui);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        if self.persist
+            && let Ok(json) = serde_json::to_string(&self.prefs)
+        {
+            storage.set_string(PREFS_KEY, json);
+        }
+    }
+}

@@ -1,0 +1,362 @@
+//! The worker: a named thread (or, for tests, the caller's thread) that owns the stage caches.
+
+use std::collections::HashMap;
+use std::ops::ControlFlow;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, Sender, channel};
+
+use super::stages::{self, Measured, Motion, Spectra};
+use super::{Event, Job, JobKind, RunId, RunSummary, Stage};
+use crate::ident::settings::Settings;
+use crate::run::{LoadError, LoadOptions, Sidecar, load_with_progress};
+use crate::spectral::WelchPlanner;
+
+/// Called after every event so the UI wakes up (egui's `request_repaint`).
+pub type Waker = Arc<dyn Fn() + Send + Sync>;
+
+/// How jobs run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WorkerMode {
+    /// On the `imu-attest-worker` thread (the app).
+    Thread,
+    /// Inside [`Worker::submit`], before it returns (tests: deterministic, no repaint loop).
+    Synchronous,
+}
+
+/// Sends jobs and receives events.
+pub struct Worker {
+    jobs: Option<Sender<Job>>,
+    inline: Option<Box<Pipeline>>,
+    /// Events from the worker, drained by the app's `logic`.
+    pub events: Receiver<Event>,
+}
+
+impl Worker {
+    /// Starts the worker. If the thread cannot be spawned, falls back to synchronous mode.
+    #[must_use]
+    pub fn start(mode: WorkerMode, waker: Waker) -> Self {
+        let (event_tx, events) = channel();
+        let pipeline = Pipeline {
+            runs: HashMap::new(),
+            planner: WelchPlanner::new(),
+            events: event_tx,
+            waker,
+        };
+        if mode == WorkerMode::Thread {
+            let (job_tx, job_rx) = channel::<Job>();
+            let spare = pipeline.events.clone();
+            let spawned = std::thread::Builder::new()
+                .name("imu-attest-worker".into())
+                .spawn(move || pipeline.serve(&job_rx));
+            if spawned.is_ok() {
+                return Self {
+                    jobs: Some(job_tx),
+                    inline: None,
+                    events,
+                };
+            }
+            // Spawning failed: the closure (and the pipeline) is gone; run inline instead.
+            let pipeline = Pipeline {
+                runs: HashMap::new(),
+                planner: WelchPlanner::new(),
+                events: spare,
+                waker: Arc::new(|| {}),
+            };
+            return Self {
+                jobs: None,
+                inline: Some(Box::new(pipeline)),
+                events,
+            };
+        }
+        Self {
+            jobs: None,
+            inline: Some(Box::new(pipeline)),
+            events,
+        }
+    }
+
+    /// Queues a job (or runs it now in synchronous mode).
+    pub fn submit(&mut self, job: Job) {
+        if let Some(pipeline) = self.inline.as_mut() {
+            pipeline.run_caught(job);
+        } else if let Some(jobs) = &self.jobs {
+            // A send fails only if the worker thread is gone; its panic was already reported.
+            let _ = jobs.send(job);
+        }
+    }
+}
+
+/// A loaded run's cached stages.
+struct RunCache {
+    summary: Arc<RunSummary>,
+    sidecar: Sidecar,
+    measured: Arc<Measured>,
+    motion: Option<Arc<Motion>>,
+    spectra: Option<Arc<Spectra>>,
+}
+
+/// The stage caches and the reusable FFT planner.
+struct Pipeline {
+    runs: HashMap<RunId, RunCache>,
+    planner: WelchPlanner,
+    events: Sender<Event>,
+    waker: Waker,
+}
+
+impl Pipeline {
+    fn serve(mut self, jobs: &Receiver<Job>) {
+        while let Ok(first) = jobs.recv() {
+            let mut batch = vec![first];
+            batch.extend(jobs.try_iter());
+            for job in newest_only(batch) {
+                self.run_caught(job);
+            }
+        }
+    }
+
+    fn send(&self, event: Event) {
+        // The app is gone when this fails; nothing left to tell.
+        let _ = self.events.send(event);
+        (self.waker)();
+    }
+
+    fn run_caught(&mut self, job: Job) {
+        let (run, generation) = (job.run, job.generation);
+        let mut stage = Stage::Load;
+        let outcome = catch_unwind(AssertUnwindSafe(|| self.run(job, &mut stage)));
+        if let Err(payload) = outcome {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(ToString::to_string)
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            self.send(Event::Failed {
+                run,
+                generation,
+                stage,
+                message: format!("internal error (panic) in the {} stage: {what}", stage.name()),
+                cancelled: false,
+            });
+        }
+    }
+
+    fn run(&mut self, job: Job, stage: &mut Stage) {
+        let (run, generation) = (job.run, job.generation);
+        match job.kind {
+            JobKind::Load { path, cancel } => self.load(run, generation, &path, &cancel),
+            JobKind::Analyse { settings } => self.analyse(run, generation, &settings, stage),
+            JobKind::Forget => {
+                self.runs.remove(&run);
+            }
+            #[cfg(test)]
+            JobKind::PanicForTest => panic!("deliberate test panic"),
+        }
+    }
+
+    fn load(&mut self, run: RunId, generation: u64, path: &Path, cancel: &AtomicBool) {
+        let mut progress = |p: crate::run::LoadProgress| {
+            if cancel.load(Ordering::Relaxed) {
+                return ControlFlow::Break(());
+            }
+            let fraction = p.bytes_done as f32 / p.bytes_total.max(1) as f32;
+            self.send(Event::Progress {
+                run,
+                fraction: fraction.clamp(0.0, 1.0),
+            });
+            ControlFlow::Continue(())
+        };
+        match load_with_progress(path, &LoadOptions::default(), &mut progress) {
+            Ok(loaded) => {
+                let (summary, measured, sidecar) = stages::split_run(loaded);
+                let (summary, measured) = (Arc::new(summary), Arc::new(measured));
+                self.runs.insert(
+                    run,
+                    RunCache {
+                        summary: summary.clone(),
+                        sidecar,
+                        measured: measured.clone(),
+                        motion: None,
+                        spectra: None,
+                    },
+                );
+                self.send(Event::Loaded {
+                    run,
+                    generation,
+                    summary,
+                    measured,
+                });
+            }
+            Err(e) => self.send(Event::Failed {
+                run,
+                generation,
+                stage: Stage::Load,
+                cancelled: matches!(e, LoadError::Cancelled),
+                message: e.to_string(),
+            }),
+        }
+    }
+
+    fn analyse(&mut self, run: RunId, generation: u64, settings: &Settings, stage: &mut Stage) {
+        let Pipeline {
+            runs,
+            planner,
+            events,
+            waker,
+        } = self;
+        let send = |event: Event| {
+            // The app is gone when this fails; nothing left to tell.
+            let _ = events.send(event);
+            waker();
+        };
+        let Some(cache) = runs.get_mut(&run) else { return };
+        let fs = cache.summary.sample_rate_hz;
+        *stage = Stage::Motion;
+        let motion = if let Some(m) = &cache.motion {
+            m.clone()
+        } else {
+            match stages::motion(&cache.measured, fs, &cache.sidecar) {
+                Ok(m) => {
+                    let m = Arc::new(m);
+                    cache.motion = Some(m.clone());
+                    send(Event::Motion {
+                        run,
+                        generation,
+                        motion: m.clone(),
+                    });
+                    m
+                }
+                Err(e) => {
+                    let message = e.to_string();
+                    send(Event::Failed {
+                        run,
+                        generation,
+                        stage: Stage::Motion,
+                        message,
+                        cancelled: false,
+                    });
+                    return;
+                }
+            }
+        };
+        *stage = Stage::Spectra;
+        let cached = cache
+            .spectra
+            .as_ref()
+            .filter(|s| s.welch == settings.welch)
+            .cloned();
+        let spectra = match cached {
+            Some(s) => Ok(s),
+            None => stages::spectra(planner, &cache.measured, &motion, fs, &settings.welch).map(Arc::new),
+        };
+        match spectra {
+            Ok(spectra) => {
+                cache.spectra = Some(spectra.clone());
+                send(Event::Spectra {
+                    run,
+                    generation,
+                    spectra,
+                });
+            }
+            Err(e) => {
+                let message = e.to_string();
+                send(Event::Failed {
+                    run,
+                    generation,
+                    stage: Stage::Spectra,
+                    message,
+                    cancelled: false,
+                });
+            }
+        }
+        // The identification stages (factorisation -> identifier -> structural fit) follow here,
+        // keyed on `settings` minus `welch`, reusing `cache.spectra`.
+    }
+}
+
+/// Keeps every load and forget job in order, and of the analysis jobs only the newest per run.
+fn newest_only(batch: Vec<Job>) -> Vec<Job> {
+    let mut newest: HashMap<RunId, u64> = HashMap::new();
+    for job in &batch {
+        if matches!(job.kind, JobKind::Analyse { .. }) {
+            let g = newest.entry(job.run).or_insert(job.generation);
+            *g = (*g).max(job.generation);
+        }
+    }
+    batch
+        .into_iter()
+        .filter(|job| {
+            !matches!(job.kind, JobKind::Analyse { .. }) || newest.get(&job.run) == Some(&job.generation)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Event, Job, JobKind, Stage, Worker, WorkerMode, newest_only};
+    use std::sync::Arc;
+
+    #[test]
+    fn only_the_newest_analysis_per_run_survives() {
+        let analyse = |run, generation| Job {
+            run,
+            generation,
+            kind: JobKind::Analyse {
+                settings: Box::default(),
+            },
+        };
+        let batch = vec![
+            analyse(1, 1),
+            Job {
+                run: 2,
+                generation: 2,
+                kind: JobKind::Forget,
+            },
+            analyse(1, 3),
+            analyse(3, 4),
+        ];
+        let kept: Vec<u64> = newest_only(batch).iter().map(|j| j.generation).collect();
+        assert_eq!(kept, vec![2, 3, 4]);
+    }
+
+    #[test]
+    fn a_panicking_job_is_reported_and_the_worker_goes_on() {
+        let mut worker = Worker::start(WorkerMode::Synchronous, Arc::new(|| {}));
+        worker.submit(Job {
+            run: 1,
+            generation: 1,
+            kind: JobKind::PanicForTest,
+        });
+        let events: Vec<Event> = worker.events.try_iter().collect();
+        let [
+            Event::Failed {
+                run: 1,
+                generation: 1,
+                stage: Stage::Load,
+                message,
+                cancelled: false,
+            },
+        ] = &events[..]
+        else {
+            panic!("{events:?}");
+        };
+        assert!(
+            message.contains("panic") && message.contains("deliberate test panic"),
+            "{message}"
+        );
+        // Still serving: a job after the panic runs.
+        worker.submit(Job {
+            run: 2,
+            generation: 2,
+            kind: JobKind::Forget,
+        });
+        worker.submit(Job {
+            run: 1,
+            generation: 3,
+            kind: JobKind::PanicForTest,
+        });
+        assert_eq!(worker.events.try_iter().count(), 1);
+    }
+}

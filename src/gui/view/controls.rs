@@ -1,0 +1,167 @@
+//! The identifier settings panel: edits a copy of [`Settings`] and sends it as a command when
+//! anything changed; shows why settings are refused (A not SPD, Lambda singular, band, segment).
+
+use eframe::egui::{self, ComboBox, DragValue, Slider};
+
+use crate::block::Block;
+use crate::gui::app::Command;
+use crate::gui::pipeline::RunSummary;
+use crate::ident::settings::{LambdaSetting, MAX_ORDER, OrderSetting, Settings};
+use crate::spectral::{Detrend, Window};
+
+const WINDOWS: [Window; 4] = [
+    Window::Rectangular,
+    Window::Hann,
+    Window::Hamming,
+    Window::BlackmanHarris,
+];
+const DETRENDS: [Detrend; 3] = [Detrend::None, Detrend::Mean, Detrend::Linear];
+
+/// Draws the panel for `settings`, validated against `run` when one is selected.
+pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, commands: &mut Vec<Command>) {
+    let mut s = settings.clone();
+    ui.heading("Identifier settings");
+    ui.weak(
+        "Welch settings drive the spectra now; band, A, Λ, order and blocks are kept for the identifier.",
+    );
+    welch(ui, &mut s);
+    ui.separator();
+    ui.horizontal(|ui| {
+        let low = ui.label("band from");
+        ui.add(
+            DragValue::new(&mut s.band_hz[0])
+                .speed(0.01)
+                .range(0.0..=f64::MAX)
+                .suffix(" Hz"),
+        )
+        .labelled_by(low.id);
+        let high = ui.label("to");
+        ui.add(
+            DragValue::new(&mut s.band_hz[1])
+                .speed(0.1)
+                .range(0.0..=f64::MAX)
+                .suffix(" Hz"),
+        )
+        .labelled_by(high.id);
+    });
+    weight(ui, &mut s);
+    lambda(ui, &mut s);
+    ui.separator();
+    ui.horizontal(|ui| {
+        let text = match s.order {
+            OrderSetting::Auto => "auto".to_owned(),
+            OrderSetting::Fixed(n) => n.to_string(),
+        };
+        ComboBox::from_label("order")
+            .selected_text(text)
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut s.order, OrderSetting::Auto, "auto");
+                for n in 0..=MAX_ORDER {
+                    ui.selectable_value(&mut s.order, OrderSetting::Fixed(n), n.to_string());
+                }
+            });
+    });
+    ui.horizontal(|ui| {
+        ui.label("blocks");
+        for block in Block::BOTH {
+            let mut on = s.blocks.contains(&block);
+            if ui.checkbox(&mut on, block.name()).changed() {
+                s.blocks.retain(|b| *b != block);
+                if on {
+                    s.blocks.push(block);
+                    s.blocks.sort();
+                }
+            }
+        }
+    });
+    if let Some(run) = run
+        && let Err(e) = s.validate(run.n_samples, run.sample_rate_hz, &run.blocks)
+    {
+        ui.colored_label(ui.visuals().error_fg_color, format!("for {}: {e}", run.file_name));
+    }
+    if s != *settings {
+        commands.push(Command::SetSettings(Box::new(s)));
+    }
+}
+
+fn welch(ui: &mut egui::Ui, s: &mut Settings) {
+    ui.strong("Welch");
+    ComboBox::from_label("window")
+        .selected_text(s.welch.window.scipy_name())
+        .show_ui(ui, |ui| {
+            for w in WINDOWS {
+                ui.selectable_value(&mut s.welch.window, w, w.scipy_name());
+            }
+        });
+    ComboBox::from_label("segment length")
+        .selected_text(s.welch.segment_len.to_string())
+        .show_ui(ui, |ui| {
+            for k in 6..=16 {
+                let n = 1usize << k;
+                ui.selectable_value(&mut s.welch.segment_len, n, n.to_string());
+            }
+        });
+    ui.add(Slider::new(&mut s.welch.overlap, 0.0..=0.9).text("overlap"));
+    ComboBox::from_label("detrend")
+        .selected_text(format!("{:?}", s.welch.detrend))
+        .show_ui(ui, |ui| {
+            for d in DETRENDS {
+                ui.selectable_value(&mut s.welch.detrend, d, format!("{d:?}"));
+            }
+        });
+}
+
+fn weight(ui: &mut egui::Ui, s: &mut Settings) {
+    ui.strong("weight A (symmetric positive definite)");
+    egui::Grid::new("weight-a").show(ui, |ui| {
+        for (i, row) in s.weight_a.iter_mut().enumerate() {
+            let label = ui.label(format!("A row {}", i + 1));
+            for v in row.iter_mut() {
+                ui.add(DragValue::new(v).speed(0.01).max_decimals(4))
+                    .labelled_by(label.id);
+            }
+            ui.end_row();
+        }
+    });
+    if ui.small_button("make symmetric").clicked() {
+        for i in 0..3 {
+            for j in i + 1..3 {
+                let m = 0.5 * (s.weight_a[i][j] + s.weight_a[j][i]);
+                s.weight_a[i][j] = m;
+                s.weight_a[j][i] = m;
+            }
+        }
+    }
+}
+
+fn lambda(ui: &mut egui::Ui, s: &mut Settings) {
+    ui.horizontal(|ui| {
+        ui.strong("Λ per channel");
+        let mut auto = s.lambda == LambdaSetting::Auto;
+        if ui.checkbox(&mut auto, "auto").changed() {
+            s.lambda = if auto {
+                LambdaSetting::Auto
+            } else {
+                LambdaSetting::Values([0.0; 3])
+            };
+        }
+    });
+    if let LambdaSetting::Values(values) = &mut s.lambda {
+        for (k, v) in values.iter_mut().enumerate() {
+            ui.horizontal(|ui| {
+                let label = ui.label(format!("λ{}", k + 1));
+                ui.add(DragValue::new(v).speed(0.001).max_decimals(5))
+                    .labelled_by(label.id);
+                ui.add(
+                    Slider::new(v, -1.0..=1.0)
+                        .show_value(false)
+                        .clamping(egui::SliderClamping::Never),
+                )
+                .labelled_by(label.id);
+            });
+        }
+    }
+    if let Err(e) = s.validate_weight_and_lambda() {
+        ui.colored_label(ui.visuals().error_fg_color, e.to_string());
+    }
+}

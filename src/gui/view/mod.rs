@@ -1,0 +1,25 @@
+//! Widgets: each draws from borrowed state and pushes [`Command`](crate::gui::app::Command)s.
+
+pub mod colormap;
+pub mod controls;
+pub mod errors;
+pub mod heatmap;
+pub mod runs;
+pub mod spectra;
+pub mod timeseries;
+
+use eframe::egui::Color32;
+
+/// Line colours: three axes of inputs, then three of outputs.
+#[must_use]
+pub fn palette(k: usize) -> Color32 {
+    const COLOURS: [Color32; 6] = [
+        Color32::from_rgb(230, 85, 80),
+        Color32::from_rgb(90, 190, 90),
+        Color32::from_rgb(80, 140, 240),
+        Color32::from_rgb(240, 170, 60),
+        Color32::from_rgb(170, 110, 230),
+        Color32::from_rgb(70, 200, 210),
+    ];
+    COLOURS[k % COLOURS.len()]
+}

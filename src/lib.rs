@@ -10,6 +10,7 @@ pub mod cli;
 pub mod fourier;
 pub mod gui;
 pub mod ident;
+pub mod model;
 pub mod output;
 pub mod rng;
 pub mod run;

@@ -221,3 +221,54 @@ fn bits(s: &SpectralMatrix) -> Vec<(u64, u64)> {
         .map(|v| (v.re.to_bits(), v.im.to_bits()))
         .collect()
 }
+
+/// Zero-padding to `fft_len` samples the same estimate on a finer grid: every `fft_len / N`-th
+/// bin equals the unpadded estimate (the DFT of a padded segment at `m k` is the `N`-point DFT at
+/// `k`), bins are `fs / fft_len` apart, and an odd or short `fft_len` is refused.
+#[test]
+fn zero_padding_refines_the_same_estimate() {
+    let channels = common::correlated_channels(11, 3, 3000);
+    let plain = common::settings(
+        256,
+        0.5,
+        imu_attest::spectral::Window::Hann,
+        imu_attest::spectral::Detrend::Linear,
+    );
+    let padded = imu_attest::spectral::WelchSettings {
+        fft_len: Some(1024),
+        ..plain
+    };
+    let mut planner = imu_attest::spectral::WelchPlanner::new();
+    let a = planner
+        .welch_matrix(&common::views(&channels), 50.0, &plain)
+        .unwrap();
+    let b = planner
+        .welch_matrix(&common::views(&channels), 50.0, &padded)
+        .unwrap();
+    assert_eq!(b.n_bins(), 513);
+    assert!((b.df_hz() - 50.0 / 1024.0).abs() < 1e-15);
+    for k in 0..a.n_bins() {
+        for i in 0..3 {
+            for j in 0..3 {
+                let (x, y) = (a.get(k, i, j).unwrap(), b.get(4 * k, i, j).unwrap());
+                assert!(
+                    (x - y).norm() <= 1e-12 * (1.0 + x.norm()),
+                    "bin {k} ({i},{j}): {x} vs {y}"
+                );
+            }
+        }
+    }
+    for bad in [255, 1023, 100] {
+        let s = imu_attest::spectral::WelchSettings {
+            fft_len: Some(bad),
+            ..plain
+        };
+        assert!(
+            matches!(
+                s.validate(3000),
+                Err(imu_attest::spectral::SpectralError::BadFftLen { .. })
+            ),
+            "{bad}"
+        );
+    }
+}

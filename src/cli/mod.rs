@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod identify;
 mod inspect;
 mod simulate;
 
@@ -43,6 +44,7 @@ usage:
   imu-attest [gui] [RUN...]                       open the GUI (with these runs loaded)
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
+  imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest inspect RUN...                       check runs against the format, summarise them
 ";
 
@@ -72,6 +74,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
     match command {
         "simulate" => simulate::run(&Args::parse(rest)?),
         "inspect" => inspect::run(&Args::parse(rest)?),
+        "identify" => identify::run(&Args::parse(rest)?),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");

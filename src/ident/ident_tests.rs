@@ -3,14 +3,13 @@
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
-use super::factorisation::factorise;
+use super::factorisation::{FactorisationSettings, factorise};
 use super::settings::LambdaSetting;
 use super::signals::BlockSignals;
 use super::spectra::block_spectra;
 use super::wiener::{band_bins, regularised_wiener};
 use crate::block::Block;
 use crate::rng::Rng;
-use crate::spectral::factor::WilsonSettings;
 use crate::spectral::{WelchPlanner, WelchSettings};
 
 const RATE: f64 = 200.0;
@@ -65,7 +64,7 @@ fn causal_wiener_recovers_a_causal_system_and_the_noise_spectrum() {
         ..WelchSettings::default()
     };
     let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
-    let fact = factorise(&sp, &WilsonSettings::default()).unwrap();
+    let fact = factorise(&sp, &FactorisationSettings::default()).unwrap();
     assert!(fact.converged);
     let band = band_bins(&sp.frequency_hz, [1.0, 80.0]);
     let w = regularised_wiener(
@@ -120,7 +119,7 @@ fn auto_lambda_minimises_the_constraint_residual() {
         ..WelchSettings::default()
     };
     let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
-    let fact = factorise(&sp, &WilsonSettings::default()).unwrap();
+    let fact = factorise(&sp, &FactorisationSettings::default()).unwrap();
     for a in [
         Matrix3::identity(),
         Matrix3::new(2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 0.5),
@@ -163,8 +162,8 @@ fn empty_band_and_singular_weight_are_errors() {
         ..WelchSettings::default()
     };
     let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
-    let fact = factorise(&sp, &WilsonSettings::default()).unwrap();
-    let none = regularised_wiener(&sp, &fact, &Matrix3::identity(), LambdaSetting::Auto, [0.1, 0.2]);
+    let fact = factorise(&sp, &FactorisationSettings::default()).unwrap();
+    let none = regularised_wiener(&sp, &fact, &Matrix3::identity(), LambdaSetting::Auto, [0.05, 0.1]);
     assert!(matches!(none, Err(super::IdentError::EmptyBand { .. })));
     let singular = regularised_wiener(&sp, &fact, &Matrix3::zeros(), LambdaSetting::Auto, [1.0, 80.0]);
     assert!(matches!(singular, Err(super::IdentError::Singular(_))));

@@ -6,6 +6,7 @@
 //! structural fit (order).
 
 pub mod factorisation;
+pub mod identify;
 pub mod settings;
 pub mod signals;
 pub mod spectra;
@@ -26,6 +27,21 @@ pub enum IdentError {
         /// High edge, Hz.
         high: f64,
     },
+    /// Settings refused for this run.
+    #[error("settings: {0}")]
+    Settings(String),
+    /// The observer refused the angles.
+    #[error("observer: {0}")]
+    Observer(String),
+    /// The run lacks a block the settings name.
+    #[error("the run has no {0} block")]
+    MissingBlock(&'static str),
+    /// The spectral estimate failed.
+    #[error("spectra: {0}")]
+    Spectra(String),
+    /// The structural fit failed.
+    #[error("structural fit: {0}")]
+    Structural(String),
     /// A matrix that must be inverted is singular.
     #[error("{0} is singular")]
     Singular(&'static str),

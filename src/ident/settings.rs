@@ -52,7 +52,7 @@ pub struct Settings {
     pub lambda: LambdaSetting,
     /// Structural order.
     pub order: OrderSetting,
-    /// Blocks to identify (those the run has, when absent from the file).
+    /// Blocks to identify; empty (the default) means every block the run has.
     pub blocks: Vec<Block>,
 }
 
@@ -64,7 +64,7 @@ impl Default for Settings {
             weight_a: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             lambda: LambdaSetting::Values([0.0; 3]),
             order: OrderSetting::Auto,
-            blocks: Block::BOTH.to_vec(),
+            blocks: Vec::new(),
         }
     }
 }
@@ -118,7 +118,7 @@ pub enum SettingsError {
     #[error("block '{0}' is not in this run")]
     MissingBlock(&'static str),
     /// No block to identify.
-    #[error("blocks is empty: nothing to identify")]
+    #[error("the run has no sensor block to identify")]
     NoBlocks,
 }
 
@@ -159,6 +159,16 @@ impl Settings {
         Matrix3::from_fn(|i, j| self.weight_a[i][j])
     }
 
+    /// The blocks to identify in a run having `present`: the settings' list, or all present.
+    #[must_use]
+    pub fn blocks_for(&self, present: &[Block]) -> Vec<Block> {
+        if self.blocks.is_empty() {
+            present.to_vec()
+        } else {
+            self.blocks.clone()
+        }
+    }
+
     /// Checks the settings against a run of `n_samples` at `sample_rate_hz` having `blocks`.
     ///
     /// # Errors
@@ -183,7 +193,7 @@ impl Settings {
         self.welch
             .validate(n_samples)
             .map_err(|e| SettingsError::Welch(e.to_string()))?;
-        if self.blocks.is_empty() {
+        if blocks.is_empty() {
             return Err(SettingsError::NoBlocks);
         }
         if let Some(b) = self.blocks.iter().find(|b| !blocks.contains(b)) {

@@ -95,13 +95,23 @@ fn validation_refuses_each_bad_setting() {
     ));
     let short = ok.validate(1000, 500.0, &blocks);
     assert!(matches!(short, Err(SettingsError::Welch(m)) if m.contains("1000")));
+    let both = Settings {
+        blocks: Block::BOTH.to_vec(),
+        ..ok.clone()
+    };
     assert!(matches!(
-        ok.validate(100_000, 500.0, &[Block::Gyro]),
+        both.validate(100_000, 500.0, &[Block::Gyro]),
         Err(SettingsError::MissingBlock("accel"))
     ));
-    let none = Settings { blocks: vec![], ..ok };
+    // Empty `blocks` means every block the run has; a run with none is refused.
     assert!(matches!(
-        none.validate(100_000, 500.0, &blocks),
+        ok.validate(100_000, 500.0, &[]),
         Err(SettingsError::NoBlocks)
     ));
+    assert_eq!(ok.blocks_for(&[Block::Accel]), vec![Block::Accel]);
+    let gyro_only = Settings {
+        blocks: vec![Block::Gyro],
+        ..ok
+    };
+    assert_eq!(gyro_only.blocks_for(&blocks), vec![Block::Gyro]);
 }

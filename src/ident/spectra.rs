@@ -26,11 +26,18 @@ pub struct BlockSpectra {
     pub equivalent_averages: f64,
     /// Sample rate, Hz.
     pub sample_rate_hz: f64,
-    /// Segment length (the two-sided grid length), samples.
-    pub segment_len: usize,
+    /// FFT length (the two-sided grid length), samples.
+    pub fft_len: usize,
 }
 
-/// Computes the block's spectra with `planner` (plans and windows are reused across calls).
+/// Zero-padding factor of the identifier's spectra when the settings give no `fft_len`. The Welch
+/// estimate's correlation spans `2 segment_len - 1` lags, so its exact minimum-phase factor is a
+/// causal FIR of `segment_len` taps; a grid of `4 segment_len` holds that factor, shifted by any
+/// plausible delay, without wrapping, which keeps the causal projection `[.]_+` exact.
+pub const ZERO_PAD: usize = 4;
+
+/// Computes the block's spectra with `planner` (plans and windows are reused across calls); the
+/// FFT length is `settings.fft_len`, or [`ZERO_PAD`] times the segment length.
 ///
 /// # Errors
 /// The Welch estimator's errors: bad settings, a run shorter than one segment, NaN samples.
@@ -40,6 +47,10 @@ pub fn block_spectra(
     sample_rate_hz: f64,
     settings: &WelchSettings,
 ) -> Result<BlockSpectra, SpectralError> {
+    let settings = &WelchSettings {
+        fft_len: Some(settings.fft_len.unwrap_or(ZERO_PAD * settings.segment_len)),
+        ..*settings
+    };
     let channels: Vec<&[f64]> = signals
         .input
         .iter()
@@ -58,7 +69,7 @@ pub fn block_spectra(
         n_averages: m.n_averages,
         equivalent_averages: equivalent_averages(&window, settings.step(), m.n_averages),
         sample_rate_hz,
-        segment_len: settings.segment_len,
+        fft_len: settings.nfft(),
     })
 }
 

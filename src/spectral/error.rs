@@ -23,6 +23,16 @@ pub enum SpectralError {
         /// The segment length it was applied to, samples.
         segment_len: usize,
     },
+    /// The FFT length is odd or shorter than the segment.
+    #[error(
+        "Welch fft_len {fft_len} is not allowed: it must be even and at least the segment length {segment_len}"
+    )]
+    BadFftLen {
+        /// The rejected FFT length.
+        fft_len: usize,
+        /// The segment length.
+        segment_len: usize,
+    },
     /// The run is shorter than one segment.
     #[error(
         "too few samples for the chosen spectral segment: {n_samples} samples, but one Welch \

@@ -11,8 +11,8 @@ use std::ops::Index;
 pub struct SpectralMatrix {
     /// Sample rate of the signals, Hz.
     pub sample_rate_hz: f64,
-    /// Welch segment length `N`, samples.
-    pub segment_len: usize,
+    /// FFT length `N` (the segment length, or the zero-padded `fft_len`), samples.
+    pub fft_len: usize,
     /// Number of channels `n`; each bin is an `n x n` matrix.
     pub n_channels: usize,
     /// Number of segments averaged.
@@ -30,7 +30,7 @@ impl SpectralMatrix {
     /// [`SpectralError::ShapeMismatch`] if `data.len() != frequency_hz.len() * n_channels^2`.
     pub fn from_parts(
         sample_rate_hz: f64,
-        segment_len: usize,
+        fft_len: usize,
         n_channels: usize,
         n_averages: usize,
         frequency_hz: Vec<f64>,
@@ -48,7 +48,7 @@ impl SpectralMatrix {
         }
         Ok(Self {
             sample_rate_hz,
-            segment_len,
+            fft_len,
             n_channels,
             n_averages,
             frequency_hz,
@@ -65,7 +65,7 @@ impl SpectralMatrix {
     /// Bin spacing `fs / N`, Hz.
     #[must_use]
     pub fn df_hz(&self) -> f64 {
-        self.sample_rate_hz / self.segment_len as f64
+        self.sample_rate_hz / self.fft_len as f64
     }
 
     /// `S[f][i][j]`, or `None` if any index is out of range.

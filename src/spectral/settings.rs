@@ -21,6 +21,12 @@ pub struct WelchSettings {
     /// What is removed from each segment before windowing. Default the mean.
     #[serde(default)]
     pub detrend: Detrend,
+    /// FFT length (scipy's `nfft`): each windowed segment is zero-padded to it. Even and at least
+    /// `segment_len`; absent (`None`), it equals `segment_len`. Padding samples the same estimate
+    /// on a finer grid: with `fft_len >= 2 segment_len` the grid holds the estimate's whole
+    /// correlation without aliasing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fft_len: Option<usize>,
 }
 
 fn default_segment_len() -> usize {
@@ -38,11 +44,18 @@ impl Default for WelchSettings {
             overlap: default_overlap(),
             window: Window::default(),
             detrend: Detrend::default(),
+            fft_len: None,
         }
     }
 }
 
 impl WelchSettings {
+    /// The FFT length actually used: `fft_len`, or `segment_len` when absent.
+    #[must_use]
+    pub fn nfft(&self) -> usize {
+        self.fft_len.unwrap_or(self.segment_len)
+    }
+
     /// Samples shared by consecutive segments: `round(overlap * segment_len)` (scipy's
     /// `noverlap`, which scipy takes as an integer; ties round away from zero).
     #[must_use]
@@ -74,6 +87,7 @@ impl WelchSettings {
     /// - [`SpectralError::BadSegmentLen`] if `segment_len` is odd or below [`MIN_SEGMENT_LEN`];
     /// - [`SpectralError::BadOverlap`] if `overlap` is not a finite number in `[0, 1)`, or is so
     ///   close to 1 that `round(overlap * segment_len) == segment_len`;
+    /// - [`SpectralError::BadFftLen`] if `fft_len` is odd or shorter than `segment_len`;
     /// - [`SpectralError::TooFewSamples`] if `n_samples < segment_len`.
     pub fn validate(&self, n_samples: usize) -> Result<(), SpectralError> {
         let segment_len = self.segment_len;
@@ -83,6 +97,11 @@ impl WelchSettings {
         let overlap = self.overlap;
         if !(0.0..1.0).contains(&overlap) || self.step() == 0 {
             return Err(SpectralError::BadOverlap { overlap, segment_len });
+        }
+        if let Some(fft_len) = self.fft_len
+            && (fft_len < segment_len || !fft_len.is_multiple_of(2))
+        {
+            return Err(SpectralError::BadFftLen { fft_len, segment_len });
         }
         if n_samples < segment_len {
             return Err(SpectralError::TooFewSamples {

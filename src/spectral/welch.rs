@@ -82,10 +82,11 @@ impl WelchPlanner {
     ) -> Result<SpectralMatrix, SpectralError> {
         check_input(channels, sample_rate_hz, settings)?;
         let seg = settings.segment_len;
-        let n_bins = seg / 2 + 1;
+        let nfft = settings.nfft();
+        let n_bins = nfft / 2 + 1;
         let n = channels.len();
         let window = self.window(settings.window, seg);
-        let fft = self.fft.plan_fft_forward(seg);
+        let fft = self.fft.plan_fft_forward(nfft);
         let plan = Plan {
             channels,
             settings,
@@ -123,9 +124,9 @@ impl WelchPlanner {
             }
         }
         let frequency_hz = (0..n_bins)
-            .map(|k| k as f64 * sample_rate_hz / seg as f64)
+            .map(|k| k as f64 * sample_rate_hz / nfft as f64)
             .collect();
-        SpectralMatrix::from_parts(sample_rate_hz, seg, n, n_segments, frequency_hz, data)
+        SpectralMatrix::from_parts(sample_rate_hz, nfft, n, n_segments, frequency_hz, data)
     }
 }
 
@@ -175,16 +176,18 @@ impl Plan<'_> {
         let (n, nb) = (self.channels.len(), self.n_bins);
         let seg = self.settings.segment_len;
         let step = self.settings.step();
-        let mut input = vec![0.0; seg];
+        let mut input = vec![0.0; self.settings.nfft()];
         let mut spectra = vec![Complex64::default(); n * nb];
         let mut scratch = vec![Complex64::default(); self.fft.get_scratch_len()];
         let mut acc = vec![Complex64::default(); nb * n * n];
         for s in segments {
             let start = s * step;
             for (x, out) in self.channels.iter().zip(spectra.chunks_exact_mut(nb)) {
-                input.copy_from_slice(&x[start..start + seg]);
-                self.settings.detrend.apply(&mut input);
-                input.iter_mut().zip(self.window).for_each(|(v, w)| *v *= w);
+                let (data, padding) = input.split_at_mut(seg);
+                data.copy_from_slice(&x[start..start + seg]);
+                self.settings.detrend.apply(data);
+                data.iter_mut().zip(self.window).for_each(|(v, w)| *v *= w);
+                padding.fill(0.0);
                 self.fft
                     .process_with_scratch(&mut input, out, &mut scratch)
                     .map_err(|e| SpectralError::Fft(e.to_string()))?;

@@ -36,5 +36,6 @@ pub fn settings(segment_len: usize, overlap: f64, window: Window, detrend: Detre
         overlap,
         window,
         detrend,
+        fft_len: None,
     }
 }

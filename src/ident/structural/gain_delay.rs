@@ -98,7 +98,13 @@ fn best_delay(sums: &Sums, tau_min: f64, tau_max: f64) -> f64 {
     let span = tau_max - tau_min;
     let points = ((span / (top / 16.0)).ceil() as usize).clamp(2, MAX_SCAN);
     let step = span / (points - 1) as f64;
-    let at = |i: usize| if i + 1 == points { tau_max } else { tau_min + step * i as f64 };
+    let at = |i: usize| {
+        if i + 1 == points {
+            tau_max
+        } else {
+            tau_min + step * i as f64
+        }
+    };
     let (mut best_i, mut best_f) = (0, f64::NEG_INFINITY);
     for i in 0..points {
         let f = sums.objective(at(i), false).0;

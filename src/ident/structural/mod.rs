@@ -211,9 +211,7 @@ pub enum StructuralError {
     #[error("the analysis band is empty: no frequency bins to fit")]
     EmptyBand,
     /// The three slices differ in length.
-    #[error(
-        "length mismatch: {frequencies} frequencies, {responses} responses, {variances} variances"
-    )]
+    #[error("length mismatch: {frequencies} frequencies, {responses} responses, {variances} variances")]
     LengthMismatch {
         /// Number of frequencies.
         frequencies: usize,
@@ -350,9 +348,7 @@ pub fn fit_structure(
             n
         }
         OrderChoice::Auto => {
-            let supported = (0..=MAX_ORDER)
-                .rev()
-                .find(|&n| order::required_bins(n) <= n_bins);
+            let supported = (0..=MAX_ORDER).rev().find(|&n| order::required_bins(n) <= n_bins);
             supported.ok_or(StructuralError::TooFewBins {
                 order: 0,
                 parameters: model::parameter_count(0),
@@ -406,12 +402,7 @@ fn validate(input: &ResponseEstimate) -> Result<(), StructuralError> {
                     return Err(StructuralError::NonFiniteVariance { bin, row, col });
                 }
                 if value <= 0.0 || !(1.0 / value).is_finite() {
-                    return Err(StructuralError::NonPositiveVariance {
-                        bin,
-                        row,
-                        col,
-                        value,
-                    });
+                    return Err(StructuralError::NonPositiveVariance { bin, row, col, value });
                 }
             }
         }

@@ -182,7 +182,11 @@ fn std_from_r(r: &DMatrix<f64>) -> Vec<f64> {
                     return f64::INFINITY;
                 }
             }
-            if var.is_finite() { var.sqrt() } else { f64::INFINITY }
+            if var.is_finite() {
+                var.sqrt()
+            } else {
+                f64::INFINITY
+            }
         })
         .collect()
 }

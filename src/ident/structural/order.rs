@@ -2,8 +2,8 @@
 
 use super::model::{Model, Prepared, parameter_count};
 use super::{
-    InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings,
-    gain_delay, rational,
+    InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings, gain_delay,
+    rational,
 };
 
 /// Bins needed by order `n`: `2 n + 2`, enough distinct frequencies to separate the numerator's
@@ -64,9 +64,7 @@ pub(super) fn fit_orders(
         let p = parameter_count(model.order());
         let value = criterion_value(settings.criterion, chi2, p, data.real_data());
         if !value.is_finite() {
-            return Err(StructuralError::NumericalFailure {
-                order: model.order(),
-            });
+            return Err(StructuralError::NumericalFailure { order: model.order() });
         }
         chi2s.push(chi2);
         candidates.push(OrderCandidate {

@@ -35,12 +35,7 @@ impl<'a> Projector<'a> {
     /// The projected numerator for `(den, tau)` (normalised coefficients, delay in s) and, into
     /// `out` (length `18 n_bins`), the weighted real residuals `sqrt(2 w) (Re, Im)(h - model)`.
     /// `None` when a normal system is singular beyond repair.
-    pub fn project(
-        &mut self,
-        den: &[f64],
-        tau: f64,
-        out: &mut [f64],
-    ) -> Option<Vec<[f64; ELEMENTS]>> {
+    pub fn project(&mut self, den: &[f64], tau: f64, out: &mut [f64]) -> Option<Vec<[f64; ELEMENTS]>> {
         let (data, nn) = (self.data, self.n_num);
         let mut gram = [[[0.0; MAX_NUM]; MAX_NUM]; ELEMENTS];
         let mut rhs = [[0.0; MAX_NUM]; ELEMENTS];
@@ -97,11 +92,7 @@ impl<'a> Projector<'a> {
 /// Solves `G b = r` for the `n x n` leading block of a symmetric positive (semi)definite `G`
 /// given by its lower triangle: Jacobi scaling, then Cholesky, retried with a ridge of `1e-13`
 /// and `1e-10` (relative) if a pivot is not positive. `None` if all fail.
-fn solve_spd(
-    g: &[[f64; MAX_NUM]; MAX_NUM],
-    r: &[f64; MAX_NUM],
-    n: usize,
-) -> Option<[f64; MAX_NUM]> {
+fn solve_spd(g: &[[f64; MAX_NUM]; MAX_NUM], r: &[f64; MAX_NUM], n: usize) -> Option<[f64; MAX_NUM]> {
     let mut scale = [1.0; MAX_NUM];
     for i in 0..n {
         if g[i][i] > 0.0 {

@@ -62,9 +62,7 @@ pub(super) fn assemble(
         .collect();
     let power = |m: usize| w_ref.powi(m as i32 + 1);
     let denominator = (0..order).map(|m| model.den[m] / power(m)).collect();
-    let denominator_std = (0..order)
-        .map(|m| std[ELEMENTS * n_num + m] / power(m))
-        .collect();
+    let denominator_std = (0..order).map(|m| std[ELEMENTS * n_num + m] / power(m)).collect();
     let tau_std_s = std[std.len() - 1] / w_ref;
     let poles = rational::roots(&model.den)
         .iter()
@@ -102,10 +100,21 @@ pub(super) fn has_nan(fit: &StructuralFit) -> bool {
         || fit.tau_s.is_nan()
         || fit.tau_std_s.is_nan()
         || fit.chi2.is_nan()
-        || fit.denominator.iter().chain(&fit.denominator_std).any(|v| v.is_nan())
+        || fit
+            .denominator
+            .iter()
+            .chain(&fit.denominator_std)
+            .any(|v| v.is_nan())
         || fit.poles.iter().flatten().any(|v| v.is_nan())
-        || fit.candidates.iter().any(|c| c.criterion.is_nan() || c.tau_s.is_nan())
+        || fit
+            .candidates
+            .iter()
+            .any(|c| c.criterion.is_nan() || c.tau_s.is_nan())
         || flat(&fit.misalignment_mrad)
         || flat(&fit.misalignment_std_mrad)
-        || fit.scale_factor_error_ppm.iter().chain(&fit.scale_factor_error_std_ppm).any(|v| v.is_nan())
+        || fit
+            .scale_factor_error_ppm
+            .iter()
+            .chain(&fit.scale_factor_error_std_ppm)
+            .any(|v| v.is_nan())
 }

@@ -62,7 +62,10 @@ pub(super) fn synthesise(
     noise_scale: f64,
 ) -> (Vec<f64>, Vec<Matrix3<Complex64>>, Vec<Matrix3<f64>>) {
     let f = band();
-    let var: Vec<Matrix3<f64>> = f.iter().map(|&f| Matrix3::repeat(element_std(f).powi(2))).collect();
+    let var: Vec<Matrix3<f64>> = f
+        .iter()
+        .map(|&f| Matrix3::repeat(element_std(f).powi(2)))
+        .collect();
     let w = f
         .iter()
         .zip(&var)
@@ -108,7 +111,9 @@ fn order0_noise_free_recovers_gain_and_fractional_delay() {
         assert!(dt < 1e-10, "tau error {dt:e} at tau {tau}");
         assert!(fit.chi2 < 1e-12, "chi2 {}", fit.chi2);
         assert!(fit.denominator.is_empty() && fit.poles.is_empty() && fit.stable);
-        let err = (fit.response(13.3) - Truth::gain_delay(k, tau).at(13.3)).map(Complex64::norm).max();
+        let err = (fit.response(13.3) - Truth::gain_delay(k, tau).at(13.3))
+            .map(Complex64::norm)
+            .max();
         assert!(err < 1e-11, "response error {err:e}");
     }
 }
@@ -163,7 +168,10 @@ fn order2_noise_free_recovers_coefficients_and_poles() {
     let (re, im) = (-zeta * wn, wn * (1.0 - zeta * zeta).sqrt());
     assert_eq!(fit.poles.len(), 2);
     for p in &fit.poles {
-        assert!((p[0] - re).abs() < 1e-6 * wn && (p[1].abs() - im).abs() < 1e-6 * wn, "{p:?}");
+        assert!(
+            (p[0] - re).abs() < 1e-6 * wn && (p[1].abs() - im).abs() < 1e-6 * wn,
+            "{p:?}"
+        );
     }
     assert!(fit.poles[0][1] * fit.poles[1][1] < 0.0, "a conjugate pair");
     assert!(fit.stable);
@@ -203,7 +211,11 @@ fn ieee_report_of_a_hand_made_gain() {
     let fit = fit(&data, OrderChoice::Fixed(0)).expect("fit");
     let ppm = [250.0, -900.0, 0.0];
     for i in 0..3 {
-        assert!((fit.scale_factor_error_ppm[i] - ppm[i]).abs() < 1e-5, "{:?}", fit.scale_factor_error_ppm);
+        assert!(
+            (fit.scale_factor_error_ppm[i] - ppm[i]).abs() < 1e-5,
+            "{:?}",
+            fit.scale_factor_error_ppm
+        );
         assert!((fit.scale_factor_error_std_ppm[i] - fit.k_std[i][i] * 1e6).abs() < 1e-9);
     }
     let mrad = [[0.0, 1.5, -0.7], [-2.0, 0.0, 0.3], [0.05, -1.1, 0.0]];
@@ -235,30 +247,50 @@ fn bad_inputs_are_refused_with_their_bin() {
     assert_eq!(run(&[], &[], &[], auto), Err(StructuralError::EmptyBand));
     assert_eq!(
         run(f, &w[1..], v, auto),
-        Err(StructuralError::LengthMismatch { frequencies: 327, responses: 326, variances: 327 })
+        Err(StructuralError::LengthMismatch {
+            frequencies: 327,
+            responses: 326,
+            variances: 327
+        })
     );
     let mut bad_w = w.to_vec();
     bad_w[17][(1, 2)].im = f64::NAN;
     assert_eq!(
         run(f, &bad_w, v, auto),
-        Err(StructuralError::NonFiniteResponse { bin: 17, row: 1, col: 2 })
+        Err(StructuralError::NonFiniteResponse {
+            bin: 17,
+            row: 1,
+            col: 2
+        })
     );
     let mut bad_v = v.to_vec();
     bad_v[40][(2, 0)] = f64::INFINITY;
     assert_eq!(
         run(f, w, &bad_v, auto),
-        Err(StructuralError::NonFiniteVariance { bin: 40, row: 2, col: 0 })
+        Err(StructuralError::NonFiniteVariance {
+            bin: 40,
+            row: 2,
+            col: 0
+        })
     );
     bad_v[40][(2, 0)] = 0.0;
     assert_eq!(
         run(f, w, &bad_v, auto),
-        Err(StructuralError::NonPositiveVariance { bin: 40, row: 2, col: 0, value: 0.0 })
+        Err(StructuralError::NonPositiveVariance {
+            bin: 40,
+            row: 2,
+            col: 0,
+            value: 0.0
+        })
     );
     let mut bad_f = f.to_vec();
     bad_f[9] = bad_f[8];
     assert_eq!(
         run(&bad_f, w, v, auto),
-        Err(StructuralError::BadFrequency { bin: 9, value: bad_f[8] })
+        Err(StructuralError::BadFrequency {
+            bin: 9,
+            value: bad_f[8]
+        })
     );
     assert_eq!(
         run(f, w, v, OrderChoice::Fixed(5)),
@@ -266,20 +298,41 @@ fn bad_inputs_are_refused_with_their_bin() {
     );
     assert_eq!(
         run(&f[..7], &w[..7], &v[..7], OrderChoice::Fixed(3)),
-        Err(StructuralError::TooFewBins { order: 3, parameters: 31, required: 8, bins: 7 })
+        Err(StructuralError::TooFewBins {
+            order: 3,
+            parameters: 31,
+            required: 8,
+            bins: 7
+        })
     );
     assert_eq!(
         run(&f[..1], &w[..1], &v[..1], auto),
-        Err(StructuralError::TooFewBins { order: 0, parameters: 10, required: 2, bins: 1 })
+        Err(StructuralError::TooFewBins {
+            order: 0,
+            parameters: 10,
+            required: 2,
+            bins: 1
+        })
     );
     // Auto on a short band fits only the orders it supports.
     let short = run(&f[..5], &w[..5], &v[..5], auto).expect("orders 0 and 1 fit");
     assert_eq!(short.candidates.len(), 2);
-    let input = ResponseEstimate { frequency_hz: f, response: w, variance: v };
-    let settings = StructuralSettings { tau_min_s: 0.01, tau_max_s: 0.01, ..Default::default() };
+    let input = ResponseEstimate {
+        frequency_hz: f,
+        response: w,
+        variance: v,
+    };
+    let settings = StructuralSettings {
+        tau_min_s: 0.01,
+        tau_max_s: 0.01,
+        ..Default::default()
+    };
     assert_eq!(
         fit_structure(&input, auto, &settings),
-        Err(StructuralError::BadTauRange { tau_min_s: 0.01, tau_max_s: 0.01 })
+        Err(StructuralError::BadTauRange {
+            tau_min_s: 0.01,
+            tau_max_s: 0.01
+        })
     );
 }
 
@@ -289,7 +342,11 @@ fn degenerate_data_gives_no_nan() {
     let f = band();
     let w = vec![Matrix3::zeros(); f.len()];
     let v = vec![Matrix3::repeat(1e-6); f.len()];
-    let input = ResponseEstimate { frequency_hz: &f, response: &w, variance: &v };
+    let input = ResponseEstimate {
+        frequency_hz: &f,
+        response: &w,
+        variance: &v,
+    };
     let result = fit_structure(&input, OrderChoice::Auto, &StructuralSettings::default());
     let fit = result.expect("order 0 is defined on zero data");
     assert!(!report::has_nan(&fit));

@@ -28,7 +28,11 @@ impl Scatter {
 
     /// How many errors lie within 3 reported sigmas.
     fn within_3_sigma(&self) -> usize {
-        self.errors.iter().zip(&self.reported).filter(|(e, s)| e.abs() <= 3.0 * **s).count()
+        self.errors
+            .iter()
+            .zip(&self.reported)
+            .filter(|(e, s)| e.abs() <= 3.0 * **s)
+            .count()
     }
 }
 
@@ -72,7 +76,11 @@ fn order1_uncertainties_are_honest() {
     let mut rng = Rng::new(200);
     let k = random_gain(&mut rng);
     let (t, tau) = (0.004, 0.002_9);
-    let truth = Truth { num: vec![k], den: vec![t], tau };
+    let truth = Truth {
+        num: vec![k],
+        den: vec![t],
+        tau,
+    };
     // K's diagonal, one coupling, T and tau.
     let mut params: Vec<Scatter> = (0..5).map(|_| Scatter::default()).collect();
     for _ in 0..120 {
@@ -95,7 +103,10 @@ fn auto_fit(truth: &Truth, seed: u64, criterion: InformationCriterion) -> Struct
         response: &data.1,
         variance: &data.2,
     };
-    let settings = StructuralSettings { criterion, ..Default::default() };
+    let settings = StructuralSettings {
+        criterion,
+        ..Default::default()
+    };
     fit_structure(&input, OrderChoice::Auto, &settings).expect("fit")
 }
 
@@ -132,7 +143,11 @@ fn bic_finds_the_sensor_pole() {
         for seed in 0..8 {
             let k: Matrix3<f64> = random_gain(&mut rng);
             let tau = rng.uniform_in(0.002, 0.006);
-            let truth = Truth { num: vec![k], den: vec![t], tau };
+            let truth = Truth {
+                num: vec![k],
+                den: vec![t],
+                tau,
+            };
             let fit = auto_fit(&truth, 2000 + seed, InformationCriterion::Bic);
             eprintln!(
                 "T {t}: order {}, T {:?}, tau {:.6} (true {tau:.6})",
@@ -151,7 +166,11 @@ fn bic_finds_the_sensor_pole() {
 #[ignore = "timing: cargo test --release --lib structural -- --ignored --nocapture"]
 fn timing_of_order_0_and_auto() {
     let mut rng = Rng::new(500);
-    let truth = Truth { num: vec![random_gain(&mut rng)], den: vec![0.003], tau: 0.004 };
+    let truth = Truth {
+        num: vec![random_gain(&mut rng)],
+        den: vec![0.003],
+        tau: 0.004,
+    };
     let data = synthesise(&truth, &mut rng, 1.0);
     let time = |order| {
         let start = std::time::Instant::now();

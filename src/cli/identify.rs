@@ -1,0 +1,64 @@
+//! `imu-attest identify RUN [--settings S.json] --out MODEL.json` (contract sections 3 and 4).
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::{Args, CliError};
+use crate::ident::IdentError;
+use crate::ident::identify::identify_run;
+use crate::ident::settings::Settings;
+use crate::model::Model;
+use crate::output::{ensure_not_input, write_atomic};
+use crate::run::{LoadOptions, load, sidecar_path};
+
+/// Reads `--settings` (or the defaults).
+pub(super) fn read_settings(args: &Args) -> Result<(Settings, Option<PathBuf>), CliError> {
+    match args.get("settings") {
+        None => Ok((Settings::default(), None)),
+        Some(p) => {
+            let path = PathBuf::from(p);
+            let bytes =
+                std::fs::read(&path).map_err(|e| CliError::Input(format!("{p}: cannot read: {e}")))?;
+            let settings = Settings::from_json(&bytes, &path).map_err(|e| CliError::Input(e.to_string()))?;
+            Ok((settings, Some(path)))
+        }
+    }
+}
+
+pub(super) fn run(args: &Args) -> Result<(), CliError> {
+    let (settings, settings_path) = read_settings(args)?;
+    let out = PathBuf::from(args.required("out")?);
+    args.reject_unknown()?;
+    let [run_path] = args.positional.as_slice() else {
+        return Err(CliError::Input(format!(
+            "identify takes one RUN, got {}",
+            args.positional.len()
+        )));
+    };
+    let run_path = Path::new(run_path);
+    let mut inputs = vec![run_path.to_path_buf(), sidecar_path(run_path)];
+    inputs.extend(settings_path);
+    ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
+
+    let run = load(run_path, &LoadOptions::default()).map_err(|e| CliError::Input(e.to_string()))?;
+    let settings = Settings {
+        blocks: settings.blocks_for(&run.blocks()),
+        ..settings
+    };
+    // Settings that do not fit this run are the user's input; anything else is ours.
+    let id = identify_run(&run, &settings).map_err(|e| match e {
+        IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. } => {
+            CliError::Input(format!("{}: {e}", run_path.display()))
+        }
+        other => CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display())),
+    })?;
+    let model = Model::from_identification(&run, &settings, &id);
+    model
+        .check_finite()
+        .map_err(|e| CliError::Internal(anyhow::anyhow!("model not written: {e}")))?;
+    write_atomic(&out, |w| {
+        serde_json::to_writer_pretty(&mut *w, &model).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+    .map_err(|e| CliError::Input(e.to_string()))
+}

@@ -1,0 +1,283 @@
+//! The identified model file (contract section 4, schema `imu-attest/model/1`): what `identify`
+//! writes and what `discrepancy` and `compare` read.
+//!
+//! Arrays are `[frequency][row][col]`; complex arrays are `{"re": .., "im": ..}`. The frequency
+//! grid is the analysis band's bins of the (zero-padded) Welch grid. Beside the contract's fields
+//! each block carries `W_u_std` (standard deviation of each element of `W_u`), `W_psi` (the
+//! disturbance's minimum-phase shaping filter for unit two-sided white noise, so
+//! `noise_psd = 2 W_psi W_psi^H` off DC), and `fit` (every figure of the structural fit and of the
+//! regularised Wiener stage). A standard deviation the data cannot determine is `null`. No NaN or
+//! infinity is ever written: [`Model::check_finite`] runs before every write.
+
+use std::collections::BTreeMap;
+
+use nalgebra::Matrix3;
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::ident::identify::{BlockIdentification, RunIdentification};
+use crate::ident::settings::Settings;
+use crate::ident::signals::channel_names;
+use crate::run::Run;
+
+/// The schema id of the model file.
+pub const MODEL_SCHEMA: &str = "imu-attest/model/1";
+
+/// A model file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model {
+    /// Always [`MODEL_SCHEMA`].
+    pub schema: String,
+    /// The run it was identified from.
+    pub source: Source,
+    /// The settings as used.
+    pub settings: Settings,
+    /// One entry per block, keyed `"gyro"` / `"accel"`.
+    pub blocks: BTreeMap<String, BlockModel>,
+}
+
+/// Where the model came from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Source {
+    /// The run's file name.
+    pub file: String,
+    /// SHA-256 of the run file as stored.
+    pub sha256: String,
+    /// Regime (sidecar, or the file stem).
+    pub regime: String,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+}
+
+/// Complex `[frequency][row][col]` arrays.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ComplexArray {
+    /// Real parts.
+    pub re: Vec<[[f64; 3]; 3]>,
+    /// Imaginary parts.
+    pub im: Vec<[[f64; 3]; 3]>,
+}
+
+impl ComplexArray {
+    fn from_bins(bins: impl Iterator<Item = Matrix3<Complex64>>) -> Self {
+        let (mut re, mut im) = (Vec::new(), Vec::new());
+        for m in bins {
+            re.push(std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)].re)));
+            im.push(std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)].im)));
+        }
+        Self { re, im }
+    }
+
+    /// The matrix at bin `k`, if present.
+    #[must_use]
+    pub fn at(&self, k: usize) -> Option<Matrix3<Complex64>> {
+        let (re, im) = (self.re.get(k)?, self.im.get(k)?);
+        Some(Matrix3::from_fn(|i, j| Complex64::new(re[i][j], im[i][j])))
+    }
+}
+
+/// One block's model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BlockModel {
+    /// Input channel names.
+    pub inputs: [String; 3],
+    /// Output channel names.
+    pub outputs: [String; 3],
+    /// Static gain: `K[i][j]` from input axis j to output channel i.
+    #[serde(rename = "K")]
+    pub k: [[f64; 3]; 3],
+    /// Delay, s.
+    pub tau_s: f64,
+    /// Structural order (0 = `K e^(-tau s)`).
+    pub order: usize,
+    /// Denominator `d_1..d_n` of `d(s) = 1 + d_1 s + ...` (empty at order 0), s in rad/s.
+    pub denominator: Vec<f64>,
+    /// Numerator coefficient matrices `N_0 = K, N_1, ...`.
+    pub numerator: Vec<[[f64; 3]; 3]>,
+    /// Poles `[re, im]`, rad/s.
+    pub poles: Vec<[f64; 2]>,
+    /// Band frequencies, Hz.
+    pub frequency_hz: Vec<f64>,
+    /// Identified frequency response (regularised Wiener-Kolmogorov).
+    #[serde(rename = "W_u")]
+    pub w_u: ComplexArray,
+    /// Standard deviation of each element of `W_u`.
+    #[serde(rename = "W_u_std")]
+    pub w_u_std: Vec<[[f64; 3]; 3]>,
+    /// One-sided cross-spectral density of the disturbance, output units^2/Hz.
+    pub noise_psd: ComplexArray,
+    /// Minimum-phase shaping filter of the disturbance.
+    #[serde(rename = "W_psi")]
+    pub shaping_filter: ComplexArray,
+    /// `coherence[frequency][output]`: multiple coherence with the three inputs.
+    pub coherence: Vec<[f64; 3]>,
+    /// Quality figures.
+    pub fit: Fit,
+}
+
+/// Quality figures of a block's identification.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Fit {
+    /// Standard deviation of K (`null` where undetermined).
+    pub k_std: [[Option<f64>; 3]; 3],
+    /// Standard deviation of tau, s.
+    pub tau_std_s: Option<f64>,
+    /// Scale-factor errors `(K_ii - 1) 1e6`, ppm.
+    pub scale_factor_error_ppm: [f64; 3],
+    /// Their standard deviations, ppm.
+    pub scale_factor_error_std_ppm: [Option<f64>; 3],
+    /// Cross-axis misalignments `K_ij 1e3` (i != j; diagonal 0), mrad.
+    pub misalignment_mrad: [[f64; 3]; 3],
+    /// Their standard deviations, mrad.
+    pub misalignment_std_mrad: [[Option<f64>; 3]; 3],
+    /// Weighted residual of the structural fit.
+    pub chi2: f64,
+    /// Its degrees of freedom.
+    pub dof: usize,
+    /// Whether the chosen model is stable.
+    pub stable: bool,
+    /// Every order tried: `{order, parameters, chi2, criterion, tau_s, stable}`.
+    pub candidates: Vec<Candidate>,
+    /// Lagrange multipliers used.
+    pub lambda: [f64; 3],
+    /// Whether they were solved from the constraint.
+    pub lambda_auto: bool,
+    /// Band-integrated relative residual of `W_u S_uu = S_xu`.
+    pub constraint_residual: f64,
+    /// Overlap-corrected number of Welch averages.
+    pub equivalent_averages: f64,
+    /// Reconstruction errors of the input and disturbance spectral factors.
+    pub factor_errors: [f64; 2],
+}
+
+/// One structural order tried.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Order.
+    pub order: usize,
+    /// Real parameters.
+    pub parameters: usize,
+    /// Weighted residual.
+    pub chi2: f64,
+    /// Information criterion.
+    pub criterion: f64,
+    /// Delay, s.
+    pub tau_s: f64,
+    /// Stable poles.
+    pub stable: bool,
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+impl BlockModel {
+    /// The model of one identified block.
+    #[must_use]
+    pub fn from_identification(b: &BlockIdentification) -> Self {
+        let (inputs, outputs) = channel_names(b.block);
+        let s = &b.structural;
+        let w = &b.wiener;
+        let f = &b.factorisation;
+        let band = &b.band;
+        Self {
+            inputs: inputs.map(str::to_owned),
+            outputs: outputs.map(str::to_owned),
+            k: s.k,
+            tau_s: s.tau_s,
+            order: s.order,
+            denominator: s.denominator.clone(),
+            numerator: s.numerator.clone(),
+            poles: s.poles.clone(),
+            frequency_hz: band.iter().map(|&k| b.spectra.frequency_hz[k]).collect(),
+            w_u: ComplexArray::from_bins(band.iter().map(|&k| w.w_u[k])),
+            w_u_std: band
+                .iter()
+                .map(|&k| std::array::from_fn(|i| std::array::from_fn(|j| w.w_u_std[k][(i, j)])))
+                .collect(),
+            noise_psd: ComplexArray::from_bins(band.iter().map(|&k| f.noise_psd[k])),
+            shaping_filter: ComplexArray::from_bins(band.iter().map(|&k| f.shaping_filter[k])),
+            coherence: band.iter().map(|&k| w.coherence[k]).collect(),
+            fit: Fit {
+                k_std: s.k_std.map(|r| r.map(finite)),
+                tau_std_s: finite(s.tau_std_s),
+                scale_factor_error_ppm: s.scale_factor_error_ppm,
+                scale_factor_error_std_ppm: s.scale_factor_error_std_ppm.map(finite),
+                misalignment_mrad: s.misalignment_mrad,
+                misalignment_std_mrad: s.misalignment_std_mrad.map(|r| r.map(finite)),
+                chi2: s.chi2,
+                dof: s.dof,
+                stable: s.stable,
+                candidates: s
+                    .candidates
+                    .iter()
+                    .map(|c| Candidate {
+                        order: c.order,
+                        parameters: c.parameters,
+                        chi2: c.chi2,
+                        criterion: c.criterion,
+                        tau_s: c.tau_s,
+                        stable: c.stable,
+                    })
+                    .collect(),
+                lambda: w.lambda,
+                lambda_auto: w.lambda_auto,
+                constraint_residual: w.constraint_residual,
+                equivalent_averages: b.spectra.equivalent_averages,
+                factor_errors: [f.input_factor_error, f.noise_factor_error],
+            },
+        }
+    }
+}
+
+impl Model {
+    /// The model file of an identified run.
+    #[must_use]
+    pub fn from_identification(run: &Run, settings: &Settings, id: &RunIdentification) -> Self {
+        Self {
+            schema: MODEL_SCHEMA.to_owned(),
+            source: Source {
+                file: run.source.file_name.clone(),
+                sha256: run.source.sha256.clone(),
+                regime: run.sidecar.regime.clone(),
+                sample_rate_hz: run.sample_rate_hz,
+            },
+            settings: settings.clone(),
+            blocks: id
+                .blocks
+                .iter()
+                .map(|b| (b.block.name().to_owned(), BlockModel::from_identification(b)))
+                .collect(),
+        }
+    }
+
+    /// Checks that every number is finite (JSON cannot carry NaN or infinity).
+    ///
+    /// # Errors
+    /// The JSON path of the first non-finite number.
+    pub fn check_finite(&self) -> Result<(), String> {
+        let value = serde_json::to_value(self).map_err(|e| e.to_string())?;
+        first_null(&value, "", false).map_or(Ok(()), |path| Err(format!("{path} is not a finite number")))
+    }
+}
+
+/// `serde_json` writes NaN and infinity as `null`; in a model only the `*_std*` figures may
+/// legitimately be `null` (undetermined). Returns the path of the first other `null`.
+fn first_null(value: &serde_json::Value, path: &str, null_allowed: bool) -> Option<String> {
+    match value {
+        serde_json::Value::Null if !null_allowed => Some(path.to_owned()),
+        serde_json::Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .find_map(|(i, v)| first_null(v, &format!("{path}[{i}]"), null_allowed)),
+        serde_json::Value::Object(map) => map.iter().find_map(|(k, v)| {
+            let child = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
+            first_null(v, &child, null_allowed || k.contains("_std"))
+        }),
+        _ => None,
+    }
+}

@@ -1,0 +1,170 @@
+//! `imu-attest identify` through the binary: the contract's model file (section 4), exactly its
+//! field names, a lossless round trip, and exit status 2 with one line for bad input.
+#![expect(clippy::unwrap_used, reason = "tests")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use imu_attest::model::{MODEL_SCHEMA, Model};
+
+fn imu_attest(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn simulated_run(dir: &Path) -> PathBuf {
+    let run = dir.join("cruise.csv");
+    let o = imu_attest(&[
+        "simulate",
+        "--regime",
+        "cruise",
+        "--duration",
+        "60",
+        "--seed",
+        "4",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    run
+}
+
+fn keys(v: &serde_json::Value) -> Vec<String> {
+    let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+    k.sort();
+    k
+}
+
+#[test]
+fn model_file_has_the_contract_fields_and_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path());
+    let settings = dir.path().join("s.json");
+    std::fs::write(
+        &settings,
+        r#"{"welch": {"segment_len": 2048}, "order": 0, "lambda": "auto"}"#,
+    )
+    .unwrap();
+    let out = dir.path().join("model.json");
+    let o = imu_attest(&[
+        "identify",
+        run.to_str().unwrap(),
+        "--settings",
+        settings.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["schema"], MODEL_SCHEMA);
+    assert_eq!(keys(&v), ["blocks", "schema", "settings", "source"]);
+    assert_eq!(keys(&v["source"]), ["file", "regime", "sample_rate_hz", "sha256"]);
+    assert_eq!(v["source"]["file"], "cruise.csv");
+    assert_eq!(v["source"]["sha256"].as_str().unwrap().len(), 64);
+    // Settings echoed as used: the file's values and the defaults of what it left out.
+    assert_eq!(v["settings"]["welch"]["segment_len"], 2048);
+    assert_eq!(v["settings"]["lambda"], "auto");
+    assert_eq!(v["settings"]["order"], 0);
+    assert_eq!(v["settings"]["band_hz"], serde_json::json!([0.1, 40.0]));
+    assert_eq!(v["settings"]["blocks"], serde_json::json!(["gyro", "accel"]));
+    for (block, inputs, outputs) in [
+        ("gyro", ["wx", "wy", "wz"], ["gx", "gy", "gz"]),
+        ("accel", ["fx", "fy", "fz"], ["ax", "ay", "az"]),
+    ] {
+        let b = &v["blocks"][block];
+        for field in [
+            "inputs",
+            "outputs",
+            "K",
+            "tau_s",
+            "order",
+            "frequency_hz",
+            "W_u",
+            "noise_psd",
+            "coherence",
+            "fit",
+        ] {
+            assert!(b.get(field).is_some(), "{block} lacks {field}");
+        }
+        assert_eq!(b["inputs"], serde_json::json!(inputs));
+        assert_eq!(b["outputs"], serde_json::json!(outputs));
+        let n = b["frequency_hz"].as_array().unwrap().len();
+        assert!(n > 100);
+        assert_eq!(b["W_u"]["re"].as_array().unwrap().len(), n);
+        assert_eq!(b["W_u"]["im"][0].as_array().unwrap().len(), 3);
+        assert_eq!(b["noise_psd"]["re"][0][0].as_array().unwrap().len(), 3);
+        assert_eq!(b["coherence"].as_array().unwrap().len(), n);
+        assert_eq!(b["coherence"][0].as_array().unwrap().len(), 3);
+        let f0 = b["frequency_hz"][0].as_f64().unwrap();
+        assert!(f0 >= 0.1, "band starts at {f0}");
+        // K near identity, a few-ms delay: a sanity check, not the accuracy test.
+        assert!((b["K"][0][0].as_f64().unwrap() - 1.0).abs() < 0.01);
+        assert!(b["tau_s"].as_f64().unwrap() > 0.0 && b["tau_s"].as_f64().unwrap() < 0.01);
+    }
+    let model: Model = serde_json::from_str(&text).unwrap();
+    let again = serde_json::to_string_pretty(&model).unwrap();
+    assert_eq!(
+        serde_json::from_str::<serde_json::Value>(&again).unwrap(),
+        v,
+        "lossless round trip"
+    );
+}
+
+#[test]
+fn bad_settings_and_inputs_exit_2_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path());
+    let out = dir.path().join("m.json");
+    let run_s = run.to_str().unwrap();
+    let out_s = out.to_str().unwrap();
+    let cases: Vec<(&str, &str)> = vec![
+        (r#"{"band_hz": [0.1, 400]}"#, "band_hz"),
+        (r#"{"weight_A": [[1,2,0],[2,1,0],[0,0,1]]}"#, "positive definite"),
+        (
+            r#"{"weight_A": [[2,0,0],[0,2,0],[0,0,2]], "lambda": [2, 0, 0]}"#,
+            "singular",
+        ),
+        (r#"{"order": 9}"#, "order"),
+        (r#"{"welch": {"segment_len": 65536}}"#, "too few samples"),
+        (r#"{"colour": "blue"}"#, "unknown field"),
+        (
+            "{\n  \"lambda\": [1, 2]\n}",
+            "s.json:3:1: lambda: lambda must be three numbers",
+        ),
+    ];
+    for (text, needle) in cases {
+        let s = dir.path().join("s.json");
+        std::fs::write(&s, text).unwrap();
+        let o = imu_attest(&[
+            "identify",
+            run_s,
+            "--settings",
+            s.to_str().unwrap(),
+            "--out",
+            out_s,
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{text}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{text}: {err}");
+        assert!(err.contains(needle), "{text}: expected '{needle}' in {err}");
+    }
+    // Never over an input: the run, its sidecar, the settings.
+    for target in [run.clone(), dir.path().join("cruise.json")] {
+        let before = std::fs::read(&target).unwrap();
+        let o = imu_attest(&["identify", run_s, "--out", target.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("input"));
+        assert_eq!(std::fs::read(&target).unwrap(), before);
+    }
+    let o = imu_attest(&[
+        "identify",
+        dir.path().join("none.csv").to_str().unwrap(),
+        "--out",
+        out_s,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists(), "no partial output");
+}

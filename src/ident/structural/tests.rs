@@ -84,7 +84,7 @@ pub(super) fn fit(
     let input = ResponseEstimate {
         frequency_hz: &data.0,
         response: &data.1,
-        variance: &data.2,
+        weights: Weights::Variance(&data.2),
     };
     fit_structure(&input, order, &StructuralSettings::default())
 }
@@ -226,7 +226,7 @@ fn bad_inputs_are_refused_with_their_bin() {
         let input = ResponseEstimate {
             frequency_hz: f,
             response: w,
-            variance: v,
+            weights: Weights::Variance(v),
         };
         fit_structure(&input, order, &StructuralSettings::default())
     };
@@ -235,7 +235,7 @@ fn bad_inputs_are_refused_with_their_bin() {
     assert_eq!(run(&[], &[], &[], auto), Err(StructuralError::EmptyBand));
     assert_eq!(
         run(f, &w[1..], v, auto),
-        Err(StructuralError::LengthMismatch { frequencies: 327, responses: 326, variances: 327 })
+        Err(StructuralError::LengthMismatch { frequencies: 327, responses: 326, weights: 327 })
     );
     let mut bad_w = w.to_vec();
     bad_w[17][(1, 2)].im = f64::NAN;
@@ -275,7 +275,7 @@ fn bad_inputs_are_refused_with_their_bin() {
     // Auto on a short band fits only the orders it supports.
     let short = run(&f[..5], &w[..5], &v[..5], auto).expect("orders 0 and 1 fit");
     assert_eq!(short.candidates.len(), 2);
-    let input = ResponseEstimate { frequency_hz: f, response: w, variance: v };
+    let input = ResponseEstimate { frequency_hz: f, response: w, weights: Weights::Variance(v) };
     let settings = StructuralSettings { tau_min_s: 0.01, tau_max_s: 0.01, ..Default::default() };
     assert_eq!(
         fit_structure(&input, auto, &settings),
@@ -289,7 +289,7 @@ fn degenerate_data_gives_no_nan() {
     let f = band();
     let w = vec![Matrix3::zeros(); f.len()];
     let v = vec![Matrix3::repeat(1e-6); f.len()];
-    let input = ResponseEstimate { frequency_hz: &f, response: &w, variance: &v };
+    let input = ResponseEstimate { frequency_hz: &f, response: &w, weights: Weights::Variance(&v) };
     let result = fit_structure(&input, OrderChoice::Auto, &StructuralSettings::default());
     let fit = result.expect("order 0 is defined on zero data");
     assert!(!report::has_nan(&fit));

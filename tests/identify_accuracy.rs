@@ -79,3 +79,40 @@ fn turbulent_cruise_k_and_tau_within_tolerance() {
 fn approach_k_and_tau_within_tolerance() {
     check(Regime::Approach, 103);
 }
+
+fn chosen_orders(regime: Regime, seed: u64, effects: &[&str]) -> Vec<(Block, usize, Vec<f64>)> {
+    let mut config = SimConfig::new(regime);
+    config.seed = seed;
+    config.effects = effects.iter().map(|e| e.parse().unwrap()).collect();
+    let sim = simulate(&config).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.csv");
+    write_run(&sim, &path).unwrap();
+    let run = load(&path, &LoadOptions::default()).unwrap();
+    let id = identify_run(&run, &Settings::default()).unwrap();
+    id.blocks
+        .iter()
+        .map(|b| {
+            (
+                b.block,
+                b.structural.order,
+                b.structural.candidates.iter().map(|c| c.criterion).collect(),
+            )
+        })
+        .collect()
+}
+
+/// `order: "auto"` picks 0 on pure `K e^(-tau s)` runs and at least 1 with a hidden sensor lag.
+#[test]
+fn auto_order_is_zero_on_clean_runs_and_at_least_one_with_a_lag() {
+    for (regime, seed) in [(Regime::Cruise, 201), (Regime::Approach, 202)] {
+        for (block, order, criteria) in chosen_orders(regime, seed, &[]) {
+            eprintln!("clean {regime} {block:?}: order {order}, criteria {criteria:.1?}");
+            assert_eq!(order, 0, "clean {regime} {block:?}: criteria {criteria:?}");
+        }
+        for (block, order, criteria) in chosen_orders(regime, seed, &["sensor_lag"]) {
+            eprintln!("lag {regime} {block:?}: order {order}, criteria {criteria:.1?}");
+            assert!(order >= 1, "sensor_lag {regime} {block:?}: criteria {criteria:?}");
+        }
+    }
+}

@@ -9,13 +9,16 @@
 use std::sync::Arc;
 
 use nalgebra::Matrix3;
+use num_complex::Complex64;
 
 use super::IdentError;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise};
 use super::settings::{OrderSetting, Settings};
 use super::signals::block_signals;
 use super::spectra::{BlockSpectra, block_spectra};
-use super::structural::{OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, fit_structure};
+use super::structural::{
+    OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure,
+};
 use super::wiener::{WienerEstimate, band_bins, regularised_wiener};
 use crate::block::Block;
 use crate::run::Run;
@@ -33,7 +36,7 @@ pub struct BlockIdentification {
     pub factorisation: Arc<Factorisation>,
     /// Regularised Wiener estimate (A, Lambda).
     pub wiener: Arc<WienerEstimate>,
-    /// Indices of the analysis band's bins.
+    /// Indices of the analysis band's native (un-padded) Welch bins.
     pub band: Vec<usize>,
     /// Structural model (order).
     pub structural: Arc<StructuralFit>,
@@ -107,8 +110,21 @@ pub fn identify_block_from(
         settings.lambda,
         settings.band_hz,
     )?);
-    let band = band_bins(&spectra.frequency_hz, settings.band_hz);
-    let structural = Arc::new(structural_fit(&spectra, &wiener, &band, settings.order)?);
+    // The structural fit and the model use the native Welch bins: the zero-padded grid (needed
+    // for the causal projection) interpolates between them, and its neighbours are not
+    // independent, which would overstate the evidence by the padding factor.
+    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
+    let band: Vec<usize> = band_bins(&spectra.frequency_hz, settings.band_hz)
+        .into_iter()
+        .filter(|k| k % step == 0)
+        .collect();
+    let structural = Arc::new(structural_fit(
+        &spectra,
+        &factorisation,
+        &wiener,
+        &band,
+        settings.order,
+    )?);
     Ok(BlockIdentification {
         block,
         spectra,
@@ -119,22 +135,32 @@ pub fn identify_block_from(
     })
 }
 
-/// Fits the structural model to `W_u` over the band, weighted by the inverse variance of each
-/// element.
+/// Fits the structural model to `W_u` over the band by generalised least squares: the estimate of
+/// output row `i` has covariance `S_psi,ii S_uu^-1 / (n_eq - 3)`, so its weight is
+/// `Omega_i = (n_eq - 3) S_uu / S_psi,ii`, which weighs collinear inputs correctly (the
+/// accelerometer's x and y specific forces are nearly collinear at high frequency).
 ///
 /// # Errors
 /// [`IdentError::Structural`] when the fit refuses its input or fails numerically.
 pub fn structural_fit(
     spectra: &BlockSpectra,
+    factorisation: &Factorisation,
     wiener: &WienerEstimate,
     band: &[usize],
     order: OrderSetting,
 ) -> Result<StructuralFit, IdentError> {
     let frequency_hz: Vec<f64> = band.iter().map(|&k| spectra.frequency_hz[k]).collect();
-    let response: Vec<Matrix3<_>> = band.iter().map(|&k| wiener.w_u[k]).collect();
-    let variance: Vec<Matrix3<f64>> = band
+    let response: Vec<Matrix3<Complex64>> = band.iter().map(|&k| wiener.w_u[k]).collect();
+    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
+    let row_weight: Vec<[Matrix3<Complex64>; 3]> = band
         .iter()
-        .map(|&k| wiener.w_u_std[k].map(|s| (s * s).max(f64::MIN_POSITIVE)))
+        .map(|&k| {
+            let s_uu = (spectra.s_uu[k] + spectra.s_uu[k].adjoint()) * Complex64::from(0.5);
+            std::array::from_fn(|i| {
+                let noise = factorisation.noise_psd[k][(i, i)].re.max(f64::MIN_POSITIVE);
+                s_uu * Complex64::from(dof / noise)
+            })
+        })
         .collect();
     let choice = match order {
         OrderSetting::Fixed(n) => OrderChoice::Fixed(n),
@@ -143,7 +169,7 @@ pub fn structural_fit(
     let input = ResponseEstimate {
         frequency_hz: &frequency_hz,
         response: &response,
-        variance: &variance,
+        weights: Weights::RowWeight(&row_weight),
     };
     fit_structure(&input, choice, &StructuralSettings::default())
         .map_err(|e| IdentError::Structural(e.to_string()))

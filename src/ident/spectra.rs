@@ -28,6 +28,9 @@ pub struct BlockSpectra {
     pub sample_rate_hz: f64,
     /// FFT length (the two-sided grid length), samples.
     pub fft_len: usize,
+    /// Welch segment length, samples: bins `k fft_len / segment_len` are the estimate's native,
+    /// roughly independent resolution.
+    pub segment_len: usize,
 }
 
 /// Zero-padding factor of the identifier's spectra when the settings give no `fft_len`. The Welch
@@ -70,6 +73,7 @@ pub fn block_spectra(
         equivalent_averages: equivalent_averages(&window, settings.step(), m.n_averages),
         sample_rate_hz,
         fft_len: settings.nfft(),
+        segment_len: settings.segment_len,
     })
 }
 

@@ -1,15 +1,19 @@
-//! Order 0, `W(s) = K e^(-tau s)`.
+//! Order 0, `W(s) = K e^(-tau s)`, by generalised least squares.
 //!
-//! For a fixed delay the gain is closed form element by element,
-//! `K_e(tau) = A_e(tau) / S_e` with `A_e = sum_k w_ke Re(W_ke e^(j w_k tau))` and
-//! `S_e = sum_k w_ke`, and the residual is `J(tau) = const - F(tau)`,
-//! `F = sum_e A_e^2 / S_e`. The delay maximises `F`: a scan over the settings' range with a step of
-//! `1 / (16 f_max)` (the phase of the top bin wraps every `1 / f_max`, so no basin is missed; the
-//! step grows only if the range would need more than `MAX_SCAN` points), then a safeguarded
-//! Newton iteration on `F'` inside the best grid cell, with `F'` and `F''` analytic, to a step
-//! below `1e-15` s. The scan allocates nothing: each point costs one `sin_cos` per bin and nine
-//! complex multiply-adds.
+//! For a fixed delay each row of the gain is closed form: with `W~ = W e^(j w tau)` and the row
+//! weight `Omega_i`, `K_i(tau) = b_i(tau) P_i`, `b_i = sum_k Re(W~_ki Omega_ki)` (a real 1x3 row),
+//! `P_i` the pseudo-inverse of `A_i = sum_k Re(Omega_ki)` (eigenvalues below `1e-12` of the
+//! largest are dropped: a gain direction no bin weighs is set to zero, and its standard deviation
+//! is infinite). The residual is `J(tau) = const - F(tau)`, `F = sum_i b_i P_i b_i^T`, and
+//! `b_i' = -sum_k w_k Im(v_ki e^(j w_k tau))`, `b_i'' = -sum_k w_k^2 Re(v_ki e^(j w_k tau))` with
+//! `v_ki = W_ki Omega_ki` fixed, so `F' = 2 b' P b^T` and `F'' = 2 (b' P b'^T + b'' P b^T)` are
+//! exact. The delay maximises `F`: a scan over the settings' range with a step of `1 / (16 f_max)`
+//! (the phase of the top bin wraps every `1 / f_max`, so no basin is missed; the step grows only if
+//! the range would need more than `MAX_SCAN` points), then a safeguarded Newton iteration on `F'`
+//! inside the best grid cell to a step below `1e-15` s. The scan allocates nothing: each point
+//! costs one `sin_cos` per bin and nine complex multiply-adds.
 
+use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::model::{ELEMENTS, Model, Prepared};
@@ -20,10 +24,21 @@ const MAX_SCAN: usize = 20_000;
 /// Sums independent of the delay.
 struct Sums<'a> {
     data: &'a Prepared,
-    /// `w_ke h_ke`.
-    wh: Vec<[Complex64; ELEMENTS]>,
-    /// `S_e = sum_k w_ke`.
-    s: [f64; ELEMENTS],
+    /// `v_k = W_ki Omega_ki`, row `i` in elements `3 i..3 i + 3`.
+    v: Vec<[Complex64; ELEMENTS]>,
+    /// `P_i`, the pseudo-inverse of `sum_k Re(Omega_ki)`.
+    p: [Matrix3<f64>; 3],
+}
+
+/// `a P b^T` for rows `a`, `b`.
+fn form(a: &[f64], p: &Matrix3<f64>, b: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for j in 0..3 {
+        for l in 0..3 {
+            s += a[j] * p[(j, l)] * b[l];
+        }
+    }
+    s
 }
 
 impl Sums<'_> {
@@ -32,12 +47,12 @@ impl Sums<'_> {
         let mut c0 = [Complex64::new(0.0, 0.0); ELEMENTS];
         let mut c1 = c0;
         let mut c2 = c0;
-        for (k, wh) in self.wh.iter().enumerate() {
+        for (k, v) in self.v.iter().enumerate() {
             let omega = self.data.omega[k];
             let (sin, cos) = (omega * tau).sin_cos();
             let z = Complex64::new(cos, sin);
             for e in 0..ELEMENTS {
-                let t = wh[e] * z;
+                let t = v[e] * z;
                 c0[e] += t;
                 if derivatives {
                     c1[e] += t * omega;
@@ -45,12 +60,16 @@ impl Sums<'_> {
                 }
             }
         }
+        let a: [f64; ELEMENTS] = std::array::from_fn(|e| c0[e].re);
+        let a1: [f64; ELEMENTS] = std::array::from_fn(|e| -c1[e].im);
+        let a2: [f64; ELEMENTS] = std::array::from_fn(|e| -c2[e].re);
         let (mut f, mut f1, mut f2) = (0.0, 0.0, 0.0);
-        for e in 0..ELEMENTS {
-            let (a, a1, a2) = (c0[e].re, -c1[e].im, -c2[e].re);
-            f += a * a / self.s[e];
-            f1 += 2.0 * a * a1 / self.s[e];
-            f2 += 2.0 * (a1 * a1 + a * a2) / self.s[e];
+        for (i, p) in self.p.iter().enumerate() {
+            let r = 3 * i..3 * i + 3;
+            let (a, a1, a2) = (&a[r.clone()], &a1[r.clone()], &a2[r]);
+            f += form(a, p, a);
+            f1 += 2.0 * form(a1, p, a);
+            f2 += 2.0 * (form(a1, p, a1) + form(a2, p, a));
         }
         (f, f1, f2)
     }
@@ -58,32 +77,56 @@ impl Sums<'_> {
     /// The gain for a given delay.
     fn gain(&self, tau: f64) -> [f64; ELEMENTS] {
         let mut a = [0.0; ELEMENTS];
-        for (k, wh) in self.wh.iter().enumerate() {
+        for (k, v) in self.v.iter().enumerate() {
             let (sin, cos) = (self.data.omega[k] * tau).sin_cos();
             let z = Complex64::new(cos, sin);
             for e in 0..ELEMENTS {
-                a[e] += (wh[e] * z).re;
+                a[e] += (v[e] * z).re;
             }
         }
-        std::array::from_fn(|e| a[e] / self.s[e])
+        std::array::from_fn(|e| {
+            let (i, j) = (e / 3, e % 3);
+            (0..3).map(|l| a[3 * i + l] * self.p[i][(l, j)]).sum()
+        })
     }
+}
+
+/// The pseudo-inverse of a real symmetric positive semi-definite matrix: eigenvalues below
+/// `1e-12` of the largest count as zero.
+fn pseudo_inverse(a: Matrix3<f64>) -> Matrix3<f64> {
+    let eigen = a.symmetric_eigen();
+    let top = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let inv = eigen
+        .eigenvalues
+        .map(|l| if l > 1e-12 * top { 1.0 / l } else { 0.0 });
+    let v = eigen.eigenvectors;
+    v * Matrix3::from_diagonal(&inv) * v.transpose()
 }
 
 /// The order-0 fit on the delay range `[tau_min, tau_max]` (finite, non-empty).
 pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
-    let wh = data
+    let v = data
         .h
         .iter()
-        .zip(&data.w)
-        .map(|(h, w)| std::array::from_fn(|e| h[e] * w[e]))
+        .zip(&data.rows)
+        .map(|(h, rows)| {
+            std::array::from_fn(|e| {
+                let (i, j) = (e / 3, e % 3);
+                (0..3).map(|l| h[3 * i + l] * rows[i].omega[(l, j)]).sum()
+            })
+        })
         .collect();
-    let mut s = [0.0; ELEMENTS];
-    for w in &data.w {
-        for e in 0..ELEMENTS {
-            s[e] += w[e];
+    let mut a = [Matrix3::<f64>::zeros(); 3];
+    for rows in &data.rows {
+        for i in 0..3 {
+            a[i] += rows[i].omega.map(|z| z.re);
         }
     }
-    let sums = Sums { data, wh, s };
+    let sums = Sums {
+        data,
+        v,
+        p: a.map(pseudo_inverse),
+    };
     let tau = best_delay(&sums, tau_min, tau_max);
     Model {
         num: vec![sums.gain(tau)],

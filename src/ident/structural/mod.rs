@@ -12,16 +12,24 @@
 //! # Units and conventions
 //! Frequencies in Hz in the input, `s = j 2 pi f` in rad/s in every output coefficient and pole,
 //! delays in seconds. `response[k][(i, j)]` is output channel `i` over input axis `j` at bin `k`.
-//! `variance[k][(i, j)]` is `E|dW_ij|^2` of the complex estimate; its real and imaginary parts
-//! are taken to carry half of it each, so the standardised real residuals are
-//! `sqrt(2 / variance) * (Re, Im)(W - model)` and
-//! `chi2 = sum_k sum_ij 2 |W_ij - model_ij|^2 / variance_ij`, which is chi-square with
-//! `dof = 18 n_bins - p` degrees of freedom when the model is right and the variances are true.
+//!
+//! # Weights: generalised least squares
+//! The estimate of output row `i`, `W_i(f)` (a complex 1x3 row), has the covariance
+//! `C_i = E[dW_i^H dW_i]` (circular complex noise; proportional to `S_psi,ii S_uu^-1 / n_eq` for
+//! an `H1` estimate). The fit minimises the generalised least-squares objective
+//! `chi2 = sum_k sum_i 2 r_i Omega_i r_i^H`, `r_i = W_i - model_i`, with the row weight
+//! `Omega_i = C_i^-1 = n_eq S_uu / S_psi,ii` ([`Weights::RowWeight`]): Hermitian positive
+//! semi-definite, possibly singular where the inputs are collinear (a direction the data say
+//! nothing about gets no weight). Per-element variances ([`Weights::Variance`],
+//! `E|dW_ij|^2`) are the special case `Omega_i = diag(1 / variance_i1, .., 1 / variance_i3)`,
+//! mapped onto the same code path. The factor 2 counts the real and imaginary parts: with
+//! `Omega_i = L_i L_i^H` the whitened real residuals are `sqrt(2) (Re, Im)(r_i L_i)`, of unit
+//! variance, and chi2 is chi-square with `dof = 18 n_bins - p` degrees of freedom when the model
+//! is right and the weights are the true inverse covariances.
 //!
 //! # Uncertainty
 //! The standard deviations are the square roots of the diagonal of the Gauss–Newton covariance
-//! `(J^T Sigma^-1 J)^-1` at the optimum (J the Jacobian of the real residuals, `Sigma^-1` the
-//! weights `2 / variance`), multiplied by `max(1, chi2 / dof)`: a fit worse than the stated noise
+//! `(J^T J)^-1` at the optimum (J the Jacobian of the whitened real residuals), multiplied by `max(1, chi2 / dof)`: a fit worse than the stated noise
 //! allows widens its error bars, a fit better than it never narrows them. A parameter the data
 //! cannot determine (a singular direction of `J`) gets an infinite standard deviation.
 //!
@@ -39,8 +47,9 @@
 //! either. The tests (`tests_noise.rs`) measure both criteria over seeded records.
 //!
 //! # Contracts
-//! Empty input, mismatched lengths, non-finite or non-positive values are refused with a
-//! [`StructuralError`] naming the bin; nothing reachable from the input panics, and no output
+//! Empty input, mismatched lengths, non-finite or non-positive values, row weights that are not
+//! Hermitian or not positive semi-definite are refused with a [`StructuralError`] naming the bin
+//! (and row); nothing reachable from the input panics, and no output
 //! holds NaN (an undetermined standard deviation is `+inf`).
 
 mod gain_delay;
@@ -52,7 +61,10 @@ mod report;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_gls;
+#[cfg(test)]
 mod tests_noise;
+mod weights;
 
 use nalgebra::Matrix3;
 use num_complex::Complex64;
@@ -61,16 +73,44 @@ use serde::Serialize;
 /// The highest rational order fitted.
 pub const MAX_ORDER: usize = 4;
 
-/// A frequency-response estimate over an analysis band, with the variance of each element.
+/// A frequency-response estimate over an analysis band, with its weights.
 #[derive(Clone, Copy, Debug)]
 pub struct ResponseEstimate<'a> {
     /// The band's bins, Hz: ascending, finite, `> 0`.
     pub frequency_hz: &'a [f64],
     /// `W(f)` at each bin: row `i` output channel, column `j` input axis.
     pub response: &'a [Matrix3<Complex64>],
-    /// `E|dW_ij|^2` of each element's estimate at each bin: finite, `> 0`. Weights are its
-    /// inverse.
-    pub variance: &'a [Matrix3<f64>],
+    /// The inverse covariance of the estimate, one entry per bin (see the module docs).
+    pub weights: Weights<'a>,
+}
+
+/// The weights of a [`ResponseEstimate`], one entry per bin.
+#[derive(Clone, Copy, Debug)]
+pub enum Weights<'a> {
+    /// `E|dW_ij|^2` of each element's estimate: finite, `> 0`; independent elements, i.e. the
+    /// diagonal row weights `Omega_i = diag(1 / variance_ij)`.
+    Variance(&'a [Matrix3<f64>]),
+    /// `Omega_i`, the inverse covariance `E[dW_i^H dW_i]^-1` of each output row's estimate
+    /// (`[i]` for output row `i`): finite, Hermitian (to `1e-9` of its largest element),
+    /// positive semi-definite (no eigenvalue below `-1e-9` of its trace); singular is allowed.
+    RowWeight(&'a [[Matrix3<Complex64>; 3]]),
+}
+
+impl Weights<'_> {
+    /// Number of bins given.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Variance(v) => v.len(),
+            Self::RowWeight(w) => w.len(),
+        }
+    }
+
+    /// Whether no bin is given.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// Which model order to fit.
@@ -211,14 +251,14 @@ pub enum StructuralError {
     #[error("the analysis band is empty: no frequency bins to fit")]
     EmptyBand,
     /// The three slices differ in length.
-    #[error("length mismatch: {frequencies} frequencies, {responses} responses, {variances} variances")]
+    #[error("length mismatch: {frequencies} frequencies, {responses} responses, {weights} weights")]
     LengthMismatch {
         /// Number of frequencies.
         frequencies: usize,
         /// Number of response matrices.
         responses: usize,
-        /// Number of variance matrices.
-        variances: usize,
+        /// Number of weight entries (variance matrices or row-weight triples).
+        weights: usize,
     },
     /// A frequency is not finite, not positive, or not above the previous one.
     #[error("frequency {value} Hz at bin {bin} is not finite, positive and ascending")]
@@ -259,6 +299,35 @@ pub enum StructuralError {
         col: usize,
         /// The value.
         value: f64,
+    },
+    /// A row weight element is NaN or infinite.
+    #[error("row weight of output {row} at bin {bin} is not finite")]
+    NonFiniteWeight {
+        /// The bin.
+        bin: usize,
+        /// Output channel.
+        row: usize,
+    },
+    /// A row weight is not Hermitian within tolerance.
+    #[error("row weight of output {row} at bin {bin} is not Hermitian")]
+    NonHermitianWeight {
+        /// The bin.
+        bin: usize,
+        /// Output channel.
+        row: usize,
+    },
+    /// A row weight has an eigenvalue below `-1e-9` of its trace.
+    #[error(
+        "row weight of output {row} at bin {bin} is not positive semi-definite (eigenvalue \
+         {eigenvalue})"
+    )]
+    IndefiniteWeight {
+        /// The bin.
+        bin: usize,
+        /// Output channel.
+        row: usize,
+        /// Its most negative eigenvalue.
+        eigenvalue: f64,
     },
     /// The requested order exceeds [`MAX_ORDER`].
     #[error("model order {order} is not supported: the highest is {max}")]
@@ -305,8 +374,9 @@ pub enum StructuralError {
 /// # Errors
 /// [`StructuralError::EmptyBand`], [`StructuralError::LengthMismatch`],
 /// [`StructuralError::BadFrequency`], [`StructuralError::NonFiniteResponse`],
-/// [`StructuralError::NonFiniteVariance`], [`StructuralError::NonPositiveVariance`] for bad
-/// input; [`StructuralError::OrderTooHigh`] for `Fixed(n)`, `n > 4`;
+/// [`StructuralError::NonFiniteVariance`], [`StructuralError::NonPositiveVariance`],
+/// [`StructuralError::NonFiniteWeight`], [`StructuralError::NonHermitianWeight`],
+/// [`StructuralError::IndefiniteWeight`] for bad input; [`StructuralError::OrderTooHigh`] for `Fixed(n)`, `n > 4`;
 /// [`StructuralError::TooFewBins`] when the band has fewer than `2 n + 2` bins for
 /// `Fixed(n)` (or fewer than 2 bins for `Auto`, which otherwise skips the orders the band cannot
 /// support); [`StructuralError::BadTauRange`] for an empty or non-finite delay scan;
@@ -318,6 +388,7 @@ pub fn fit_structure(
     settings: &StructuralSettings,
 ) -> Result<StructuralFit, StructuralError> {
     validate(input)?;
+    let row_weights = weights::row_weights(&input.weights)?;
     if !(settings.tau_min_s.is_finite()
         && settings.tau_max_s.is_finite()
         && settings.tau_min_s < settings.tau_max_s)
@@ -357,7 +428,7 @@ pub fn fit_structure(
             })?
         }
     };
-    let data = model::Prepared::new(input);
+    let data = model::Prepared::new(input, &row_weights);
     let selection = order::fit_orders(&data, highest, order, settings)?;
     let fit = report::assemble(&data, &selection, settings.criterion);
     if report::has_nan(&fit) {
@@ -366,18 +437,19 @@ pub fn fit_structure(
     Ok(fit)
 }
 
-/// Checks lengths, finiteness, positivity and ordering of the input.
+/// Checks lengths, finiteness, positivity and ordering of the input (the weights themselves in
+/// [`weights::row_weights`]).
 fn validate(input: &ResponseEstimate) -> Result<(), StructuralError> {
     let (nf, nr, nv) = (
         input.frequency_hz.len(),
         input.response.len(),
-        input.variance.len(),
+        input.weights.len(),
     );
     if nf != nr || nf != nv {
         return Err(StructuralError::LengthMismatch {
             frequencies: nf,
             responses: nr,
-            variances: nv,
+            weights: nv,
         });
     }
     if nf == 0 {
@@ -390,19 +462,12 @@ fn validate(input: &ResponseEstimate) -> Result<(), StructuralError> {
         }
         previous = f;
     }
-    for (bin, (w, v)) in input.response.iter().zip(input.variance).enumerate() {
+    for (bin, w) in input.response.iter().enumerate() {
         for row in 0..3 {
             for col in 0..3 {
                 let z = w[(row, col)];
                 if !(z.re.is_finite() && z.im.is_finite()) {
                     return Err(StructuralError::NonFiniteResponse { bin, row, col });
-                }
-                let value = v[(row, col)];
-                if !value.is_finite() {
-                    return Err(StructuralError::NonFiniteVariance { bin, row, col });
-                }
-                if value <= 0.0 || !(1.0 / value).is_finite() {
-                    return Err(StructuralError::NonPositiveVariance { bin, row, col, value });
                 }
             }
         }

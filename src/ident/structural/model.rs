@@ -5,6 +5,7 @@ use nalgebra::DMatrix;
 use num_complex::Complex64;
 
 use super::ResponseEstimate;
+use super::weights::RowWeight;
 
 /// Elements of a 3x3 block, row-major: element `e` is row `e / 3`, column `e % 3`.
 pub(super) const ELEMENTS: usize = 9;
@@ -23,15 +24,19 @@ pub(super) struct Prepared {
     pub x: Vec<f64>,
     /// The normalising angular frequency (the band's top), rad/s.
     pub omega_ref: f64,
-    /// Weights `1 / variance`, element-major within a bin.
+    /// The diagonal approximation `Re(Omega_i)_jj` of the weights (exactly `1 / variance` on
+    /// the variance path), element-major within a bin: for the Sanathanan–Koerner starts only.
     pub w: Vec<[f64; ELEMENTS]>,
+    /// The row weights and their square roots, per bin and output row.
+    pub rows: Vec<[RowWeight; 3]>,
     /// The response, element-major within a bin.
     pub h: Vec<[Complex64; ELEMENTS]>,
 }
 
 impl Prepared {
-    /// Precomputes from a validated estimate (non-empty, ascending positive frequencies).
-    pub fn new(input: &ResponseEstimate) -> Self {
+    /// Precomputes from a validated estimate (non-empty, ascending positive frequencies) and its
+    /// validated row weights.
+    pub fn new(input: &ResponseEstimate, rows: &[[RowWeight; 3]]) -> Self {
         let omega: Vec<f64> = input
             .frequency_hz
             .iter()
@@ -39,10 +44,9 @@ impl Prepared {
             .collect();
         let omega_ref = omega.last().copied().unwrap_or(1.0);
         let x = omega.iter().map(|o| o / omega_ref).collect();
-        let w = input
-            .variance
+        let w = rows
             .iter()
-            .map(|v| std::array::from_fn(|e| 1.0 / v[(e / 3, e % 3)]))
+            .map(|r| std::array::from_fn(|e| r[e / 3].omega[(e % 3, e % 3)].re))
             .collect();
         let h = input
             .response
@@ -54,6 +58,7 @@ impl Prepared {
             x,
             omega_ref,
             w,
+            rows: rows.to_vec(),
             h,
         }
     }
@@ -104,52 +109,67 @@ impl Model {
         Complex64::new(1.0, 0.0) + Self::poly(self.den.iter().copied(), x, 1)
     }
 
-    /// The weighted residual `chi2 = sum 2 w |h - model|^2`.
+    /// The model's rows at bin `k`: `num(j x) e^(-j w tau) / d(j x)`.
+    fn at(&self, data: &Prepared, k: usize) -> [Complex64; ELEMENTS] {
+        let x = data.x[k];
+        let e = Complex64::from_polar(1.0, -data.omega[k] * self.tau) / self.den_at(x);
+        std::array::from_fn(|el| Self::poly(self.num.iter().map(|c| c[el]), x, 0) * e)
+    }
+
+    /// The generalised least-squares residual `chi2 = sum 2 r_i Omega_i r_i^H`.
     pub fn chi2(&self, data: &Prepared) -> f64 {
         let mut chi2 = 0.0;
         for k in 0..data.bins() {
-            let d = self.den_at(data.x[k]);
-            let e = Complex64::from_polar(1.0, -data.omega[k] * self.tau) / d;
-            for el in 0..ELEMENTS {
-                let n = Self::poly(self.num.iter().map(|c| c[el]), data.x[k], 0);
-                chi2 += 2.0 * data.w[k][el] * (data.h[k][el] - n * e).norm_sqr();
+            let m = self.at(data, k);
+            for (i, weight) in data.rows[k].iter().enumerate() {
+                let r = std::array::from_fn(|j| data.h[k][3 * i + j] - m[3 * i + j]);
+                chi2 += 2.0 * weight.quadratic(&r);
             }
         }
         chi2
     }
 
     /// Standard deviations of every parameter, in the order `num` (coefficient-major, then
-    /// element), `den`, `tau * omega_ref`, from the Gauss–Newton covariance of the weighted
-    /// real residuals (unscaled by `chi2 / dof`). `+inf` for an undetermined parameter.
+    /// element), `den`, `tau * omega_ref`, from the Gauss–Newton covariance of the whitened
+    /// real residuals `sqrt(2) (Re, Im)(r_i L_i)` (unscaled by `chi2 / dof`). `+inf` for an
+    /// undetermined parameter.
     pub fn parameter_std(&self, data: &Prepared) -> Vec<f64> {
         let n_num = self.num.len();
         let p = ELEMENTS * n_num + self.den.len() + 1;
         let rows = data.real_data();
         let mut jac = faer::Mat::<f64>::zeros(rows, p);
+        let sqrt2 = std::f64::consts::SQRT_2;
         for k in 0..data.bins() {
             let x = data.x[k];
             let sigma = Complex64::new(0.0, x);
             let d = self.den_at(x);
             let e = Complex64::from_polar(1.0, -data.omega[k] * self.tau) / d;
-            for el in 0..ELEMENTS {
-                let sw = (2.0 * data.w[k][el]).sqrt();
-                let row = 2 * (k * ELEMENTS + el);
-                let n = Self::poly(self.num.iter().map(|c| c[el]), x, 0);
-                let mut put = |col: usize, z: Complex64| {
-                    jac[(row, col)] = sw * z.re;
-                    jac[(row + 1, col)] = sw * z.im;
+            let model = self.at(data, k);
+            for (i, weight) in data.rows[k].iter().enumerate() {
+                let base = 2 * (k * ELEMENTS + 3 * i);
+                // Column `col` of the Jacobian from the derivative of the model's row `i`.
+                let mut put = |col: usize, dm: [Complex64; 3]| {
+                    for (l, z) in weight.whiten(&dm).iter().enumerate() {
+                        jac[(base + 2 * l, col)] = sqrt2 * z.re;
+                        jac[(base + 2 * l + 1, col)] = sqrt2 * z.im;
+                    }
                 };
-                let mut pw = Complex64::new(1.0, 0.0);
-                for m in 0..n_num {
-                    put(m * ELEMENTS + el, pw * e);
-                    pw *= sigma;
+                for j in 0..3 {
+                    let mut pw = e;
+                    for m in 0..n_num {
+                        let mut dm = [Complex64::new(0.0, 0.0); 3];
+                        dm[j] = pw;
+                        put(m * ELEMENTS + 3 * i + j, dm);
+                        pw *= sigma;
+                    }
                 }
+                let row: [Complex64; 3] = std::array::from_fn(|j| model[3 * i + j]);
                 let mut pw = sigma;
                 for m in 0..self.den.len() {
-                    put(ELEMENTS * n_num + m, -n * pw * e / d);
+                    put(ELEMENTS * n_num + m, row.map(|z| -z * pw / d));
                     pw *= sigma;
                 }
-                put(p - 1, -sigma * n * e);
+                put(p - 1, row.map(|z| -sigma * z));
             }
         }
         if (0..p).any(|c| jac.col(c).iter().any(|v| !v.is_finite())) {

@@ -1,11 +1,14 @@
-//! Variable projection: for a given denominator and delay, each element's numerator is a linear
-//! weighted least-squares problem with `max(n, 1) <= 4` unknowns, solved exactly here.
+//! Variable projection: for a given denominator and delay, the numerator is a linear
+//! generalised least-squares problem, solved exactly here.
 //!
-//! The basis `u_m = sigma^m e^(-j w tau) / d(sigma)` is shared by the nine elements (only their
-//! weights differ), so it and the products `Re(conj(u_m) u_l)` are formed once per bin; the
-//! per-element normal systems are at most 4x4 and solved by a Jacobi-scaled Cholesky
-//! factorisation (with a tiny ridge only if it fails). The buffers are reused across calls, so
-//! an evaluation inside the Levenberg–Marquardt loop does not allocate.
+//! The basis `u_m = sigma^m e^(-j w tau) / d(sigma)` is shared by the nine elements. Row `i`'s
+//! `3 max(n, 1) <= 12` numerator coefficients `n_mij` are coupled by the row weight `Omega_i`:
+//! minimising `sum_k r_i Omega_i r_i^H`, `r_i = W_i - sum_m u_m n_mi`, gives the normal system
+//! `G[(m, j), (l, j')] = sum_k Re(u_m conj(u_l) Omega_i[j, j'])`,
+//! `rhs[(m, j)] = sum_k Re(u_m (Omega_i W_i^H)_j)`, solved by a Jacobi-scaled Cholesky
+//! factorisation (with a tiny ridge only if it fails, e.g. a gain direction no bin weighs). The
+//! buffers are reused across calls, so an evaluation inside the Levenberg–Marquardt loop does not
+//! allocate.
 
 use num_complex::Complex64;
 
@@ -13,6 +16,8 @@ use super::model::{ELEMENTS, Prepared};
 
 /// Largest numerator size (order 4).
 const MAX_NUM: usize = 4;
+/// Largest normal system: one row's coefficients.
+const MAX_SYS: usize = 3 * MAX_NUM;
 
 /// Reusable buffers of the projection.
 pub(super) struct Projector<'a> {
@@ -33,12 +38,13 @@ impl<'a> Projector<'a> {
     }
 
     /// The projected numerator for `(den, tau)` (normalised coefficients, delay in s) and, into
-    /// `out` (length `18 n_bins`), the weighted real residuals `sqrt(2 w) (Re, Im)(h - model)`.
+    /// `out` (length `18 n_bins`), the whitened real residuals `sqrt(2) (Re, Im)(r_i L_i)`.
     /// `None` when a normal system is singular beyond repair.
     pub fn project(&mut self, den: &[f64], tau: f64, out: &mut [f64]) -> Option<Vec<[f64; ELEMENTS]>> {
         let (data, nn) = (self.data, self.n_num);
-        let mut gram = [[[0.0; MAX_NUM]; MAX_NUM]; ELEMENTS];
-        let mut rhs = [[0.0; MAX_NUM]; ELEMENTS];
+        let size = 3 * nn;
+        let mut gram = [[[0.0; MAX_SYS]; MAX_SYS]; 3];
+        let mut rhs = [[0.0; MAX_SYS]; 3];
         for k in 0..data.bins() {
             let x = data.x[k];
             let sigma = Complex64::new(0.0, x);
@@ -52,37 +58,55 @@ impl<'a> Projector<'a> {
                 *um = p;
                 p *= sigma;
             }
-            let mut prod = [[0.0; MAX_NUM]; MAX_NUM];
+            let mut prod = [[Complex64::new(0.0, 0.0); MAX_NUM]; MAX_NUM];
             for m in 0..nn {
-                for l in 0..=m {
-                    prod[m][l] = u[m].re * u[l].re + u[m].im * u[l].im;
+                for l in 0..nn {
+                    prod[m][l] = u[m] * u[l].conj();
                 }
             }
-            for e in 0..ELEMENTS {
-                let (w, h) = (data.w[k][e], data.h[k][e]);
-                for m in 0..nn {
-                    rhs[e][m] += w * (u[m].re * h.re + u[m].im * h.im);
-                    for l in 0..=m {
-                        gram[e][m][l] += w * prod[m][l];
+            for (i, weight) in data.rows[k].iter().enumerate() {
+                let omega = &weight.omega;
+                let h = &data.h[k][3 * i..3 * i + 3];
+                for j in 0..3 {
+                    let g: Complex64 = (0..3).map(|l| omega[(j, l)] * h[l].conj()).sum();
+                    for m in 0..nn {
+                        let q = 3 * m + j;
+                        rhs[i][q] += (u[m] * g).re;
+                        for l in 0..=m {
+                            for jj in 0..3 {
+                                let q2 = 3 * l + jj;
+                                if q2 <= q {
+                                    let (a, b) = (prod[m][l], omega[(j, jj)]);
+                                    gram[i][q][q2] += a.re * b.re - a.im * b.im;
+                                }
+                            }
+                        }
                     }
                 }
             }
         }
         let mut num = vec![[0.0; ELEMENTS]; nn];
-        for e in 0..ELEMENTS {
-            let b = solve_spd(&gram[e], &rhs[e], nn)?;
+        for i in 0..3 {
+            let b = solve_spd(&gram[i], &rhs[i], size)?;
             for m in 0..nn {
-                num[m][e] = b[m];
+                for j in 0..3 {
+                    num[m][3 * i + j] = b[3 * m + j];
+                }
             }
         }
+        let sqrt2 = std::f64::consts::SQRT_2;
         for k in 0..data.bins() {
             let u = &self.u[k * nn..(k + 1) * nn];
-            for e in 0..ELEMENTS {
-                let fit: Complex64 = (0..nn).map(|m| u[m] * num[m][e]).sum();
-                let r = (data.h[k][e] - fit) * (2.0 * data.w[k][e]).sqrt();
-                let i = 2 * (k * ELEMENTS + e);
-                out[i] = r.re;
-                out[i + 1] = r.im;
+            for (i, weight) in data.rows[k].iter().enumerate() {
+                let r: [Complex64; 3] = std::array::from_fn(|j| {
+                    let e = 3 * i + j;
+                    data.h[k][e] - (0..nn).map(|m| u[m] * num[m][e]).sum::<Complex64>()
+                });
+                let base = 2 * (k * ELEMENTS + 3 * i);
+                for (l, z) in weight.whiten(&r).iter().enumerate() {
+                    out[base + 2 * l] = sqrt2 * z.re;
+                    out[base + 2 * l + 1] = sqrt2 * z.im;
+                }
             }
         }
         Some(num)
@@ -92,15 +116,15 @@ impl<'a> Projector<'a> {
 /// Solves `G b = r` for the `n x n` leading block of a symmetric positive (semi)definite `G`
 /// given by its lower triangle: Jacobi scaling, then Cholesky, retried with a ridge of `1e-13`
 /// and `1e-10` (relative) if a pivot is not positive. `None` if all fail.
-fn solve_spd(g: &[[f64; MAX_NUM]; MAX_NUM], r: &[f64; MAX_NUM], n: usize) -> Option<[f64; MAX_NUM]> {
-    let mut scale = [1.0; MAX_NUM];
+fn solve_spd(g: &[[f64; MAX_SYS]; MAX_SYS], r: &[f64; MAX_SYS], n: usize) -> Option<[f64; MAX_SYS]> {
+    let mut scale = [1.0; MAX_SYS];
     for i in 0..n {
         if g[i][i] > 0.0 {
             scale[i] = 1.0 / g[i][i].sqrt();
         }
     }
     'ridge: for ridge in [0.0, 1e-13, 1e-10] {
-        let mut l = [[0.0; MAX_NUM]; MAX_NUM];
+        let mut l = [[0.0; MAX_SYS]; MAX_SYS];
         for i in 0..n {
             for j in 0..=i {
                 let mut v = g[i][j] * scale[i] * scale[j] + if i == j { ridge } else { 0.0 };
@@ -117,12 +141,12 @@ fn solve_spd(g: &[[f64; MAX_NUM]; MAX_NUM], r: &[f64; MAX_NUM], n: usize) -> Opt
                 }
             }
         }
-        let mut y = [0.0; MAX_NUM];
+        let mut y = [0.0; MAX_SYS];
         for i in 0..n {
             let s: f64 = (0..i).map(|m| l[i][m] * y[m]).sum();
             y[i] = (r[i] * scale[i] - s) / l[i][i];
         }
-        let mut b = [0.0; MAX_NUM];
+        let mut b = [0.0; MAX_SYS];
         for i in (0..n).rev() {
             let s: f64 = (i + 1..n).map(|m| l[m][i] * b[m]).sum();
             b[i] = (y[i] - s) / l[i][i];

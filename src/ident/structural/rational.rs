@@ -8,8 +8,11 @@
 //!    unknowns, rows the real and imaginary parts) by eliminating each element's numerator with a
 //!    faer QR of its block and solving the stacked reduced rows for `d`. A start with unstable
 //!    roots is refined both as it is and with those roots reflected into the left half-plane.
-//! 2. Refinement: variable projection. For given `(d, tau)` each element's numerator is the
-//!    exact weighted least-squares solution (a `max(n,1)`-square normal system), so the
+//!    These iterations use the diagonal approximation `w = Re(Omega_i)_jj` of the row weights
+//!    (exact on the variance path): they only provide a start, and the refinement below minimises
+//!    the full generalised least-squares objective.
+//! 2. Refinement: variable projection. For given `(d, tau)` each output row's numerator is the
+//!    exact generalised least-squares solution (a `3 max(n,1)`-square normal system), so the
 //!    Levenberg–Marquardt iteration runs over the `n + 1` nonlinear parameters only, with a
 //!    forward-difference Jacobian of the projected residual vector.
 //!

@@ -87,7 +87,7 @@ pub(super) fn fit(
     let input = ResponseEstimate {
         frequency_hz: &data.0,
         response: &data.1,
-        variance: &data.2,
+        weights: Weights::Variance(&data.2),
     };
     fit_structure(&input, order, &StructuralSettings::default())
 }
@@ -238,7 +238,7 @@ fn bad_inputs_are_refused_with_their_bin() {
         let input = ResponseEstimate {
             frequency_hz: f,
             response: w,
-            variance: v,
+            weights: Weights::Variance(v),
         };
         fit_structure(&input, order, &StructuralSettings::default())
     };
@@ -250,7 +250,7 @@ fn bad_inputs_are_refused_with_their_bin() {
         Err(StructuralError::LengthMismatch {
             frequencies: 327,
             responses: 326,
-            variances: 327
+            weights: 327
         })
     );
     let mut bad_w = w.to_vec();
@@ -320,7 +320,7 @@ fn bad_inputs_are_refused_with_their_bin() {
     let input = ResponseEstimate {
         frequency_hz: f,
         response: w,
-        variance: v,
+        weights: Weights::Variance(v),
     };
     let settings = StructuralSettings {
         tau_min_s: 0.01,
@@ -345,7 +345,7 @@ fn degenerate_data_gives_no_nan() {
     let input = ResponseEstimate {
         frequency_hz: &f,
         response: &w,
-        variance: &v,
+        weights: Weights::Variance(&v),
     };
     let result = fit_structure(&input, OrderChoice::Auto, &StructuralSettings::default());
     let fit = result.expect("order 0 is defined on zero data");

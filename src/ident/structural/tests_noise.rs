@@ -101,7 +101,7 @@ fn auto_fit(truth: &Truth, seed: u64, criterion: InformationCriterion) -> Struct
     let input = ResponseEstimate {
         frequency_hz: &data.0,
         response: &data.1,
-        variance: &data.2,
+        weights: Weights::Variance(&data.2),
     };
     let settings = StructuralSettings {
         criterion,

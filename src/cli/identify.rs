@@ -9,7 +9,7 @@ use crate::ident::identify::identify_run;
 use crate::ident::settings::Settings;
 use crate::model::Model;
 use crate::output::{ensure_not_input, write_atomic};
-use crate::run::{LoadOptions, load, sidecar_path};
+use crate::run::sidecar_path;
 
 /// Reads `--settings` (or the defaults).
 pub(super) fn read_settings(args: &Args) -> Result<(Settings, Option<PathBuf>), CliError> {
@@ -40,7 +40,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     inputs.extend(settings_path);
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
 
-    let run = load(run_path, &LoadOptions::default()).map_err(|e| CliError::Input(e.to_string()))?;
+    let run = super::progress::load_run(run_path)?;
     let settings = Settings {
         blocks: settings.blocks_for(&run.blocks()),
         ..settings

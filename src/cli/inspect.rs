@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::{Args, CliError};
-use crate::run::{LoadOptions, Run, load};
+use crate::run::Run;
 
 pub(super) fn run(args: &Args) -> Result<(), CliError> {
     args.reject_unknown()?;
@@ -14,8 +14,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     }
     let mut report = String::new();
     for path in &args.positional {
-        let run =
-            load(Path::new(path), &LoadOptions::default()).map_err(|e| CliError::Input(e.to_string()))?;
+        let run = super::progress::load_run(Path::new(path))?;
         summarise(&run, &mut report);
     }
     eprint!("{report}");

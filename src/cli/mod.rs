@@ -5,6 +5,7 @@
 mod args;
 mod identify;
 mod inspect;
+mod progress;
 mod simulate;
 
 use std::process::ExitCode;

@@ -64,10 +64,15 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
     ui.horizontal(|ui| {
         ui.label("blocks");
         for block in Block::BOTH {
-            let mut on = s.blocks.contains(&block);
+            // An empty list means every block the run has.
+            let mut on = s.blocks.is_empty() || s.blocks.contains(&block);
             if ui.checkbox(&mut on, block.name()).changed() {
+                if s.blocks.is_empty() {
+                    s.blocks = Block::BOTH.to_vec();
+                }
                 s.blocks.retain(|b| *b != block);
-                if on {
+                // At least one block stays: an empty list would mean "all".
+                if on || s.blocks.is_empty() {
                     s.blocks.push(block);
                     s.blocks.sort();
                 }

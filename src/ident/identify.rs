@@ -3,7 +3,7 @@
 //! result is an `Arc` so that callers (the app's worker) can cache a stage and redo only what a
 //! changed setting touches: [`identify_block_from`] starts from cached spectra and factorisation.
 //!
-//! The run's sidecar `"truth"` is never read: everything comes from the measured angles and
+//! Nothing here reads a sidecar's simulator answer key: everything comes from the measured angles and
 //! outputs.
 
 use std::sync::Arc;

@@ -15,23 +15,23 @@ fn angles(r: &SimulatedRun) -> [&[f64]; 3] {
     r.angles.each_ref().map(Vec::as_slice)
 }
 
-/// Power of `est - truth` between `lo` and `hi` Hz (sum over whole-record FFT bins), and power of
-/// `truth` there.
-fn band_error_power(est: &[f64], truth: &[f64], rate: f64, lo: f64, hi: f64) -> (f64, f64) {
+/// Power of `est - exact` between `lo` and `hi` Hz (sum over whole-record FFT bins), and power of
+/// `exact` there.
+fn band_error_power(est: &[f64], exact: &[f64], rate: f64, lo: f64, hi: f64) -> (f64, f64) {
     let mut fft = RecordFft::new(est.len(), rate);
-    let e: Vec<f64> = est.iter().zip(truth).map(|(a, b)| a - b).collect();
-    let (se, st) = (fft.forward(&e), fft.forward(truth));
+    let e: Vec<f64> = est.iter().zip(exact).map(|(a, b)| a - b).collect();
+    let (se, st) = (fft.forward(&e), fft.forward(exact));
     let band = (0..fft.n_bins()).filter(|&k| (lo..=hi).contains(&fft.frequency_hz(k)));
     band.fold((0.0, 0.0), |(pe, pt), k| {
         (pe + se[k].norm_sqr(), pt + st[k].norm_sqr())
     })
 }
 
-/// Delay of `est` relative to `truth` (positive = est lags), from the cross-spectrum's phase slope
+/// Delay of `est` relative to `exact` (positive = est lags), from the cross-spectrum's phase slope
 /// weighted by its magnitude over `lo..hi` Hz.
-fn delay_s(est: &[f64], truth: &[f64], rate: f64, lo: f64, hi: f64) -> f64 {
+fn delay_s(est: &[f64], exact: &[f64], rate: f64, lo: f64, hi: f64) -> f64 {
     let mut fft = RecordFft::new(est.len(), rate);
-    let (a, b) = (fft.forward(est), fft.forward(truth));
+    let (a, b) = (fft.forward(est), fft.forward(exact));
     let (mut num, mut den) = (0.0, 0.0);
     for k in 0..fft.n_bins() {
         let f = fft.frequency_hz(k);
@@ -49,12 +49,12 @@ fn delay_s(est: &[f64], truth: &[f64], rate: f64, lo: f64, hi: f64) -> f64 {
 fn delay_estimator_recovers_a_known_shift() {
     let r = run(Regime::Cruise, 5, 60.0);
     let rate = 500.0;
-    let truth = gyro_input(&r.true_motion);
-    // A two-sample shift of the truth: 4 ms exactly.
-    let shifted: Vec<f64> = (0..truth[0].len())
-        .map(|i| truth[0][i.saturating_sub(2)])
+    let exact = gyro_input(&r.true_motion);
+    // A two-sample shift of the exact: 4 ms exactly.
+    let shifted: Vec<f64> = (0..exact[0].len())
+        .map(|i| exact[0][i.saturating_sub(2)])
         .collect();
-    let d = delay_s(&shifted, &truth[0], rate, 0.1, 40.0);
+    let d = delay_s(&shifted, &exact[0], rate, 0.1, 40.0);
     assert!((d - 0.004).abs() < 2e-5, "{d}");
 }
 
@@ -74,7 +74,7 @@ fn observer_beats_differentiation_and_adds_no_delay() {
         let est = observe(angles(&r), rate, &ObserverSettings::default()).unwrap();
         let naive = differentiate(angles(&r), rate);
         let lever = r.sidecar.accel_lever_arm_m;
-        let truth = (
+        let exact = (
             gyro_input(&r.true_motion),
             accel_input(&r.true_motion, lever, 9.80665),
         );
@@ -83,22 +83,22 @@ fn observer_beats_differentiation_and_adds_no_delay() {
         for axis in 0..3 {
             let err = |e: &[f64], t: &[f64], lo, hi| band_error_power(e, t, rate, lo, hi).0;
             let whole_w =
-                err(&nai.0[axis], &truth.0[axis], 0.1, 225.0) / err(&obs.0[axis], &truth.0[axis], 0.1, 225.0);
+                err(&nai.0[axis], &exact.0[axis], 0.1, 225.0) / err(&obs.0[axis], &exact.0[axis], 0.1, 225.0);
             let whole_f =
-                err(&nai.1[axis], &truth.1[axis], 0.1, 225.0) / err(&obs.1[axis], &truth.1[axis], 0.1, 225.0);
+                err(&nai.1[axis], &exact.1[axis], 0.1, 225.0) / err(&obs.1[axis], &exact.1[axis], 0.1, 225.0);
             let band_w =
-                err(&nai.0[axis], &truth.0[axis], 0.1, 40.0) / err(&obs.0[axis], &truth.0[axis], 0.1, 40.0);
+                err(&nai.0[axis], &exact.0[axis], 0.1, 40.0) / err(&obs.0[axis], &exact.0[axis], 0.1, 40.0);
             let band_f =
-                err(&nai.1[axis], &truth.1[axis], 0.1, 40.0) / err(&obs.1[axis], &truth.1[axis], 0.1, 40.0);
+                err(&nai.1[axis], &exact.1[axis], 0.1, 40.0) / err(&obs.1[axis], &exact.1[axis], 0.1, 40.0);
             let ctx = format!(
                 "{regime} axis {axis}: whole {whole_w:.1}/{whole_f:.1}, band {band_w:.2}/{band_f:.2}"
             );
             assert!(whole_w > 4.0 && whole_f > 40.0, "{ctx}");
             assert!(band_w > 0.98 && band_f > 0.98, "{ctx}");
             // Statistical: the estimate's noise gives its phase a random part.
-            let d = delay_s(&obs.0[axis], &truth.0[axis], rate, 0.1, 40.0);
+            let d = delay_s(&obs.0[axis], &exact.0[axis], rate, 0.1, 40.0);
             assert!(d.abs() < 1e-5, "{ctx}: rate delay {d:e} s");
-            let d = delay_s(&obs.1[axis], &truth.1[axis], rate, 0.1, 40.0);
+            let d = delay_s(&obs.1[axis], &exact.1[axis], rate, 0.1, 40.0);
             assert!(d.abs() < 2.5e-5, "{ctx}: force delay {d:e} s");
         }
         // The estimated noise is the angle sensor's (white 1e-5 rad with a 1.5e-6 rad quantum).
@@ -122,10 +122,10 @@ fn smoother_has_zero_phase_on_clean_angles() {
     };
     let est = observe(clean, 500.0, &settings).unwrap();
     assert_eq!(est.noise_source, NoiseSource::Declared);
-    let truth = gyro_input(&r.true_motion);
+    let exact = gyro_input(&r.true_motion);
     let obs = gyro_input(&est.euler);
     for axis in 0..3 {
-        let d = delay_s(&obs[axis], &truth[axis], 500.0, 0.1, 40.0);
+        let d = delay_s(&obs[axis], &exact[axis], 500.0, 0.1, 40.0);
         assert!(d.abs() < 1e-6, "axis {axis}: {d:e} s");
         let da = delay_s(&est.euler.angle[axis], clean[axis], 500.0, 0.1, 40.0);
         assert!(da.abs() < 1e-6, "angle axis {axis}: {da:e} s");

@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
+use crate::ident::structural::OrderCandidate;
 use crate::run::Run;
 
 /// The schema id of the model file.
@@ -137,7 +138,7 @@ pub struct Fit {
     /// Whether the chosen model is stable.
     pub stable: bool,
     /// Every order tried: `{order, parameters, chi2, criterion, tau_s, stable}`.
-    pub candidates: Vec<Candidate>,
+    pub candidates: Vec<OrderCandidate>,
     /// Lagrange multipliers used.
     pub lambda: [f64; 3],
     /// Whether they were solved from the constraint.
@@ -148,23 +149,6 @@ pub struct Fit {
     pub equivalent_averages: f64,
     /// Reconstruction errors of the input and disturbance spectral factors.
     pub factor_errors: [f64; 2],
-}
-
-/// One structural order tried.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Candidate {
-    /// Order.
-    pub order: usize,
-    /// Real parameters.
-    pub parameters: usize,
-    /// Weighted residual.
-    pub chi2: f64,
-    /// Information criterion.
-    pub criterion: f64,
-    /// Delay, s.
-    pub tau_s: f64,
-    /// Stable poles.
-    pub stable: bool,
 }
 
 fn finite(v: f64) -> Option<f64> {
@@ -208,18 +192,7 @@ impl BlockModel {
                 chi2: s.chi2,
                 dof: s.dof,
                 stable: s.stable,
-                candidates: s
-                    .candidates
-                    .iter()
-                    .map(|c| Candidate {
-                        order: c.order,
-                        parameters: c.parameters,
-                        chi2: c.chi2,
-                        criterion: c.criterion,
-                        tau_s: c.tau_s,
-                        stable: c.stable,
-                    })
-                    .collect(),
+                candidates: s.candidates.clone(),
                 lambda: w.lambda,
                 lambda_auto: w.lambda_auto,
                 constraint_residual: w.constraint_residual,

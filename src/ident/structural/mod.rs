@@ -161,7 +161,7 @@ impl Default for StructuralSettings {
 }
 
 /// One fitted order, as compared by the order selection.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct OrderCandidate {
     /// The model order (number of poles).
     pub order: usize,

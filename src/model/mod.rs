@@ -50,6 +50,19 @@ pub struct Source {
     pub sample_rate_hz: f64,
 }
 
+impl Source {
+    /// The source record of a loaded run.
+    #[must_use]
+    pub fn of(run: &Run) -> Self {
+        Self {
+            file: run.source.file_name.clone(),
+            sha256: run.source.sha256.clone(),
+            regime: run.sidecar.regime.clone(),
+            sample_rate_hz: run.sample_rate_hz,
+        }
+    }
+}
+
 /// Complex `[frequency][row][col]` arrays.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ComplexArray {
@@ -209,12 +222,7 @@ impl Model {
     pub fn from_identification(run: &Run, settings: &Settings, id: &RunIdentification) -> Self {
         Self {
             schema: MODEL_SCHEMA.to_owned(),
-            source: Source {
-                file: run.source.file_name.clone(),
-                sha256: run.source.sha256.clone(),
-                regime: run.sidecar.regime.clone(),
-                sample_rate_hz: run.sample_rate_hz,
-            },
+            source: Source::of(run),
             settings: settings.clone(),
             blocks: id
                 .blocks

@@ -1,0 +1,158 @@
+//! The catalogue's effects as candidate extensions of the current model: each is added, the
+//! extended model is fitted (its new parameters initialised by a coarse grid where the cost is
+//! not smooth in them: the lag's time constant, a resonance's frequency and damping), and the
+//! reduction of `chi2` it achieves is its evidence.
+
+use std::f64::consts::PI;
+
+use super::fit::{Fitted, cost_at, fit};
+use super::state::State;
+use super::tone::{Tone, strongest_line};
+use crate::block::Block;
+use crate::sim::effect::Effect;
+
+/// What a candidate adds to the model.
+#[derive(Clone, Debug)]
+pub enum Extension {
+    /// A structural effect: the refitted model with it.
+    Structural(Box<Fitted>),
+    /// A tone, fitted on the residual.
+    Tone(Tone),
+}
+
+/// One candidate effect, fitted.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// Which catalogue entry.
+    pub effect: Effect,
+    /// The extended model or the tone.
+    pub extension: Extension,
+    /// Reduction of `chi2` over the current model.
+    pub delta_chi2: f64,
+    /// Number of real parameters it adds.
+    pub added_params: usize,
+}
+
+fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) -> Option<Candidate> {
+    let fitted = fitted?;
+    let current = &state.fitted;
+    Some(Candidate {
+        effect,
+        delta_chi2: current.chi2() - fitted.chi2(),
+        added_params: fitted.n_params().saturating_sub(current.n_params()),
+        extension: Extension::Structural(Box::new(fitted)),
+    })
+}
+
+/// Every candidate for the block that the current model does not already hold.
+#[must_use]
+pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
+    let design = &state.design;
+    let current = &state.fitted;
+    let s0 = &current.structure;
+    let run_fit = |structure: &super::structure::Structure, theta: &super::structure::Theta| {
+        fit(design, &state.grams, structure, theta, band_hz)
+    };
+    let mut out = Vec::new();
+    if design.block == Block::Gyro && !s0.g_sensitivity {
+        let mut s = s0.clone();
+        s.g_sensitivity = true;
+        out.extend(structural(
+            Effect::GSensitivity,
+            state,
+            run_fit(&s, &current.theta),
+        ));
+    }
+    if design.block == Block::Accel && !s0.lever_arm {
+        let mut s = s0.clone();
+        s.lever_arm = true;
+        out.extend(structural(
+            Effect::LeverArmError,
+            state,
+            run_fit(&s, &current.theta),
+        ));
+    }
+    if !s0.k2 {
+        let mut s = s0.clone();
+        s.k2 = true;
+        out.extend(structural(
+            Effect::ScaleNonlinearity,
+            state,
+            run_fit(&s, &current.theta),
+        ));
+    }
+    if !s0.skew {
+        let mut s = s0.clone();
+        s.skew = true;
+        out.extend(structural(
+            Effect::AxisTimeSkew,
+            state,
+            run_fit(&s, &current.theta),
+        ));
+    }
+    if !s0.lag {
+        let mut s = s0.clone();
+        s.lag = true;
+        let best = [0.5e-3, 2e-3, 6e-3, 15e-3]
+            .into_iter()
+            .filter_map(|t| {
+                let mut theta = current.theta.clone();
+                theta.lag_s = t;
+                theta.tau_s = (theta.tau_s - t).max(0.0);
+                run_fit(&s, &theta)
+            })
+            .min_by(|a, b| a.profile.cost.total_cmp(&b.profile.cost));
+        out.extend(structural(Effect::SensorLag, state, best));
+    }
+    for axis in 0..3 {
+        if s0.resonance_axes.contains(&axis) {
+            continue;
+        }
+        let mut s = s0.clone();
+        s.resonance_axes.push(axis);
+        let start = resonance_start(state, &s, band_hz);
+        out.extend(structural(
+            Effect::PlatformResonance,
+            state,
+            start.and_then(|t| run_fit(&s, &t)),
+        ));
+    }
+    if let Some(tone) = strongest_line(design, &state.residual) {
+        out.push(Candidate {
+            effect: Effect::VibrationTone,
+            delta_chi2: tone.delta_chi2,
+            added_params: 7,
+            extension: Extension::Tone(tone),
+        });
+    }
+    out
+}
+
+/// The best point of a grid over a new resonance's frequency (log-spaced inside the band, from
+/// 1 Hz) and damping.
+fn resonance_start(
+    state: &State,
+    structure: &super::structure::Structure,
+    band_hz: [f64; 2],
+) -> Option<super::structure::Theta> {
+    let (lo, hi) = (band_hz[0].max(1.0), band_hz[1] * 0.98);
+    if hi <= lo {
+        return None;
+    }
+    let n = 48;
+    let mut best: Option<(f64, super::structure::Theta)> = None;
+    for m in 0..n {
+        let f = lo * (hi / lo).powf(m as f64 / (n - 1) as f64);
+        for zeta in [0.03, 0.1, 0.3, 0.7] {
+            let mut theta = state.fitted.theta.clone();
+            theta.resonances.push((f, zeta));
+            // A resonance adds phase lag 2 zeta f / f_r below f_r: start tau without it.
+            theta.tau_s = (theta.tau_s - zeta / (PI * f)).max(0.0);
+            let c = cost_at(&state.design, &state.grams, structure, &theta);
+            if best.as_ref().is_none_or(|(b, _)| c < *b) {
+                best = Some((c, theta));
+            }
+        }
+    }
+    best.map(|(_, t)| t)
+}

@@ -1,0 +1,57 @@
+//! The missing-effect workflow (issue 5, contract section 5): where does the identified model,
+//! driven by the observer's inputs, disagree with the measured outputs, which catalogue effect
+//! explains the disagreement, how large is it, and how much of the gap does adding it close.
+//!
+//! 1. Identify the run with the paper's model `K e^(-tau s)` (order 0). Its disturbance model
+//!    `S_psi` (median-smoothed across frequency, so lines do not hide in it) sets the level every
+//!    residual bin is expected to have.
+//! 2. Whole-record spectra of outputs, inputs and the effects' regressors ([`design`]).
+//! 3. Refit the base model on them, then, round by round, fit every catalogue effect the model
+//!    does not hold yet ([`candidates`]), measure the `chi2` it removes, and penalise its added
+//!    parameters by BIC (`ln n` each, `n` the real degrees of freedom of the band). The best
+//!    effect with a positive gain is added, everything is refitted, and the next round starts;
+//!    when no effect gains, the search stops. No effect at all gives `no_missing_effect`.
+//!
+//! Nothing here reads a simulated run's answer key: only the measured angles, outputs and the
+//! sidecar's declared lever arms, `g` and angle noise. Units: SI; gaps in dB of power; `chi2` in
+//! units of the expected disturbance. Empty or too-short records are refused with
+//! [`DiagnoseError::TooShort`]; non-finite samples cannot reach here (the loader refuses them).
+
+pub mod candidates;
+pub mod design;
+pub mod fit;
+pub mod map;
+pub mod profile;
+pub mod report;
+pub mod simplex;
+pub mod state;
+pub mod structure;
+pub mod tone;
+mod workflow;
+
+pub use report::{DISCREPANCY_SCHEMA, Finding, Report, Verdict};
+pub use workflow::diagnose_run;
+
+/// Why a diagnosis could not be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DiagnoseError {
+    /// The identification the diagnosis starts from failed.
+    #[error(transparent)]
+    Ident(#[from] crate::ident::IdentError),
+    /// The band holds too few whole-record bins.
+    #[error("the {block} block's record is too short for a diagnosis between {low} and {high} Hz")]
+    TooShort {
+        /// Block name.
+        block: &'static str,
+        /// Band low edge, Hz.
+        low: f64,
+        /// Band high edge, Hz.
+        high: f64,
+    },
+    /// The base model could not be fitted (degenerate inputs).
+    #[error("the {0} block's base model cannot be fitted: its inputs are degenerate")]
+    Degenerate(&'static str),
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,126 @@
+//! Variable projection: for given nonlinear parameters, the linear ones solve a weighted least
+//! squares problem built from the group Gram matrices, and the weighted residual power that
+//! remains is the profile cost the nonlinear search minimises.
+//!
+//! Weights are `1 / E|psi_k|^2`, the disturbance level the identifier's noise model expects, so
+//! a correct model leaves `E[cost] = n_bins` per channel and `chi2 = 2 cost` is chi-squared with two
+//! degrees of freedom per independent complex bin.
+
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex64;
+
+use super::design::{Design, X};
+use super::structure::{Filters, Layout, Structure, Theta};
+
+/// The result of one projection.
+#[derive(Clone, Debug)]
+pub struct Profile {
+    /// Weighted residual power, summed over channels and band bins (`chi2 / 2`).
+    pub cost: f64,
+    /// Per-channel share of `cost`.
+    pub channel_cost: [f64; 3],
+    /// The linear parameters.
+    pub beta: Vec<f64>,
+}
+
+/// Solves the linear parameters for `theta`. `None` when the normal equations are singular or
+/// not finite (a degenerate `theta`).
+#[must_use]
+pub fn project(
+    design: &Design,
+    grams: &[DMatrix<Complex64>],
+    structure: &Structure,
+    layout: &Layout,
+    theta: &Theta,
+) -> Option<Profile> {
+    let p = layout.n_params;
+    let mut normal = DMatrix::<f64>::zeros(p, p);
+    let mut rhs = DVector::<f64>::zeros(p);
+    let mut c0 = [0.0; 3];
+    let mut factors = vec![Complex64::default(); layout.terms.len()];
+    for (g, gram) in grams.iter().enumerate() {
+        let filters = Filters::at(structure, theta, design.group_hz[g]);
+        for (a, t) in factors.iter_mut().zip(&layout.terms) {
+            *a = filters.factor(t);
+        }
+        let w = [0, 1, 2].map(|i| 1.0 / design.group_expected[i][g]);
+        for i in 0..3 {
+            c0[i] += w[i] * gram[(X + i, X + i)].re;
+        }
+        for (m, tm) in layout.terms.iter().enumerate() {
+            let wi = w[tm.channel];
+            let am = factors[m].conj();
+            rhs[tm.param] += wi * (am * gram[(tm.regressor, X + tm.channel)]).re;
+            for (n, tn) in layout.terms.iter().enumerate().skip(m) {
+                if tn.channel != tm.channel {
+                    continue;
+                }
+                let v = wi * (am * factors[n] * gram[(tm.regressor, tn.regressor)]).re;
+                normal[(tm.param, tn.param)] += v;
+                if n != m {
+                    normal[(tn.param, tm.param)] += v;
+                }
+            }
+        }
+    }
+    let scale = (0..p).map(|k| normal[(k, k)]).fold(0.0_f64, f64::max);
+    if !(scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    for k in 0..p {
+        normal[(k, k)] += 1e-13 * scale;
+    }
+    let beta = normal.clone().cholesky()?.solve(&rhs);
+    if beta.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    // Per-channel cost: c0_i - 2 b_i.beta + beta N_i beta, with N and b split by channel.
+    let mut channel_cost = c0;
+    let mut channel_of = vec![usize::MAX; p];
+    let mut shared = vec![false; p];
+    for t in &layout.terms {
+        if channel_of[t.param] != usize::MAX && channel_of[t.param] != t.channel {
+            shared[t.param] = true;
+        }
+        channel_of[t.param] = t.channel;
+    }
+    let total = c0.iter().sum::<f64>() - rhs.dot(&beta);
+    if shared.iter().any(|&s| s) {
+        // Parameters shared across channels: split the reduction in proportion to c0.
+        let c0_sum: f64 = c0.iter().sum();
+        for c in &mut channel_cost {
+            *c *= total / c0_sum.max(f64::MIN_POSITIVE);
+        }
+    } else {
+        for (k, &ch) in channel_of.iter().enumerate() {
+            if ch < 3 {
+                channel_cost[ch] -= rhs[k] * beta[k];
+            }
+        }
+    }
+    Some(Profile {
+        cost: total,
+        channel_cost,
+        beta: beta.iter().copied().collect(),
+    })
+}
+
+/// The model's output spectrum on every band bin.
+#[must_use]
+pub fn predict(
+    design: &Design,
+    structure: &Structure,
+    layout: &Layout,
+    theta: &Theta,
+    beta: &[f64],
+) -> [Vec<Complex64>; 3] {
+    let n = design.n_bins();
+    let mut out = [(); 3].map(|()| vec![Complex64::default(); n]);
+    for (k, &f) in design.frequency_hz.iter().enumerate() {
+        let filters = Filters::at(structure, theta, f);
+        for t in &layout.terms {
+            out[t.channel][k] += filters.factor(t) * beta[t.param] * design.z[t.regressor][k];
+        }
+    }
+    out
+}

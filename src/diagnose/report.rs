@@ -1,0 +1,187 @@
+//! The missing-effect report (contract section 5, schema `imu-attest/discrepancy/1`), with the
+//! contract's fields first and this program's extensions after them: the criterion, and per
+//! block the model before and after, every candidate's evidence in the first round, the
+//! disagreement maps and residual densities before and after.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+
+use super::map::{DisagreementMap, ResidualPsd};
+use super::state::State;
+use super::structure::Theta;
+use crate::block::Block;
+use crate::ident::settings::Settings;
+use crate::model::Source;
+use crate::sim::effect::Effect;
+
+/// The report's schema name.
+pub const DISCREPANCY_SCHEMA: &str = "imu-attest/discrepancy/1";
+
+/// The overall verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// At least one effect is significant.
+    EffectFound,
+    /// Nothing significant is left by the paper's model.
+    NoMissingEffect,
+}
+
+/// The whole report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// [`DISCREPANCY_SCHEMA`].
+    pub schema: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Named effects, most important (largest criterion gain) first.
+    pub findings: Vec<Finding>,
+    /// The run.
+    pub source: Source,
+    /// The identifier settings used (order forced to 0: effects extend `K e^(-tau s)`).
+    pub settings: Settings,
+    /// How significance is decided.
+    pub criterion: Criterion,
+    /// Per block details.
+    pub blocks: BTreeMap<String, BlockReport>,
+}
+
+/// The decision rule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Criterion {
+    /// `"BIC"`.
+    pub name: String,
+    /// What an added real parameter must buy in `chi2`: `ln(n)`.
+    pub penalty_per_parameter: f64,
+}
+
+/// One named effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    /// `gyro` or `accel`.
+    pub block: String,
+    /// Catalogue id.
+    pub effect: String,
+    /// Readable name.
+    pub name: String,
+    /// Estimated size, re-identified with every finding of the block in the model.
+    pub parameters: Value,
+    /// Worst channel's gap before adding it, dB.
+    pub gap_before_db: f64,
+    /// Worst channel's gap after, dB.
+    pub gap_after_db: f64,
+    /// The evidence in words.
+    pub evidence: String,
+    /// Reduction of `chi2`.
+    pub delta_chi2: f64,
+    /// Real parameters added.
+    pub added_parameters: usize,
+    /// `delta_chi2 - added_parameters ln(n)`: positive means significant.
+    pub criterion_gain: f64,
+}
+
+/// A candidate's evidence in one round.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateSummary {
+    /// Catalogue id.
+    pub effect: String,
+    /// Reduction of `chi2`.
+    pub delta_chi2: f64,
+    /// Real parameters added.
+    pub added_parameters: usize,
+    /// `delta_chi2 - added_parameters ln(n)`.
+    pub criterion_gain: f64,
+}
+
+/// One block's details.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BlockReport {
+    /// Static gain of the paper's model alone.
+    #[serde(rename = "K_base")]
+    pub k_base: [[f64; 3]; 3],
+    /// Its delay, s.
+    pub tau_base_s: f64,
+    /// Static gain with every finding in the model.
+    #[serde(rename = "K")]
+    pub k: [[f64; 3]; 3],
+    /// Its delay, s.
+    pub tau_s: f64,
+    /// `chi2` per degree of freedom before and after (near 1 when the model explains the data).
+    pub chi2_per_dof: [f64; 2],
+    /// Per-channel gap before and after, dB.
+    pub gap_db: [[f64; 3]; 2],
+    /// First round's candidates, best first.
+    pub candidates: Vec<CandidateSummary>,
+    /// Disagreement before and after.
+    pub map: [DisagreementMap; 2],
+    /// Residual densities before and after.
+    pub residual_psd: [ResidualPsd; 2],
+    /// The disturbance density the model expects.
+    pub expected_psd: ResidualPsd,
+}
+
+/// The catalogue entry's readable name on a block.
+#[must_use]
+pub fn effect_name(effect: Effect, block: Block) -> String {
+    let b = match block {
+        Block::Gyro => "gyro",
+        Block::Accel => "accelerometer",
+    };
+    let what = match effect {
+        Effect::GSensitivity => "g-sensitivity",
+        Effect::SensorLag => "first-order lag",
+        Effect::AxisTimeSkew => "channel time skew",
+        Effect::ScaleNonlinearity => "quadratic scale factor",
+        Effect::VibrationTone => "vibration tone",
+        Effect::LeverArmError => "lever-arm error",
+        Effect::PlatformResonance => "mount resonance",
+    };
+    format!("{b} {what}")
+}
+
+/// The static gain `K` of a state.
+#[must_use]
+pub fn gain(state: &State) -> [[f64; 3]; 3] {
+    let b = &state.fitted.profile.beta;
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| b[3 * i + j]))
+}
+
+fn slice3(beta: &[f64], at: Option<usize>) -> [f64; 3] {
+    at.map_or([0.0; 3], |p| [beta[p], beta[p + 1], beta[p + 2]])
+}
+
+/// The estimated size of `effect` in `state` (for a resonance, the one on `axis`; for a tone,
+/// tone number `index`).
+#[must_use]
+pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&str; 3]) -> Value {
+    let f = &state.fitted;
+    let b = &f.profile.beta;
+    let theta: &Theta = &f.theta;
+    match effect {
+        Effect::GSensitivity => {
+            let g = f
+                .layout
+                .g
+                .map_or([[0.0; 3]; 3], |p| [0, 1, 2].map(|i| slice3(b, Some(p + 3 * i))));
+            json!({"G": g, "units": "output units per m/s^2"})
+        }
+        Effect::SensorLag => json!({"T_s": theta.lag_s}),
+        Effect::AxisTimeSkew => {
+            let skew = theta.channel_skew_s();
+            json!({"channel_delay_s": skew.map(|d| theta.tau_s + d), "skew_s": skew})
+        }
+        Effect::ScaleNonlinearity => json!({"k2": slice3(b, f.layout.k2)}),
+        Effect::LeverArmError => json!({"offset_m": slice3(b, f.layout.lever_arm)}),
+        Effect::PlatformResonance => {
+            let axis = f.structure.resonance_axes.get(index).copied().unwrap_or(0);
+            let (frequency_hz, damping) = theta.resonances.get(index).copied().unwrap_or((0.0, 0.0));
+            json!({"axis": input_names[axis], "axis_index": axis, "frequency_hz": frequency_hz, "damping": damping})
+        }
+        Effect::VibrationTone => state.tones.get(index).map_or(
+            Value::Null,
+            |t| json!({"frequency_hz": t.frequency_hz, "amplitude": t.amplitude()}),
+        ),
+    }
+}

@@ -1,0 +1,108 @@
+//! The model of one block as the diagnosis grows it: the fitted structure, the tones found, and
+//! the residual spectrum (measured minus simulated) they leave.
+
+use nalgebra::DMatrix;
+use num_complex::Complex64;
+
+use super::candidates::{Candidate, Extension};
+use super::design::Design;
+use super::fit::{Fitted, fit};
+use super::profile::predict;
+use super::structure::{Structure, Theta};
+use super::tone::Tone;
+
+/// One block's current model and residual.
+#[derive(Clone, Debug)]
+pub struct State {
+    /// The block's data.
+    pub design: Design,
+    /// Group Gram matrices of the outputs (tones removed) and regressors.
+    pub grams: Vec<DMatrix<Complex64>>,
+    /// The fitted structure.
+    pub fitted: Fitted,
+    /// Tones in the model.
+    pub tones: Vec<Tone>,
+    /// Measured outputs minus the tones, band bins.
+    pub outputs: [Vec<Complex64>; 3],
+    /// Measured minus simulated outputs, band bins.
+    pub residual: [Vec<Complex64>; 3],
+}
+
+impl State {
+    /// The paper's model `K e^(-tau s)` fitted from a starting delay. `None` when the fit fails
+    /// (degenerate inputs).
+    #[must_use]
+    pub fn base(design: Design, tau_s: f64, band_hz: [f64; 2]) -> Option<Self> {
+        let outputs = design.outputs();
+        let grams = design.grams(&outputs);
+        let theta = Theta {
+            tau_s,
+            skew_s: [0.0; 2],
+            lag_s: 0.0,
+            resonances: Vec::new(),
+        };
+        let fitted = fit(&design, &grams, &Structure::default(), &theta, band_hz)?;
+        let residual = residual(&design, &outputs, &fitted);
+        Some(Self {
+            design,
+            grams,
+            fitted,
+            tones: Vec::new(),
+            outputs,
+            residual,
+        })
+    }
+
+    /// The model with `candidate` added and every parameter refitted.
+    #[must_use]
+    pub fn with(&self, candidate: &Candidate, band_hz: [f64; 2]) -> Option<Self> {
+        let mut next = self.clone();
+        match &candidate.extension {
+            Extension::Structural(fitted) => next.fitted = (**fitted).clone(),
+            Extension::Tone(tone) => {
+                let spectrum = tone.spectrum(&self.design);
+                for (out, tone) in next.outputs.iter_mut().zip(&spectrum) {
+                    out.iter_mut().zip(tone).for_each(|(o, t)| *o -= t);
+                }
+                next.grams = self.design.grams(&next.outputs);
+                next.fitted = fit(
+                    &self.design,
+                    &next.grams,
+                    &self.fitted.structure,
+                    &self.fitted.theta,
+                    band_hz,
+                )?;
+                next.tones.push(tone.clone());
+            }
+        }
+        next.residual = residual(&next.design, &next.outputs, &next.fitted);
+        Some(next)
+    }
+
+    /// Band power of the residual relative to the measured output's, per channel, dB.
+    #[must_use]
+    pub fn gap_db(&self) -> [f64; 3] {
+        [0, 1, 2].map(|i| {
+            let r: f64 = self.residual[i].iter().map(Complex64::norm_sqr).sum();
+            let x: f64 = self.design.z[i].iter().map(Complex64::norm_sqr).sum();
+            10.0 * (r / x.max(f64::MIN_POSITIVE)).max(1e-30).log10()
+        })
+    }
+
+    /// The worst channel's gap, dB.
+    #[must_use]
+    pub fn worst_gap_db(&self) -> f64 {
+        self.gap_db().into_iter().fold(f64::NEG_INFINITY, f64::max)
+    }
+}
+
+fn residual(design: &Design, outputs: &[Vec<Complex64>; 3], fitted: &Fitted) -> [Vec<Complex64>; 3] {
+    let model = predict(
+        design,
+        &fitted.structure,
+        &fitted.layout,
+        &fitted.theta,
+        &fitted.profile.beta,
+    );
+    [0, 1, 2].map(|i| outputs[i].iter().zip(&model[i]).map(|(x, m)| x - m).collect())
+}

@@ -1,0 +1,248 @@
+//! The rounds of the search: identify, build each block's design, grow the model effect by
+//! effect while the criterion gains, and write the report.
+
+use std::collections::BTreeMap;
+
+use super::DiagnoseError;
+use super::candidates::{Candidate, Extension, candidates};
+use super::design::{Design, DesignSignals};
+use super::map::{disagreement_map, power, psd_cells};
+use super::report::{
+    BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, effect_name,
+    gain, parameters,
+};
+use super::state::State;
+use crate::block::Block;
+use crate::ident::identify::{BlockIdentification, identify_run};
+use crate::ident::settings::{OrderSetting, Settings};
+use crate::ident::signals::{block_signals, channel_names};
+use crate::model::Source;
+use crate::run::Run;
+use crate::sim::effect::Effect;
+use crate::stand::kinematics::EulerSeries;
+
+/// Effects a block can carry at most (the search stops earlier when nothing gains).
+const MAX_FINDINGS: usize = 5;
+/// Log-spaced cells of the residual densities in the report.
+const PSD_CELLS: usize = 80;
+
+/// Diagnoses every block of `run` the settings name.
+///
+/// # Errors
+/// The identification's errors (bad settings for this run, ...), a record too short for the
+/// band, or degenerate inputs.
+pub fn diagnose_run(run: &Run, settings: &Settings) -> Result<Report, DiagnoseError> {
+    let settings = Settings {
+        order: OrderSetting::Fixed(0),
+        blocks: settings.blocks_for(&run.blocks()),
+        ..settings.clone()
+    };
+    let id = identify_run(run, &settings)?;
+    let band = settings.band_hz;
+    let mut findings = Vec::new();
+    let mut blocks = BTreeMap::new();
+    let mut penalty = 0.0;
+    for b in &id.blocks {
+        let design = block_design(run, &id.motion.euler, b, band).ok_or(DiagnoseError::TooShort {
+            block: b.block.name(),
+            low: band[0],
+            high: band[1],
+        })?;
+        let (report, mut found, p) = diagnose_block(design, b, band)?;
+        penalty = p;
+        findings.append(&mut found);
+        blocks.insert(b.block.name().to_owned(), report);
+    }
+    findings.sort_by(|a: &Finding, b: &Finding| b.criterion_gain.total_cmp(&a.criterion_gain));
+    Ok(Report {
+        schema: DISCREPANCY_SCHEMA.to_owned(),
+        verdict: if findings.is_empty() {
+            Verdict::NoMissingEffect
+        } else {
+            Verdict::EffectFound
+        },
+        findings,
+        source: Source::of(run),
+        settings,
+        criterion: Criterion {
+            name: "BIC".to_owned(),
+            penalty_per_parameter: penalty,
+        },
+        blocks,
+    })
+}
+
+/// The block's whole-record design, its expected disturbance level taken from the
+/// identification's `S_psi`.
+fn block_design(run: &Run, motion: &EulerSeries, b: &BlockIdentification, band: [f64; 2]) -> Option<Design> {
+    let signals = block_signals(run, motion, b.block)?;
+    let g = run.sidecar.g_mps2;
+    let auxiliary: Vec<Vec<f64>> = match b.block {
+        Block::Gyro => motion
+            .specific_forces(run.sidecar.gyro_lever_arm_m, g)
+            .into_iter()
+            .collect(),
+        Block::Accel => {
+            let r = run.sidecar.accel_lever_arm_m;
+            let at = motion.specific_forces(r, g);
+            let shifted: Vec<[Vec<f64>; 3]> = (0..3)
+                .map(|l| {
+                    let mut rl = r;
+                    rl[l] += 1.0;
+                    motion.specific_forces(rl, g)
+                })
+                .collect();
+            // d f_i / d r_l at AUX + 3 i + l (f is affine in the lever arm: the difference is exact).
+            (0..3)
+                .flat_map(|i| (0..3).map(move |l| (i, l)))
+                .map(|(i, l)| shifted[l][i].iter().zip(&at[i]).map(|(a, b)| a - b).collect())
+                .collect()
+        }
+    };
+    let expected = smoothed_noise_psd(b);
+    let freq = &b.spectra.frequency_hz;
+    let lookup = |i: usize, f: f64| {
+        let k = freq.partition_point(|&x| x < f).clamp(1, freq.len() - 1);
+        let t = ((f - freq[k - 1]) / (freq[k] - freq[k - 1])).clamp(0.0, 1.0);
+        expected[i][k - 1] * (1.0 - t) + expected[i][k] * t
+    };
+    Design::new(
+        &DesignSignals {
+            block: b.block,
+            output: &signals.output,
+            input: &signals.input,
+            auxiliary: &auxiliary,
+            sample_rate_hz: run.sample_rate_hz,
+        },
+        band,
+        &lookup,
+    )
+}
+
+/// `S_psi,ii` running-median smoothed over about four native Welch bins each side, so that a
+/// line does not raise the level it is tested against.
+fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
+    let psd = &b.factorisation.noise_psd;
+    let half = 4 * (b.spectra.fft_len / b.spectra.segment_len.max(1)).max(1);
+    // S_psi is a regression residual of n_eq averages less the three inputs' degrees of freedom,
+    // so its mean is (n_eq - 3) / n_eq of the disturbance's; the median of its scaled
+    // chi-squared(2 (n_eq - 3)) distribution lies a further (1 - 1/(9 (n_eq - 3)))^3 below
+    // (Wilson-Hilferty). Both are undone.
+    let dof = (b.spectra.equivalent_averages - 3.0).max(1.0);
+    let unbias = (dof + 3.0) / dof / (1.0 - 1.0 / (9.0 * dof)).powi(3);
+    [0, 1, 2].map(|i| {
+        let diag: Vec<f64> = psd.iter().map(|m| m[(i, i)].re.max(0.0) * unbias).collect();
+        (0..diag.len())
+            .map(|k| {
+                let lo = k.saturating_sub(half);
+                let hi = (k + half + 1).min(diag.len());
+                let mut w = diag[lo..hi].to_vec();
+                let mid = w.len() / 2;
+                w.select_nth_unstable_by(mid, f64::total_cmp);
+                w[mid]
+            })
+            .collect()
+    })
+}
+
+fn summary(c: &Candidate, penalty: f64) -> CandidateSummary {
+    CandidateSummary {
+        effect: c.effect.id().to_owned(),
+        delta_chi2: c.delta_chi2,
+        added_parameters: c.added_params,
+        criterion_gain: c.delta_chi2 - c.added_params as f64 * penalty,
+    }
+}
+
+type BlockOutcome = (BlockReport, Vec<Finding>, f64);
+
+/// Grows one block's model; returns its report, findings and the per-parameter penalty.
+fn diagnose_block(
+    design: Design,
+    b: &BlockIdentification,
+    band: [f64; 2],
+) -> Result<BlockOutcome, DiagnoseError> {
+    let name = b.block.name();
+    let dof = 3.0 * design.dof_per_channel();
+    let penalty = dof.ln();
+    let (input_names, _) = channel_names(b.block);
+    let base = State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
+    let mut state = base.clone();
+    let mut accepted: Vec<(Effect, usize, f64, f64, f64, usize)> = Vec::new();
+    let mut first_round = Vec::new();
+    for round in 0..MAX_FINDINGS {
+        let mut cands = candidates(&state, band);
+        cands.sort_by(|a, b| {
+            let gain = |c: &Candidate| c.delta_chi2 - c.added_params as f64 * penalty;
+            gain(b).total_cmp(&gain(a))
+        });
+        if round == 0 {
+            first_round = cands.iter().map(|c| summary(c, penalty)).collect();
+        }
+        let Some(best) = cands.first() else { break };
+        let gain = best.delta_chi2 - best.added_params as f64 * penalty;
+        if gain <= 0.0 {
+            break;
+        }
+        let Some(next) = state.with(best, band) else { break };
+        let index = match &best.extension {
+            Extension::Tone(_) => state.tones.len(),
+            Extension::Structural(_) => state.fitted.structure.resonance_axes.len(),
+        };
+        accepted.push((
+            best.effect,
+            index,
+            state.worst_gap_db(),
+            next.worst_gap_db(),
+            best.delta_chi2,
+            best.added_params,
+        ));
+        state = next;
+    }
+    let findings = accepted
+        .iter()
+        .map(|&(effect, index, before, after, delta, added)| {
+            let gain = delta - added as f64 * penalty;
+            Finding {
+                block: name.to_owned(),
+                effect: effect.id().to_owned(),
+                name: effect_name(effect, b.block),
+                parameters: parameters(effect, &state, index, input_names),
+                gap_before_db: before,
+                gap_after_db: after,
+                evidence: format!(
+                    "removes chi2 {delta:.1} with {added} added parameters (BIC threshold {:.1}, gain {gain:.1}); \
+                     worst-channel gap {before:.2} dB -> {after:.2} dB",
+                    added as f64 * penalty
+                ),
+                delta_chi2: delta,
+                added_parameters: added,
+                criterion_gain: gain,
+            }
+        })
+        .collect();
+    let report = block_report(&base, &state, first_round, dof);
+    Ok((report, findings, penalty))
+}
+
+fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, dof: f64) -> BlockReport {
+    let d = &base.design;
+    BlockReport {
+        k_base: gain(base),
+        tau_base_s: base.fitted.theta.tau_s,
+        k: gain(last),
+        tau_s: last.fitted.theta.tau_s,
+        chi2_per_dof: [base.fitted.chi2() / dof, last.fitted.chi2() / dof],
+        gap_db: [base.gap_db(), last.gap_db()],
+        candidates,
+        map: [
+            disagreement_map(d, &base.residual),
+            disagreement_map(d, &last.residual),
+        ],
+        residual_psd: [
+            psd_cells(d, &power(&base.residual), PSD_CELLS),
+            psd_cells(d, &power(&last.residual), PSD_CELLS),
+        ],
+        expected_psd: psd_cells(d, &d.expected, PSD_CELLS),
+    }
+}

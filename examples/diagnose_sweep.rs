@@ -24,7 +24,7 @@ fn main() {
     write_run(&sim, &path).unwrap();
     let run = load(&path, &LoadOptions::default()).unwrap();
     let t0 = std::time::Instant::now();
-    let report = diagnose_run(&run, &Settings::default()).unwrap();
+    let report = diagnose_run(&run, &Settings::default(), None).unwrap();
     eprintln!(
         "diagnosis {:.2} s, verdict {:?}",
         t0.elapsed().as_secs_f64(),

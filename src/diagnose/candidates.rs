@@ -139,10 +139,10 @@ fn resonance_start(
     if hi <= lo {
         return None;
     }
-    let n = 48;
+    let n: u32 = 48;
     let mut best: Option<(f64, super::structure::Theta)> = None;
     for m in 0..n {
-        let f = lo * (hi / lo).powf(m as f64 / (n - 1) as f64);
+        let f = lo * (hi / lo).powf(f64::from(m) / f64::from(n - 1));
         for zeta in [0.03, 0.1, 0.3, 0.7] {
             let mut theta = state.fitted.theta.clone();
             theta.resonances.push((f, zeta));

@@ -120,6 +120,9 @@ pub struct BlockReport {
     pub residual_psd: [ResidualPsd; 2],
     /// The disturbance density the model expects.
     pub expected_psd: ResidualPsd,
+    /// Per-channel gap of the model given with `--model`, as it is (no refit), dB.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub given_model_gap_db: Option<[f64; 3]>,
 }
 
 /// The catalogue entry's readable name on a block.

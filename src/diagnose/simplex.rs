@@ -114,6 +114,6 @@ mod tests {
             0.0,
             10,
         );
-        assert!(x.is_empty() && v == 7.0 && calls == 1);
+        assert!(x.is_empty() && (v - 7.0).abs() < 1e-15 && calls == 1);
     }
 }

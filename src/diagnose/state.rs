@@ -82,11 +82,27 @@ impl State {
     /// Band power of the residual relative to the measured output's, per channel, dB.
     #[must_use]
     pub fn gap_db(&self) -> [f64; 3] {
-        [0, 1, 2].map(|i| {
-            let r: f64 = self.residual[i].iter().map(Complex64::norm_sqr).sum();
-            let x: f64 = self.design.z[i].iter().map(Complex64::norm_sqr).sum();
-            10.0 * (r / x.max(f64::MIN_POSITIVE)).max(1e-30).log10()
-        })
+        gap_db(&self.design, &self.residual)
+    }
+
+    /// Per-channel gap, dB, of the paper's model with gain `k` and delay `tau_s` as given.
+    #[must_use]
+    pub fn gap_of(&self, k: [[f64; 3]; 3], tau_s: f64) -> [f64; 3] {
+        let structure = Structure::default();
+        let layout = structure.layout();
+        let theta = Theta {
+            tau_s,
+            skew_s: [0.0; 2],
+            lag_s: 0.0,
+            resonances: Vec::new(),
+        };
+        let beta: Vec<f64> = k.iter().flatten().copied().collect();
+        let model = predict(&self.design, &structure, &layout, &theta, &beta);
+        let outputs = self.design.outputs();
+        gap_db(
+            &self.design,
+            &[0, 1, 2].map(|i| outputs[i].iter().zip(&model[i]).map(|(x, m)| x - m).collect()),
+        )
     }
 
     /// The worst channel's gap, dB.
@@ -105,4 +121,13 @@ fn residual(design: &Design, outputs: &[Vec<Complex64>; 3], fitted: &Fitted) -> 
         &fitted.profile.beta,
     );
     [0, 1, 2].map(|i| outputs[i].iter().zip(&model[i]).map(|(x, m)| x - m).collect())
+}
+
+/// Band power of `residual` relative to the measured output's, per channel, dB.
+fn gap_db(design: &Design, residual: &[Vec<Complex64>; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|i| {
+        let r: f64 = residual[i].iter().map(Complex64::norm_sqr).sum();
+        let x: f64 = design.z[i].iter().map(Complex64::norm_sqr).sum();
+        10.0 * (r / x.max(f64::MIN_POSITIVE)).max(1e-30).log10()
+    })
 }

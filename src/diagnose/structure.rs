@@ -18,6 +18,10 @@ use super::design::{AUX, Q, U};
 
 /// Which effects the model holds (besides tones).
 #[derive(Clone, Debug, Default, PartialEq)]
+#[expect(
+    clippy::struct_excessive_bools,
+    reason = "each flag is one catalogue effect present or not; a set type would only hide that"
+)]
 pub struct Structure {
     /// First-order lag `1/(T s + 1)`.
     pub lag: bool,

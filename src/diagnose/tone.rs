@@ -134,7 +134,7 @@ pub fn strongest_line(design: &Design, residual: &[Vec<Complex64>; 3]) -> Option
         .collect();
     let continuum = |k: usize| {
         let lo = k.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);
-        median(power[lo..lo + 2 * MEDIAN_HALF + 1].to_vec())
+        median(power[lo..=lo + 2 * MEDIAN_HALF].to_vec())
     };
     // The largest ratio to the continuum among the ten strongest bins.
     let mut strongest: Vec<usize> = (0..n).collect();

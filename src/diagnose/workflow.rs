@@ -16,7 +16,7 @@ use crate::block::Block;
 use crate::ident::identify::{BlockIdentification, identify_run};
 use crate::ident::settings::{OrderSetting, Settings};
 use crate::ident::signals::{block_signals, channel_names};
-use crate::model::Source;
+use crate::model::{BlockModel, Model, Source};
 use crate::run::Run;
 use crate::sim::effect::Effect;
 use crate::stand::kinematics::EulerSeries;
@@ -26,12 +26,14 @@ const MAX_FINDINGS: usize = 5;
 /// Log-spaced cells of the residual densities in the report.
 const PSD_CELLS: usize = 80;
 
-/// Diagnoses every block of `run` the settings name.
+/// Diagnoses every block of `run` the settings name. With `given`, a model identified before
+/// (perhaps from another run), each block's report also holds the gap that model leaves as it
+/// is, before anything is refitted.
 ///
 /// # Errors
 /// The identification's errors (bad settings for this run, ...), a record too short for the
 /// band, or degenerate inputs.
-pub fn diagnose_run(run: &Run, settings: &Settings) -> Result<Report, DiagnoseError> {
+pub fn diagnose_run(run: &Run, settings: &Settings, given: Option<&Model>) -> Result<Report, DiagnoseError> {
     let settings = Settings {
         order: OrderSetting::Fixed(0),
         blocks: settings.blocks_for(&run.blocks()),
@@ -48,7 +50,8 @@ pub fn diagnose_run(run: &Run, settings: &Settings) -> Result<Report, DiagnoseEr
             low: band[0],
             high: band[1],
         })?;
-        let (report, mut found, p) = diagnose_block(design, b, band)?;
+        let given = given.and_then(|m| m.blocks.get(b.block.name()));
+        let (report, mut found, p) = diagnose_block(design, b, band, given)?;
         penalty = p;
         findings.append(&mut found);
         blocks.insert(b.block.name().to_owned(), report);
@@ -161,6 +164,7 @@ fn diagnose_block(
     design: Design,
     b: &BlockIdentification,
     band: [f64; 2],
+    given: Option<&BlockModel>,
 ) -> Result<BlockOutcome, DiagnoseError> {
     let name = b.block.name();
     let dof = 3.0 * design.dof_per_channel();
@@ -221,7 +225,8 @@ fn diagnose_block(
             }
         })
         .collect();
-    let report = block_report(&base, &state, first_round, dof);
+    let mut report = block_report(&base, &state, first_round, dof);
+    report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     Ok((report, findings, penalty))
 }
 
@@ -244,5 +249,6 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
             psd_cells(d, &power(&last.residual), PSD_CELLS),
         ],
         expected_psd: psd_cells(d, &d.expected, PSD_CELLS),
+        given_model_gap_db: None,
     }
 }

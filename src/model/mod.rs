@@ -242,6 +242,13 @@ impl Model {
     }
 }
 
+/// The path of the first `null` in `value` (where `serde_json` wrote NaN or infinity), outside
+/// keys containing `_std` (undetermined uncertainties).
+#[must_use]
+pub fn first_non_finite(value: &serde_json::Value) -> Option<String> {
+    first_null(value, "", false)
+}
+
 /// `serde_json` writes NaN and infinity as `null`; in a model only the `*_std*` figures may
 /// legitimately be `null` (undetermined). Returns the path of the first other `null`.
 fn first_null(value: &serde_json::Value, path: &str, null_allowed: bool) -> Option<String> {

@@ -1,0 +1,83 @@
+//! `imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json`
+//! (contract sections 3 and 5).
+//!
+//! Settings: `--settings`, else those of `--model`, else the defaults. With `--model`, each
+//! block's report adds the gap that model leaves as it is (`given_model_gap_db`); the search
+//! itself always starts from the paper's model identified on this run.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::identify::read_settings;
+use super::{Args, CliError};
+use crate::diagnose::{DiagnoseError, diagnose_run};
+use crate::ident::IdentError;
+use crate::model::{MODEL_SCHEMA, Model};
+use crate::output::{ensure_not_input, write_atomic};
+use crate::run::sidecar_path;
+
+fn read_model(path: &Path) -> Result<Model, CliError> {
+    let shown = path.display();
+    let bytes = std::fs::read(path).map_err(|e| CliError::Input(format!("{shown}: cannot read: {e}")))?;
+    let de = &mut serde_json::Deserializer::from_slice(&bytes);
+    let model: Model = serde_path_to_error::deserialize(de).map_err(|e| {
+        let inner = e.inner();
+        CliError::Input(format!(
+            "{shown}:{}:{}: not a model file at '{}': {inner}",
+            inner.line(),
+            inner.column(),
+            e.path()
+        ))
+    })?;
+    if model.schema != MODEL_SCHEMA {
+        return Err(CliError::Input(format!(
+            "{shown}: schema '{}' is not '{MODEL_SCHEMA}'",
+            model.schema
+        )));
+    }
+    Ok(model)
+}
+
+pub(super) fn run(args: &Args) -> Result<(), CliError> {
+    let (settings, settings_path) = read_settings(args)?;
+    let model_path = args.get("model").map(PathBuf::from);
+    let out = PathBuf::from(args.required("out")?);
+    args.reject_unknown()?;
+    let [run_path] = args.positional.as_slice() else {
+        return Err(CliError::Input(format!(
+            "discrepancy takes one RUN, got {}",
+            args.positional.len()
+        )));
+    };
+    let run_path = Path::new(run_path);
+    let mut inputs = vec![run_path.to_path_buf(), sidecar_path(run_path)];
+    inputs.extend(settings_path.clone());
+    inputs.extend(model_path.clone());
+    ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
+    let model = model_path.as_deref().map(read_model).transpose()?;
+    let settings = match (&settings_path, &model) {
+        (None, Some(m)) => m.settings.clone(),
+        _ => settings,
+    };
+
+    let run = super::progress::load_run(run_path)?;
+    let report = diagnose_run(&run, &settings, model.as_ref()).map_err(|e| match e {
+        DiagnoseError::Ident(
+            IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. },
+        )
+        | DiagnoseError::TooShort { .. }
+        | DiagnoseError::Degenerate(_) => CliError::Input(format!("{}: {e}", run_path.display())),
+        other @ DiagnoseError::Ident(_) => CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display())),
+    })?;
+    let value = serde_json::to_value(&report).map_err(|e| CliError::Internal(e.into()))?;
+    if let Some(path) = crate::model::first_non_finite(&value) {
+        return Err(CliError::Internal(anyhow::anyhow!(
+            "report not written: non-finite number at {path}"
+        )));
+    }
+    write_atomic(&out, |w| {
+        serde_json::to_writer_pretty(&mut *w, &value).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+    .map_err(|e| CliError::Input(e.to_string()))
+}

@@ -1,0 +1,129 @@
+//! `imu-attest discrepancy` through the binary: the contract's report (section 5) with its field
+//! names, the hidden effect named, `--model` honoured, and exit status 2 with one line for bad
+//! input, leaving no output file.
+#![expect(clippy::unwrap_used, reason = "tests")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn imu_attest(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn simulated_run(dir: &Path, name: &str, effect: Option<&str>) -> PathBuf {
+    let run = dir.join(format!("{name}.csv"));
+    let mut args = vec![
+        "simulate",
+        "--regime",
+        "approach",
+        "--duration",
+        "60",
+        "--seed",
+        "7",
+    ];
+    if let Some(e) = effect {
+        args.extend(["--effect", e]);
+    }
+    args.extend(["--out", run.to_str().unwrap()]);
+    let o = imu_attest(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    run
+}
+
+fn one_line_error(o: &Output) -> String {
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    err
+}
+
+#[test]
+fn report_names_the_hidden_effect_with_the_contract_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path(), "lagged", Some("sensor_lag:accel"));
+    let model = dir.path().join("model.json");
+    let o = imu_attest(&[
+        "identify",
+        run.to_str().unwrap(),
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("report.json");
+    let o = imu_attest(&[
+        "discrepancy",
+        run.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(v["schema"], "imu-attest/discrepancy/1");
+    assert_eq!(v["verdict"], "effect_found");
+    let first = &v["findings"][0];
+    for key in [
+        "block",
+        "effect",
+        "name",
+        "parameters",
+        "gap_before_db",
+        "gap_after_db",
+        "evidence",
+    ] {
+        assert!(first.get(key).is_some(), "finding lacks '{key}': {first}");
+    }
+    assert_eq!(
+        (first["block"].as_str(), first["effect"].as_str()),
+        (Some("accel"), Some("sensor_lag"))
+    );
+    assert!(first["gap_after_db"].as_f64().unwrap() < first["gap_before_db"].as_f64().unwrap());
+    // The given model's own gap, as it is, is reported per channel.
+    let given = &v["blocks"]["accel"]["given_model_gap_db"];
+    assert_eq!(given.as_array().map(Vec::len), Some(3), "{given}");
+}
+
+#[test]
+fn bad_input_exits_2_with_one_line_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path(), "clean", None);
+    let out = dir.path().join("report.json");
+    let (run_s, out_s) = (run.to_str().unwrap(), out.to_str().unwrap());
+
+    // Output over an input.
+    let err = one_line_error(&imu_attest(&["discrepancy", run_s, "--out", run_s]));
+    assert!(err.contains("input"), "{err}");
+
+    // A model file that is not one.
+    let bad_model = dir.path().join("bad.json");
+    std::fs::write(&bad_model, "{\"schema\": \"imu-attest/model/1\", \"blocks\": 3}").unwrap();
+    let err = one_line_error(&imu_attest(&[
+        "discrepancy",
+        run_s,
+        "--model",
+        bad_model.to_str().unwrap(),
+        "--out",
+        out_s,
+    ]));
+    assert!(err.contains("bad.json"), "{err}");
+
+    // A band the run cannot hold.
+    let settings = dir.path().join("s.json");
+    std::fs::write(&settings, r#"{"band_hz": [0.1, 400.0]}"#).unwrap();
+    one_line_error(&imu_attest(&[
+        "discrepancy",
+        run_s,
+        "--settings",
+        settings.to_str().unwrap(),
+        "--out",
+        out_s,
+    ]));
+
+    // No run at all.
+    one_line_error(&imu_attest(&["discrepancy", "--out", out_s]));
+    assert!(!out.exists(), "a failed command left an output file");
+}

@@ -3,6 +3,7 @@
 //! Prints the findings next to what the simulator hid (read here, never by the workflow).
 #![expect(clippy::unwrap_used, clippy::print_stderr, reason = "development tool")]
 
+use imu_attest::diagnose::DiagnoseOptions;
 use imu_attest::diagnose::diagnose_run;
 use imu_attest::ident::settings::Settings;
 use imu_attest::run::{LoadOptions, load};
@@ -24,7 +25,7 @@ fn main() {
     write_run(&sim, &path).unwrap();
     let run = load(&path, &LoadOptions::default()).unwrap();
     let t0 = std::time::Instant::now();
-    let report = diagnose_run(&run, &Settings::default(), None).unwrap();
+    let report = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).unwrap();
     eprintln!(
         "diagnosis {:.2} s, verdict {:?}",
         t0.elapsed().as_secs_f64(),

@@ -7,6 +7,7 @@
 //! sees the CSV and the sidecar's declared fields, as it would from a real stand.
 #![expect(clippy::unwrap_used, reason = "tests")]
 
+use imu_attest::diagnose::DiagnoseOptions;
 use imu_attest::diagnose::{Report, Verdict, diagnose_run};
 use imu_attest::ident::settings::Settings;
 use imu_attest::run::{LoadOptions, load};
@@ -28,7 +29,7 @@ fn diagnose(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Repor
     let path = dir.path().join("run.csv");
     write_run(&sim, &path).unwrap();
     let run = load(&path, &LoadOptions::default()).unwrap();
-    let report = diagnose_run(&run, &Settings::default(), None).unwrap();
+    let report = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).unwrap();
     (sim, report)
 }
 
@@ -382,4 +383,33 @@ fn two_hidden_effects_are_both_named() {
             assert!(f.gap_after_db <= f.gap_before_db, "{}: gap grew", f.effect);
         }
     }
+}
+
+#[test]
+fn a_rejected_effect_is_not_named_again() {
+    let mut config = SimConfig::new(Regime::Approach);
+    config.seed = 131;
+    config.duration_s = DURATION_S;
+    config.effects = vec!["sensor_lag:gyro".parse().unwrap()];
+    let sim = simulate(&config).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.csv");
+    write_run(&sim, &path).unwrap();
+    let run = load(&path, &LoadOptions::default()).unwrap();
+    let options = DiagnoseOptions {
+        given: None,
+        rejected: vec![(
+            imu_attest::block::Block::Gyro,
+            imu_attest::sim::effect::Effect::SensorLag,
+        )],
+    };
+    let report = diagnose_run(&run, &Settings::default(), &options).unwrap();
+    let named: Vec<(&str, &str)> = report
+        .findings
+        .iter()
+        .map(|f| (f.block.as_str(), f.effect.as_str()))
+        .collect();
+    assert!(!named.contains(&("gyro", "sensor_lag")), "{named:?}");
+    // The lag is still there: something else must stand in for it, so the gyro is not clean.
+    assert!(named.iter().any(|(b, _)| *b == "gyro"), "{named:?}");
 }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::identify::read_settings;
 use super::{Args, CliError};
-use crate::diagnose::{DiagnoseError, diagnose_run};
+use crate::diagnose::{DiagnoseError, DiagnoseOptions, diagnose_run};
 use crate::ident::IdentError;
 use crate::model::{MODEL_SCHEMA, Model};
 use crate::output::{ensure_not_input, write_atomic};
@@ -61,13 +61,23 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     };
 
     let run = super::progress::load_run(run_path)?;
-    let report = diagnose_run(&run, &settings, model.as_ref()).map_err(|e| match e {
+    let report = diagnose_run(
+        &run,
+        &settings,
+        &DiagnoseOptions {
+            given: model.as_ref(),
+            rejected: Vec::new(),
+        },
+    )
+    .map_err(|e| match e {
         DiagnoseError::Ident(
             IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. },
         )
         | DiagnoseError::TooShort { .. }
         | DiagnoseError::Degenerate(_) => CliError::Input(format!("{}: {e}", run_path.display())),
-        other @ DiagnoseError::Ident(_) => CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display())),
+        other @ DiagnoseError::Ident(_) => {
+            CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display()))
+        }
     })?;
     let value = serde_json::to_value(&report).map_err(|e| CliError::Internal(e.into()))?;
     if let Some(path) = crate::model::first_non_finite(&value) {

@@ -30,7 +30,7 @@ pub mod tone;
 mod workflow;
 
 pub use report::{DISCREPANCY_SCHEMA, Finding, Report, Verdict};
-pub use workflow::diagnose_run;
+pub use workflow::{DiagnoseOptions, diagnose_run};
 
 /// Why a diagnosis could not be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

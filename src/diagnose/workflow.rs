@@ -26,14 +26,26 @@ const MAX_FINDINGS: usize = 5;
 /// Log-spaced cells of the residual densities in the report.
 const PSD_CELLS: usize = 80;
 
-/// Diagnoses every block of `run` the settings name. With `given`, a model identified before
-/// (perhaps from another run), each block's report also holds the gap that model leaves as it
-/// is, before anything is refitted.
+/// What the caller adds to a diagnosis.
+#[derive(Clone, Debug, Default)]
+pub struct DiagnoseOptions<'a> {
+    /// A model identified before (perhaps from another run): each block's report also holds
+    /// the gap it leaves as it is, before anything is refitted.
+    pub given: Option<&'a Model>,
+    /// Effects the engineer rejected: never offered as candidates on that block.
+    pub rejected: Vec<(Block, Effect)>,
+}
+
+/// Diagnoses every block of `run` the settings name.
 ///
 /// # Errors
 /// The identification's errors (bad settings for this run, ...), a record too short for the
 /// band, or degenerate inputs.
-pub fn diagnose_run(run: &Run, settings: &Settings, given: Option<&Model>) -> Result<Report, DiagnoseError> {
+pub fn diagnose_run(
+    run: &Run,
+    settings: &Settings,
+    options: &DiagnoseOptions<'_>,
+) -> Result<Report, DiagnoseError> {
     let settings = Settings {
         order: OrderSetting::Fixed(0),
         blocks: settings.blocks_for(&run.blocks()),
@@ -50,8 +62,14 @@ pub fn diagnose_run(run: &Run, settings: &Settings, given: Option<&Model>) -> Re
             low: band[0],
             high: band[1],
         })?;
-        let given = given.and_then(|m| m.blocks.get(b.block.name()));
-        let (report, mut found, p) = diagnose_block(design, b, band, given)?;
+        let given = options.given.and_then(|m| m.blocks.get(b.block.name()));
+        let rejected: Vec<Effect> = options
+            .rejected
+            .iter()
+            .filter(|(block, _)| *block == b.block)
+            .map(|&(_, e)| e)
+            .collect();
+        let (report, mut found, p) = diagnose_block(design, b, band, given, &rejected)?;
         penalty = p;
         findings.append(&mut found);
         blocks.insert(b.block.name().to_owned(), report);
@@ -165,6 +183,7 @@ fn diagnose_block(
     b: &BlockIdentification,
     band: [f64; 2],
     given: Option<&BlockModel>,
+    rejected: &[Effect],
 ) -> Result<BlockOutcome, DiagnoseError> {
     let name = b.block.name();
     let dof = 3.0 * design.dof_per_channel();
@@ -176,6 +195,7 @@ fn diagnose_block(
     let mut first_round = Vec::new();
     for round in 0..MAX_FINDINGS {
         let mut cands = candidates(&state, band);
+        cands.retain(|c| !rejected.contains(&c.effect));
         cands.sort_by(|a, b| {
             let gain = |c: &Candidate| c.delta_chi2 - c.added_params as f64 * penalty;
             gain(b).total_cmp(&gain(a))

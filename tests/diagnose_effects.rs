@@ -133,6 +133,13 @@ fn check_effect(effect: &str, block: &str, cases: [(Regime, u64, f64); 3]) {
             "{spec} on {regime}: ranked first {summary:?}"
         );
         let err = size_error(&sim, block, &first.parameters);
+        eprintln!(
+            "  size error {:.1} %, criterion gain {:.0}, gap {:.2} -> {:.2} dB",
+            err * 100.0,
+            first.criterion_gain,
+            first.gap_before_db,
+            first.gap_after_db
+        );
         assert!(
             err < 0.25,
             "{spec} on {regime}: size error {:.1} % ({})",
@@ -293,7 +300,10 @@ fn check_clean(runs: &[(Regime, u64)]) {
         let gains: Vec<String> = report
             .blocks
             .iter()
-            .map(|(b, r)| format!("{b}: {}", r.candidates.first().map_or(0.0, |c| c.criterion_gain)))
+            .map(|(b, r)| {
+                let gain = r.candidates.first().map_or(0.0, |c| c.criterion_gain);
+                format!("{b}: gain {gain:.1}, chi2/dof {:.3}", r.chi2_per_dof[0])
+            })
             .collect();
         eprintln!("clean {regime} seed {seed}: best gains {gains:?}");
         assert_eq!(

@@ -55,6 +55,8 @@ pub struct Criterion {
     pub name: String,
     /// What an added real parameter must buy in `chi2`: `ln(n)`.
     pub penalty_per_parameter: f64,
+    /// What winning a round among `m` candidates costs on top: `2 ln(m)`.
+    pub look_elsewhere: String,
 }
 
 /// One named effect.
@@ -78,7 +80,7 @@ pub struct Finding {
     pub delta_chi2: f64,
     /// Real parameters added.
     pub added_parameters: usize,
-    /// `delta_chi2 - added_parameters ln(n)`: positive means significant.
+    /// `delta_chi2 - added_parameters ln(n) - 2 ln(m)`: positive means significant.
     pub criterion_gain: f64,
 }
 
@@ -91,7 +93,7 @@ pub struct CandidateSummary {
     pub delta_chi2: f64,
     /// Real parameters added.
     pub added_parameters: usize,
-    /// `delta_chi2 - added_parameters ln(n)`.
+    /// `delta_chi2 - added_parameters ln(n) - 2 ln(m)`.
     pub criterion_gain: f64,
 }
 

@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod compare;
 mod identify;
 mod inspect;
 mod progress;
@@ -46,6 +47,7 @@ usage:
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
   imu-attest identify RUN [--settings S.json] --out MODEL.json
+  imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json
   imu-attest inspect RUN...                       check runs against the format, summarise them
 ";
 
@@ -76,6 +78,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "simulate" => simulate::run(&Args::parse(rest)?),
         "inspect" => inspect::run(&Args::parse(rest)?),
         "identify" => identify::run(&Args::parse(rest)?),
+        "compare" => compare::run(&Args::parse(rest)?),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::{App, RunEntry, RunState};
-use crate::gui::pipeline::{Job, JobKind, RunId};
+use crate::gui::pipeline::{Job, JobKind, RunId, Stage};
 use crate::ident::settings::Settings;
 
 /// A request from the UI.
@@ -26,6 +26,14 @@ pub enum Command {
     SetSettings(Box<Settings>),
     /// Forget one error message.
     DismissError(usize),
+    /// Write the selected run's model JSON here (`None`: ask with a save dialog).
+    ExportModel(Option<PathBuf>),
+    /// Write the current view as PNG here (`None`: ask with a save dialog).
+    ExportPng(Option<PathBuf>),
+    /// Add a run to, or remove it from, the comparison.
+    ToggleCompare(RunId),
+    /// Fault injection: make the worker panic in `stage` of this run's analysis, as a bug would.
+    InjectPanic(RunId, Stage),
 }
 
 impl App {
@@ -56,6 +64,7 @@ impl App {
                     cancel.store(true, Ordering::Relaxed);
                 }
                 self.runs.retain(|r| r.id != id);
+                self.compared.retain(|r| *r != id);
                 let generation = self.next_generation();
                 self.worker.submit(Job {
                     run: id,
@@ -81,6 +90,24 @@ impl App {
                     }
                 }
             }
+            Command::ExportModel(path) => {
+                let path = path.or_else(|| self.save_dialog("model JSON", "json", "_model.json"));
+                if let Some(path) = path {
+                    self.export_model(&path);
+                }
+            }
+            Command::ExportPng(path) => {
+                let path = path.or_else(|| self.save_dialog("PNG image", "png", "_view.png"));
+                self.screenshots.pending = path;
+            }
+            Command::ToggleCompare(id) => {
+                if self.compared.contains(&id) {
+                    self.compared.retain(|r| *r != id);
+                } else {
+                    self.compared.push(id);
+                }
+            }
+            Command::InjectPanic(id, stage) => self.request(id, JobKind::InjectPanic { stage }),
             Command::DismissError(index) => {
                 if index < self.errors.len() {
                     self.errors.remove(index);
@@ -108,8 +135,13 @@ impl App {
 
     /// Asks the worker to bring a loaded run's stages up to date with the current settings.
     pub(super) fn analyse(&mut self, id: RunId) {
-        let generation = self.next_generation();
         let settings = Box::new(self.prefs.settings.clone());
+        self.request(id, JobKind::Analyse { settings });
+    }
+
+    /// Submits an analysis-like job whose result (or failure) the run waits for.
+    fn request(&mut self, id: RunId, kind: JobKind) {
+        let generation = self.next_generation();
         if let Some(run) = self.run_mut(id) {
             run.requested_generation = generation;
             run.analysis_error = None;
@@ -117,7 +149,7 @@ impl App {
         self.worker.submit(Job {
             run: id,
             generation,
-            kind: JobKind::Analyse { settings },
+            kind,
         });
     }
 }

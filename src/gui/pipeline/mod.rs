@@ -8,17 +8,23 @@
 //! | load | the file | [`Event::Loaded`]: [`RunSummary`] + [`Measured`] |
 //! | observer + block inputs | the run (sidecar lever arm, `g`, angle noise) | [`Event::Motion`] |
 //! | spectra | block inputs + [`WelchSettings`](crate::spectral::WelchSettings) | [`Event::Spectra`] |
+//! | factorisation | the spectra (per block) | (inside the next) |
+//! | identification (Wiener + structural fit) | band, `A`, `Lambda`, order, blocks | [`Event::Identified`] |
 //!
 //! An [`JobKind::Analyse`] job carries the whole identifier [`Settings`]; each stage looks only at
-//! its own key, so a Welch change recomputes the spectra alone, and the stages that follow the
-//! spectra (factorisation, identifier, structural fit) key on band, `A`, `Lambda`, order and
-//! blocks without redoing them.
+//! its own key, so a Welch change recomputes the spectra and what follows, while a change of `A`,
+//! `Lambda` or the order redoes only `identify_block_from` (regularised Wiener + structural fit)
+//! from the cached [`crate::ident::spectra::BlockSpectra`] and factorisation. The spectra are
+//! computed once, by the identifier's own code, and the spectra tab reads the same snapshot.
 //!
 //! Jobs carry a generation (increasing over the app's life). The worker drains its queue before
 //! working and computes only the newest analysis per run; the app ignores results older than its
 //! newest request and keeps showing the last good one meanwhile. A panic inside a job is caught
 //! and reported as [`Event::Failed`]; the worker and the cached stages before it survive.
 
+mod analyse;
+mod display;
+mod identified;
 mod series;
 mod stages;
 mod worker;
@@ -27,8 +33,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+pub use display::{BlockSpectra, NativeCsd, Spectra, decibels};
+pub use identified::{BAND_SIGMAS, BlockBode, BodeElement, Identification};
 pub use series::Series;
-pub use stages::{BlockSpectra, Measured, Motion, Spectra, decibels};
+pub use stages::{Measured, Motion};
 pub use worker::{Worker, WorkerMode};
 
 use crate::block::Block;
@@ -65,9 +73,12 @@ pub enum JobKind {
     },
     /// Drop the run's cached stages.
     Forget,
-    /// Panics inside the worker (unit tests of the panic guard only).
-    #[cfg(test)]
-    PanicForTest,
+    /// Fault injection: panics inside the worker as a bug in `stage` would (tests of the panic
+    /// guard and of how the app shows it).
+    InjectPanic {
+        /// The stage the panic is reported in.
+        stage: Stage,
+    },
 }
 
 /// The pipeline stage a result or failure belongs to.
@@ -79,6 +90,10 @@ pub enum Stage {
     Motion,
     /// Welch spectral matrices.
     Spectra,
+    /// Spectral factorisation.
+    Factorisation,
+    /// Regularised Wiener estimate and structural fit.
+    Identify,
 }
 
 impl Stage {
@@ -89,6 +104,8 @@ impl Stage {
             Stage::Load => "load",
             Stage::Motion => "observer",
             Stage::Spectra => "spectra",
+            Stage::Factorisation => "factorisation",
+            Stage::Identify => "identification",
         }
     }
 }
@@ -110,6 +127,8 @@ pub struct RunSummary {
     pub duration_s: f64,
     /// Blocks present, gyro first.
     pub blocks: Vec<Block>,
+    /// SHA-256 of the file as stored (for the model's source).
+    pub sha256: String,
     /// Loader notices (missing sidecar, unknown columns, ...).
     pub notices: Vec<String>,
 }
@@ -152,6 +171,15 @@ pub enum Event {
         generation: u64,
         /// The result.
         spectra: Arc<Spectra>,
+    },
+    /// The identification (model, curves) ready.
+    Identified {
+        /// The run.
+        run: RunId,
+        /// The job's generation.
+        generation: u64,
+        /// The result.
+        identification: Arc<Identification>,
     },
     /// A stage failed (error or caught panic); earlier results stay valid.
     Failed {

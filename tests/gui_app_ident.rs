@@ -2,6 +2,7 @@
 //! (`egui_kittest`, no GPU). The worker runs synchronously (or, for the cancel test, only when
 //! told), so every assertion sees finished results and nothing depends on timing.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -72,7 +73,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
         .expect("identified");
 
     set(&mut harness, |s| {
-        s.lambda = LambdaSetting::Values([0.2, 0.2, 0.2])
+        s.lambda = LambdaSetting::Values([0.2, 0.2, 0.2]);
     });
     let (_, k1) = gyro_labels(&harness);
     assert_ne!(k1, k0, "K follows Lambda");
@@ -164,7 +165,7 @@ fn two_runs_are_compared_side_by_side() {
         let model = &run.identification.as_ref().expect("identified").model;
         for (name, b) in &model.blocks {
             assert_eq!(compared.blocks[name].k, b.k);
-            assert_eq!(compared.blocks[name].tau_s, b.tau_s);
+            assert_eq!(compared.blocks[name].tau_s.to_bits(), b.tau_s.to_bits(), "copied");
         }
     }
     harness.get_by_label(&significance_label(&c, "gyro"));
@@ -229,7 +230,7 @@ fn a_run_too_large_for_memory_is_refused_in_the_error_panel() {
     let big = dir.path().join("big.csv");
     let mut text = String::from("t,roll,yaw,pitch,gx,gy,gz\n");
     for k in 0..100_000 {
-        text.push_str(&format!("{},0.1,0.2,0.3,0.01,0.02,0.03\n", f64::from(k) * 0.002));
+        writeln!(text, "{},0.1,0.2,0.3,0.01,0.02,0.03", f64::from(k) * 0.002).expect("to a string");
     }
     std::fs::write(&big, text).expect("written");
     let mut opts = options(vec![big], WorkerMode::Synchronous);

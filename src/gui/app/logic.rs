@@ -18,6 +18,9 @@ const DRAIN_BUDGET: Duration = Duration::from_millis(10);
 /// What the pair-grid texture shows: run, spectra generation, block, mode.
 pub(super) type TextureKey = (RunId, u64, Block, HeatmapMode);
 
+/// What the comparison was computed from: each compared run and its identification generation.
+pub(super) type ComparisonKey = Vec<(RunId, u64)>;
+
 impl App {
     pub(super) fn logic_pass(&mut self, ctx: &egui::Context) {
         let dropped: Vec<_> = ctx.input(|i| {
@@ -59,7 +62,7 @@ impl App {
 
     /// Recomputes the comparison when the compared runs or their identifications changed.
     fn update_comparison(&mut self) {
-        let key: Vec<(RunId, u64)> = self
+        let key: ComparisonKey = self
             .compared
             .iter()
             .filter_map(|&id| self.run(id))

@@ -218,7 +218,7 @@ pub struct App {
     generation: u64,
     pair_texture: Option<(logic::TextureKey, egui::TextureHandle)>,
     compared: Vec<RunId>,
-    comparison: Option<(Vec<(RunId, u64)>, Arc<Comparison>)>,
+    comparison: Option<(logic::ComparisonKey, Arc<Comparison>)>,
     status: Option<String>,
     screenshots: export::Screenshots,
 }

@@ -138,7 +138,9 @@ fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeE
     let mut model_phase = unwrap_deg(fitted.iter().map(|z| z.arg().to_degrees()));
     if let (Some(p0), Some(m0)) = (phase.first(), model_phase.first()) {
         let shift = 360.0 * ((p0 - m0) / 360.0).round();
-        model_phase.iter_mut().for_each(|p| *p += shift);
+        for p in &mut model_phase {
+            *p += shift;
+        }
     }
     let points = |ys: &[f64]| {
         log_f

@@ -98,7 +98,9 @@ impl Worker {
         let jobs = self.queued.as_mut().map(std::mem::take).unwrap_or_default();
         let n = jobs.len();
         if let Some(pipeline) = self.inline.as_mut() {
-            jobs.into_iter().for_each(|job| pipeline.run_caught(job));
+            for job in jobs {
+                pipeline.run_caught(job);
+            }
         }
         n
     }

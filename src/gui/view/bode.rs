@@ -65,6 +65,7 @@ pub fn grid(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], group: &str) {
 }
 
 /// The curves of one quantity: the estimate, its band, the fitted model.
+#[derive(Clone, Copy)]
 struct Curves<'a> {
     estimate: &'a [PlotPoint],
     band: &'a (Vec<f64>, Vec<f64>),

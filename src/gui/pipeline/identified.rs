@@ -2,10 +2,11 @@
 //! they make (what Export writes), and the Bode, coherence and disturbance curves precomputed so
 //! the plots only borrow them.
 //!
-//! Curves use `x = log10 f` (Hz). Confidence bands are `|W_u| ± 2 W_u_std` (about 95 %) in dB, and
-//! `± asin(2 W_u_std / |W_u|)` in phase (± 180° where the band contains zero). Phases are
-//! unwrapped along frequency; the fitted model's phase is shifted by whole turns to start next to
-//! the estimate's.
+//! Curves use `x = log10 f` (Hz). Confidence bands are `|W_u| ± 2 W_u_std` (about 95 %) in dB (the
+//! lower edge at most [`BAND_FLOOR_DB`] below the estimate, where the band contains zero), and
+//! `± asin(2 W_u_std / |W_u|)` in phase (± 180° where the band contains zero). Phases are shown
+//! wrapped to (-180°, 180°]: unwrapping the noisy phase of a weak cross-axis element would let
+//! it drift by whole turns.
 
 use std::collections::BTreeMap;
 
@@ -21,6 +22,9 @@ use crate::model::{BlockModel, MODEL_SCHEMA, Model, Source};
 /// Number of standard deviations of the confidence bands.
 pub const BAND_SIGMAS: f64 = 2.0;
 
+/// Deepest the lower edge of a magnitude band goes below the estimate, dB.
+pub const BAND_FLOOR_DB: f64 = 40.0;
+
 /// One element `W_u[i][j]` on a Bode plot.
 #[derive(Debug, Default)]
 pub struct BodeElement {
@@ -30,7 +34,7 @@ pub struct BodeElement {
     pub magnitude_db: Vec<PlotPoint>,
     /// Confidence band, dB (lower, upper).
     pub magnitude_band_db: (Vec<f64>, Vec<f64>),
-    /// Unwrapped phase, degrees.
+    /// Phase, degrees, in (-180, 180].
     pub phase_deg: Vec<PlotPoint>,
     /// Confidence band, degrees (lower, upper).
     pub phase_band_deg: (Vec<f64>, Vec<f64>),
@@ -110,17 +114,10 @@ fn db20(x: f64) -> f64 {
     20.0 * x.max(1e-300).log10()
 }
 
-/// Unwraps a phase sequence in degrees.
-fn unwrap_deg(raw: impl Iterator<Item = f64>) -> Vec<f64> {
-    let mut out: Vec<f64> = Vec::new();
-    for p in raw {
-        let q = match out.last() {
-            Some(&prev) => p + 360.0 * ((prev - p) / 360.0).round(),
-            None => p,
-        };
-        out.push(q);
-    }
-    out
+/// The magnitude band `(|w| - s, |w| + s)` in dB, the lower edge at most [`BAND_FLOOR_DB`] below
+/// `|w|`.
+fn band_db(w: f64, s: f64) -> (f64, f64) {
+    (db20(w - s).max(db20(w) - BAND_FLOOR_DB), db20(w + s))
 }
 
 fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeElement {
@@ -134,14 +131,8 @@ fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeE
         .iter()
         .map(|&f| b.structural.response(f)[(i, j)])
         .collect();
-    let phase = unwrap_deg(w.iter().map(|z| z.arg().to_degrees()));
-    let mut model_phase = unwrap_deg(fitted.iter().map(|z| z.arg().to_degrees()));
-    if let (Some(p0), Some(m0)) = (phase.first(), model_phase.first()) {
-        let shift = 360.0 * ((p0 - m0) / 360.0).round();
-        for p in &mut model_phase {
-            *p += shift;
-        }
-    }
+    let phase: Vec<f64> = w.iter().map(|z| z.arg().to_degrees()).collect();
+    let model_phase: Vec<f64> = fitted.iter().map(|z| z.arg().to_degrees()).collect();
     let points = |ys: &[f64]| {
         log_f
             .iter()
@@ -163,10 +154,7 @@ fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeE
         .collect();
     BodeElement {
         magnitude_db: points(&mag),
-        magnitude_band_db: (
-            w.iter().zip(&std).map(|(z, s)| db20(z.norm() - s)).collect(),
-            w.iter().zip(&std).map(|(z, s)| db20(z.norm() + s)).collect(),
-        ),
+        magnitude_band_db: w.iter().zip(&std).map(|(z, &s)| band_db(z.norm(), s)).unzip(),
         phase_deg: points(&phase),
         phase_band_deg: (
             phase.iter().zip(&spread).map(|(p, s)| p - s).collect(),
@@ -211,11 +199,17 @@ fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
 
 #[cfg(test)]
 mod tests {
-    use super::unwrap_deg;
+    use super::{BAND_FLOOR_DB, band_db};
 
     #[test]
-    fn unwrapping_removes_whole_turn_jumps() {
-        let out = unwrap_deg([170.0, -170.0, -10.0, 179.0].into_iter());
-        assert_eq!(out, vec![170.0, 190.0, 350.0, 179.0]);
+    fn a_band_containing_zero_is_floored_below_the_estimate() {
+        // |W| = 1e-3 with 2 std = 2e-3: the lower edge would be -inf dB.
+        let (lower, upper) = band_db(1e-3, 2e-3);
+        assert!((lower - (-60.0 - BAND_FLOOR_DB)).abs() < 1e-9, "{lower}");
+        assert!((upper - 20.0 * 3e-3f64.log10()).abs() < 1e-9, "{upper}");
+        // A tight band keeps its own edges.
+        let (lower, upper) = band_db(1.0, 0.01);
+        assert!((lower - 20.0 * 0.99f64.log10()).abs() < 1e-12);
+        assert!((upper - 20.0 * 1.01f64.log10()).abs() < 1e-12);
     }
 }

@@ -63,7 +63,11 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         commands.push(Command::ExportModel(None));
     }
     let auto_order = id.settings.order == OrderSetting::Auto;
-    for (name, m) in &id.model.blocks {
+    for (name, m) in id
+        .blocks
+        .iter()
+        .filter_map(|b| id.model.blocks.get_key_value(b.block.name()))
+    {
         ui.separator();
         ui.strong(format!(
             "{name}: {} to {}",

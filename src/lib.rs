@@ -7,6 +7,7 @@
 
 pub mod block;
 pub mod cli;
+pub mod compare;
 pub mod diagnose;
 pub mod fourier;
 pub mod gui;

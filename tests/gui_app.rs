@@ -19,9 +19,9 @@ fn sample_app(builder: egui_kittest::HarnessBuilder<App>) -> Harness<'static, Ap
             App::new(
                 cc,
                 AppOptions {
-                    paths,
                     mode: WorkerMode::Synchronous,
                     persist: false,
+                    ..AppOptions::new(paths)
                 },
             )
         });

@@ -40,10 +40,20 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     inputs.extend(settings_path);
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
 
+    let model = identify_model(run_path, &settings)?;
+    write_atomic(&out, |w| {
+        serde_json::to_writer_pretty(&mut *w, &model).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+    .map_err(|e| CliError::Input(e.to_string()))
+}
+
+/// Loads and identifies one run into its checked model (shared with `compare`).
+pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Model, CliError> {
     let run = super::progress::load_run(run_path)?;
     let settings = Settings {
         blocks: settings.blocks_for(&run.blocks()),
-        ..settings
+        ..settings.clone()
     };
     // Settings that do not fit this run are the user's input; anything else is ours.
     let id = identify_run(&run, &settings).map_err(|e| match e {
@@ -56,9 +66,5 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     model
         .check_finite()
         .map_err(|e| CliError::Internal(anyhow::anyhow!("model not written: {e}")))?;
-    write_atomic(&out, |w| {
-        serde_json::to_writer_pretty(&mut *w, &model).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
-    })
-    .map_err(|e| CliError::Input(e.to_string()))
+    Ok(model)
 }

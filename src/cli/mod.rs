@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod compare;
 mod discrepancy;
 mod identify;
 mod inspect;
@@ -48,6 +49,7 @@ usage:
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
   imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
+  imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json
   imu-attest inspect RUN...                       check runs against the format, summarise them
 ";
 
@@ -79,6 +81,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "inspect" => inspect::run(&Args::parse(rest)?),
         "identify" => identify::run(&Args::parse(rest)?),
         "discrepancy" => discrepancy::run(&Args::parse(rest)?),
+        "compare" => compare::run(&Args::parse(rest)?),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");

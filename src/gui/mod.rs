@@ -47,16 +47,7 @@ pub fn run_app(paths: Vec<PathBuf>) -> Result<(), GuiError> {
     eframe::run_native(
         "imu-attest",
         options,
-        Box::new(move |cc| {
-            Ok(Box::new(App::new(
-                cc,
-                AppOptions {
-                    paths,
-                    mode: WorkerMode::Thread,
-                    persist: true,
-                },
-            )))
-        }),
+        Box::new(move |cc| Ok(Box::new(App::new(cc, AppOptions::new(paths))))),
     )
     .map_err(|e| GuiError::Window(e.to_string()))
 }

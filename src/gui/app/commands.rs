@@ -5,8 +5,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::{App, RunEntry, RunState};
-use crate::gui::pipeline::{Job, JobKind, RunId};
+use crate::block::Block;
+use crate::gui::pipeline::{Job, JobKind, RunId, Stage};
 use crate::ident::settings::Settings;
+use crate::sim::effect::Effect;
 
 /// A request from the UI.
 #[derive(Debug)]
@@ -26,6 +28,22 @@ pub enum Command {
     SetSettings(Box<Settings>),
     /// Forget one error message.
     DismissError(usize),
+    /// Write the selected run's model JSON here (`None`: ask with a save dialog).
+    ExportModel(Option<PathBuf>),
+    /// Write the current view as PNG here (`None`: ask with a save dialog).
+    ExportPng(Option<PathBuf>),
+    /// Add a run to, or remove it from, the comparison.
+    ToggleCompare(RunId),
+    /// Find the missing effects of this run.
+    Diagnose(RunId),
+    /// Keep a named effect (`block`, effect id) in the run's model.
+    AcceptEffect(RunId, String, String),
+    /// Drop a named effect (`block`, effect id) and diagnose again without it.
+    RejectEffect(RunId, String, String),
+    /// Forget the run's rejections and diagnose again.
+    ClearRejected(RunId),
+    /// Fault injection: make the worker panic in `stage` of this run's analysis, as a bug would.
+    InjectPanic(RunId, Stage),
 }
 
 impl App {
@@ -56,6 +74,7 @@ impl App {
                     cancel.store(true, Ordering::Relaxed);
                 }
                 self.runs.retain(|r| r.id != id);
+                self.compared.retain(|r| *r != id);
                 let generation = self.next_generation();
                 self.worker.submit(Job {
                     run: id,
@@ -81,6 +100,47 @@ impl App {
                     }
                 }
             }
+            Command::ExportModel(path) => {
+                let path = path.or_else(|| self.save_dialog("model JSON", "json", "_model.json"));
+                if let Some(path) = path {
+                    self.export_model(&path);
+                }
+            }
+            Command::ExportPng(path) => {
+                let path = path.or_else(|| self.save_dialog("PNG image", "png", "_view.png"));
+                self.screenshots.pending = path;
+            }
+            Command::ToggleCompare(id) => {
+                if self.compared.contains(&id) {
+                    self.compared.retain(|r| *r != id);
+                } else {
+                    self.compared.push(id);
+                }
+            }
+            Command::Diagnose(id) => self.diagnose(id),
+            Command::AcceptEffect(id, block, effect) => {
+                if let (Some(run), Some(pair)) = (self.run_mut(id), effect_of(&block, &effect))
+                    && !run.accepted.contains(&pair)
+                {
+                    run.accepted.push(pair);
+                }
+            }
+            Command::RejectEffect(id, block, effect) => {
+                if let (Some(run), Some(pair)) = (self.run_mut(id), effect_of(&block, &effect)) {
+                    run.accepted.retain(|p| *p != pair);
+                    if !run.rejected.contains(&pair) {
+                        run.rejected.push(pair);
+                    }
+                    self.diagnose(id);
+                }
+            }
+            Command::ClearRejected(id) => {
+                if let Some(run) = self.run_mut(id) {
+                    run.rejected.clear();
+                    self.diagnose(id);
+                }
+            }
+            Command::InjectPanic(id, stage) => self.request(id, JobKind::InjectPanic { stage }),
             Command::DismissError(index) => {
                 if index < self.errors.len() {
                     self.errors.remove(index);
@@ -108,8 +168,30 @@ impl App {
 
     /// Asks the worker to bring a loaded run's stages up to date with the current settings.
     pub(super) fn analyse(&mut self, id: RunId) {
-        let generation = self.next_generation();
         let settings = Box::new(self.prefs.settings.clone());
+        self.request(id, JobKind::Analyse { settings });
+    }
+
+    fn diagnose(&mut self, id: RunId) {
+        let settings = Box::new(self.prefs.settings.clone());
+        let generation = self.next_generation();
+        let Some(run) = self.run_mut(id) else { return };
+        if run.summary.is_none() {
+            return;
+        }
+        run.diagnosing = true;
+        run.diagnosis_error = None;
+        let rejected = run.rejected.clone();
+        self.worker.submit(Job {
+            run: id,
+            generation,
+            kind: JobKind::Diagnose { settings, rejected },
+        });
+    }
+
+    /// Submits an analysis-like job whose result (or failure) the run waits for.
+    fn request(&mut self, id: RunId, kind: JobKind) {
+        let generation = self.next_generation();
         if let Some(run) = self.run_mut(id) {
             run.requested_generation = generation;
             run.analysis_error = None;
@@ -117,7 +199,14 @@ impl App {
         self.worker.submit(Job {
             run: id,
             generation,
-            kind: JobKind::Analyse { settings },
+            kind,
         });
     }
+}
+
+/// The `(block, effect)` pair named by a finding's strings.
+fn effect_of(block: &str, effect: &str) -> Option<(Block, Effect)> {
+    let block = Block::BOTH.into_iter().find(|b| b.name() == block)?;
+    let effect = Effect::ALL.into_iter().find(|e| e.id() == effect)?;
+    Some((block, effect))
 }

@@ -1,19 +1,25 @@
 //! The non-drawing half of a frame: commands, dropped files, worker events, textures.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use eframe::egui;
 
 use super::{App, Command, HeatmapMode, RunState};
 use crate::block::Block;
+use crate::compare::compare;
 use crate::gui::pipeline::{Event, RunId, Stage};
 use crate::gui::view::colormap;
+use crate::model::Model;
 
 /// Longest time spent draining worker events in one pass.
 const DRAIN_BUDGET: Duration = Duration::from_millis(10);
 
 /// What the pair-grid texture shows: run, spectra generation, block, mode.
 pub(super) type TextureKey = (RunId, u64, Block, HeatmapMode);
+
+/// What the comparison was computed from: each compared run and its identification generation.
+pub(super) type ComparisonKey = Vec<(RunId, u64)>;
 
 impl App {
     pub(super) fn logic_pass(&mut self, ctx: &egui::Context) {
@@ -32,6 +38,8 @@ impl App {
             self.apply(command);
         }
         self.drain_events(ctx);
+        self.update_comparison();
+        self.screenshot_pass(ctx);
         self.update_pair_texture(ctx);
     }
 
@@ -49,6 +57,30 @@ impl App {
         while let Ok(event) = self.worker.events.try_recv() {
             self.handle(event);
         }
+        self.update_comparison();
+    }
+
+    /// Recomputes the comparison when the compared runs or their identifications changed.
+    fn update_comparison(&mut self) {
+        let key: ComparisonKey = self
+            .compared
+            .iter()
+            .filter_map(|&id| self.run(id))
+            .filter(|r| r.identification.is_some())
+            .map(|r| (r.id, r.identification_generation))
+            .collect();
+        if key.len() < 2 {
+            self.comparison = None;
+            return;
+        }
+        if self.comparison.as_ref().is_some_and(|(k, _)| *k == key) {
+            return;
+        }
+        let models: Vec<Model> = key
+            .iter()
+            .filter_map(|&(id, _)| self.run(id)?.identification.as_ref().map(|i| i.model.clone()))
+            .collect();
+        self.comparison = compare(&models).ok().map(|c| (key, Arc::new(c)));
     }
 
     fn drain_events(&mut self, ctx: &egui::Context) {
@@ -100,6 +132,38 @@ impl App {
                     entry.analysis_error = None;
                 }
             }
+            Event::Identified {
+                run,
+                generation,
+                identification,
+            } => {
+                let Some(entry) = self.run_mut(run) else { return };
+                if generation > entry.identification_generation {
+                    entry.identification = Some(identification);
+                    entry.identification_generation = generation;
+                    if generation >= entry.requested_generation {
+                        entry.analysis_error = None;
+                    }
+                }
+            }
+            Event::Diagnosed { run, report, .. } => {
+                let Some(entry) = self.run_mut(run) else { return };
+                entry.diagnosis = Some(report);
+                entry.diagnosing = false;
+                entry.diagnosis_error = None;
+            }
+            Event::Failed {
+                stage: Stage::Diagnose,
+                run,
+                message,
+                ..
+            } => {
+                let Some(entry) = self.run_mut(run) else { return };
+                entry.diagnosing = false;
+                entry.diagnosis_error = Some(message.clone());
+                let name = entry.name();
+                self.errors.push(format!("{name}: diagnosis: {message}"));
+            }
             Event::Failed {
                 run,
                 generation,
@@ -113,7 +177,7 @@ impl App {
     fn failed(&mut self, run: RunId, generation: u64, stage: Stage, message: String, cancelled: bool) {
         let Some(entry) = self.run_mut(run) else { return };
         if stage == Stage::Load {
-            let name = entry.path.display().to_string();
+            let name = entry.name();
             self.runs.retain(|r| r.id != run);
             if self.selected == Some(run) {
                 self.selected = self.runs.first().map(|r| r.id);

@@ -6,6 +6,7 @@
 //! directly; everything that reaches the pipeline goes through a [`Command`].
 
 mod commands;
+mod export;
 mod logic;
 mod ui;
 
@@ -19,10 +20,17 @@ use serde::{Deserialize, Serialize};
 pub use commands::Command;
 
 use crate::block::Block;
-use crate::gui::pipeline::{Measured, Motion, RunId, RunSummary, Spectra, Worker, WorkerMode};
+use crate::compare::Comparison;
+use crate::diagnose::Report;
+use crate::gui::pipeline::{
+    Identification, Measured, Motion, RunId, RunSummary, Spectra, Worker, WorkerMode,
+};
 use crate::ident::settings::Settings;
+use crate::run::LoadOptions;
+use crate::sim::effect::Effect;
 
-/// Storage key of [`Prefs`] (JSON, in eframe's storage).
+/// Storage key of [`Prefs`] (JSON, in eframe's storage: `~/.local/share/imu-attest/app.ron` on
+/// Linux).
 const PREFS_KEY: &str = "imu-attest/prefs";
 
 /// How to start the app.
@@ -34,6 +42,21 @@ pub struct AppOptions {
     pub mode: WorkerMode,
     /// Read and write preferences in eframe's storage.
     pub persist: bool,
+    /// How runs are loaded (memory limit, chunk size).
+    pub load: LoadOptions,
+}
+
+impl AppOptions {
+    /// The app's options: threaded worker, persisted preferences, default loading.
+    #[must_use]
+    pub fn new(paths: Vec<PathBuf>) -> Self {
+        Self {
+            paths,
+            mode: WorkerMode::Thread,
+            persist: true,
+            load: LoadOptions::default(),
+        }
+    }
 }
 
 /// The central panel's tab.
@@ -44,6 +67,12 @@ pub enum Tab {
     TimeSeries,
     /// PSDs and cross-spectral heatmaps.
     Spectra,
+    /// `W_u` Bode grid, coherence, disturbance PSD.
+    Bode,
+    /// The missing-effect workflow.
+    Diagnosis,
+    /// Several runs side by side.
+    Compare,
 }
 
 /// What the heatmaps show.
@@ -70,6 +99,8 @@ pub struct ViewState {
     pub heatmap_mode: HeatmapMode,
     /// Frequency of the CSD-matrix heatmap, Hz.
     pub heatmap_frequency_hz: f64,
+    /// Block shown on the Bode and Compare tabs.
+    pub bode_block: Block,
 }
 
 impl Default for ViewState {
@@ -80,6 +111,7 @@ impl Default for ViewState {
             spectra_block: Block::Gyro,
             heatmap_mode: HeatmapMode::Magnitude,
             heatmap_frequency_hz: 5.0,
+            bode_block: Block::Gyro,
         }
     }
 }
@@ -131,8 +163,22 @@ pub struct RunEntry {
     pub motion: Option<Arc<Motion>>,
     /// Spectra (the last good ones).
     pub spectra: Option<Arc<Spectra>>,
+    /// Identification (the last good one).
+    pub identification: Option<Arc<Identification>>,
+    /// Generation of the identification shown (0: none yet).
+    pub identification_generation: u64,
     /// Why the newest analysis failed, if it did.
     pub analysis_error: Option<String>,
+    /// The missing-effect report (the last good one).
+    pub diagnosis: Option<Arc<Report>>,
+    /// A diagnosis is under way.
+    pub diagnosing: bool,
+    /// Why the newest diagnosis failed, if it did.
+    pub diagnosis_error: Option<String>,
+    /// Effects the engineer accepted (kept in the model shown).
+    pub accepted: Vec<(Block, Effect)>,
+    /// Effects the engineer rejected (never offered again).
+    pub rejected: Vec<(Block, Effect)>,
 }
 
 impl RunEntry {
@@ -151,15 +197,30 @@ impl RunEntry {
             measured: None,
             motion: None,
             spectra: None,
+            identification: None,
+            identification_generation: 0,
             analysis_error: None,
+            diagnosis: None,
+            diagnosing: false,
+            diagnosis_error: None,
+            accepted: Vec::new(),
+            rejected: Vec::new(),
         }
     }
 
-    /// Computing: loading, or an analysis newer than the spectra shown is under way.
+    /// Computing: loading, or an analysis newer than the identification shown is under way.
     #[must_use]
     pub fn busy(&self) -> bool {
         matches!(self.state, RunState::Loading { .. })
-            || (self.analysis_error.is_none() && self.spectra_generation < self.requested_generation)
+            || (self.analysis_error.is_none() && self.identification_generation < self.requested_generation)
+    }
+
+    /// The file name shown.
+    #[must_use]
+    pub fn name(&self) -> String {
+        self.path
+            .file_name()
+            .map_or_else(|| self.path.display().to_string(), |n| n.to_string_lossy().into())
     }
 }
 
@@ -175,6 +236,10 @@ pub struct App {
     next_run: RunId,
     generation: u64,
     pair_texture: Option<(logic::TextureKey, egui::TextureHandle)>,
+    compared: Vec<RunId>,
+    comparison: Option<(logic::ComparisonKey, Arc<Comparison>)>,
+    status: Option<String>,
+    screenshots: export::Screenshots,
 }
 
 impl App {
@@ -188,7 +253,11 @@ impl App {
             .and_then(|json| serde_json::from_str::<Prefs>(&json).ok())
             .unwrap_or_default();
         let ctx = cc.egui_ctx.clone();
-        let worker = Worker::start(options.mode, Arc::new(move || ctx.request_repaint()));
+        let worker = Worker::start_with(
+            options.mode,
+            Arc::new(move || ctx.request_repaint()),
+            options.load,
+        );
         let mut app = Self {
             prefs,
             persist: options.persist,
@@ -200,6 +269,10 @@ impl App {
             next_run: 1,
             generation: 0,
             pair_texture: None,
+            compared: Vec::new(),
+            comparison: None,
+            status: None,
+            screenshots: export::Screenshots::default(),
         };
         app.push_command(Command::Open(options.paths));
         app
@@ -221,6 +294,29 @@ impl App {
     #[must_use]
     pub fn errors(&self) -> &[String] {
         &self.errors
+    }
+
+    /// The runs chosen for comparison, in the order chosen.
+    #[must_use]
+    pub fn compared(&self) -> &[RunId] {
+        &self.compared
+    }
+
+    /// The comparison of the chosen runs' identifications, when two or more have one.
+    #[must_use]
+    pub fn comparison(&self) -> Option<&Arc<Comparison>> {
+        self.comparison.as_ref().map(|(_, c)| c)
+    }
+
+    /// The last export's outcome, shown in the menu bar.
+    #[must_use]
+    pub fn status(&self) -> Option<&str> {
+        self.status.as_deref()
+    }
+
+    /// Runs the jobs queued by a [`WorkerMode::Manual`] worker; returns how many ran.
+    pub fn run_worker_jobs(&mut self) -> usize {
+        self.worker.run_queued()
     }
 
     /// The identifier settings in force.

@@ -4,7 +4,7 @@
 use eframe::egui;
 
 use super::{App, Command, Tab};
-use crate::gui::view::{controls, errors, runs, spectra, timeseries};
+use crate::gui::view::{bode, compare, controls, discrepancy, errors, results, runs, spectra, timeseries};
 
 impl App {
     pub(super) fn draw(&mut self, ui: &mut egui::Ui) {
@@ -16,6 +16,12 @@ impl App {
                     if ui.button("Open…").clicked() {
                         commands.push(Command::OpenDialog);
                     }
+                    if ui.button("Export model JSON…").clicked() {
+                        commands.push(Command::ExportModel(None));
+                    }
+                    if ui.button("Export view as PNG…").clicked() {
+                        commands.push(Command::ExportPng(None));
+                    }
                     if ui.button("Quit").clicked() {
                         ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                     }
@@ -23,6 +29,13 @@ impl App {
                 ui.separator();
                 ui.selectable_value(&mut view.tab, Tab::TimeSeries, "Time series");
                 ui.selectable_value(&mut view.tab, Tab::Spectra, "Spectra");
+                ui.selectable_value(&mut view.tab, Tab::Bode, "Bode");
+                ui.selectable_value(&mut view.tab, Tab::Diagnosis, "Missing effects");
+                ui.selectable_value(&mut view.tab, Tab::Compare, "Compare");
+                if let Some(status) = &self.status {
+                    ui.separator();
+                    ui.weak(status);
+                }
             });
         });
         if !self.errors.is_empty() {
@@ -37,7 +50,15 @@ impl App {
                 controls::show(ui, &self.prefs.settings, summary, &mut commands);
             });
         });
+        egui::Panel::right("results").default_size(360.0).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| results::show(ui, selected, &mut commands));
+        });
         egui::CentralPanel::default().show(ui, |ui| {
+            if view.tab == Tab::Compare {
+                let comparison = self.comparison.as_ref().map(|(_, c)| c.as_ref());
+                compare::show(ui, &self.runs, &self.compared, comparison, view, &mut commands);
+                return;
+            }
             let Some(run) = selected else {
                 ui.centered_and_justified(|ui| {
                     ui.label("open a stand run (File > Open, or drop a file here)")
@@ -50,6 +71,12 @@ impl App {
                     let texture = self.pair_texture.as_ref().map(|(_, t)| t);
                     spectra::show(ui, run, view, texture);
                 }
+                Tab::Bode => bode::show(ui, run, view),
+                Tab::Diagnosis => {
+                    egui::ScrollArea::vertical()
+                        .show(ui, |ui| discrepancy::show(ui, Some(run), &mut commands));
+                }
+                Tab::Compare => {}
             }
         });
         self.commands.extend(commands);

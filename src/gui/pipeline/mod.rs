@@ -8,17 +8,24 @@
 //! | load | the file | [`Event::Loaded`]: [`RunSummary`] + [`Measured`] |
 //! | observer + block inputs | the run (sidecar lever arm, `g`, angle noise) | [`Event::Motion`] |
 //! | spectra | block inputs + [`WelchSettings`](crate::spectral::WelchSettings) | [`Event::Spectra`] |
+//! | factorisation | the spectra (per block) | (inside the next) |
+//! | identification (Wiener + structural fit) | band, `A`, `Lambda`, order, blocks | [`Event::Identified`] |
 //!
 //! An [`JobKind::Analyse`] job carries the whole identifier [`Settings`]; each stage looks only at
-//! its own key, so a Welch change recomputes the spectra alone, and the stages that follow the
-//! spectra (factorisation, identifier, structural fit) key on band, `A`, `Lambda`, order and
-//! blocks without redoing them.
+//! its own key, so a Welch change recomputes the spectra and what follows, while a change of `A`,
+//! `Lambda` or the order redoes only `identify_block_from` (regularised Wiener + structural fit)
+//! from the cached [`crate::ident::spectra::BlockSpectra`] and factorisation. The spectra are
+//! computed once, by the identifier's own code, and the spectra tab reads the same snapshot.
 //!
 //! Jobs carry a generation (increasing over the app's life). The worker drains its queue before
 //! working and computes only the newest analysis per run; the app ignores results older than its
 //! newest request and keeps showing the last good one meanwhile. A panic inside a job is caught
 //! and reported as [`Event::Failed`]; the worker and the cached stages before it survive.
 
+mod analyse;
+mod diagnosis;
+mod display;
+mod identified;
 mod series;
 mod stages;
 mod worker;
@@ -27,12 +34,16 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+pub use display::{BlockSpectra, NativeCsd, Spectra, decibels};
+pub use identified::{BAND_FLOOR_DB, BAND_SIGMAS, BlockBode, BodeElement, Identification};
 pub use series::Series;
-pub use stages::{BlockSpectra, Measured, Motion, Spectra, decibels};
+pub use stages::{Measured, Motion};
 pub use worker::{Worker, WorkerMode};
 
 use crate::block::Block;
+use crate::diagnose::Report;
 use crate::ident::settings::Settings;
+use crate::sim::effect::Effect;
 
 /// Identifies a run inside one app session.
 pub type RunId = u64;
@@ -63,11 +74,21 @@ pub enum JobKind {
         /// The identifier settings; each stage uses its own part.
         settings: Box<Settings>,
     },
+    /// Find the missing effects of a loaded run (on request: it takes seconds).
+    Diagnose {
+        /// The identifier settings.
+        settings: Box<Settings>,
+        /// Effects the engineer rejected, never offered again.
+        rejected: Vec<(Block, Effect)>,
+    },
     /// Drop the run's cached stages.
     Forget,
-    /// Panics inside the worker (unit tests of the panic guard only).
-    #[cfg(test)]
-    PanicForTest,
+    /// Fault injection: panics inside the worker as a bug in `stage` would (tests of the panic
+    /// guard and of how the app shows it).
+    InjectPanic {
+        /// The stage the panic is reported in.
+        stage: Stage,
+    },
 }
 
 /// The pipeline stage a result or failure belongs to.
@@ -79,6 +100,12 @@ pub enum Stage {
     Motion,
     /// Welch spectral matrices.
     Spectra,
+    /// Spectral factorisation.
+    Factorisation,
+    /// Regularised Wiener estimate and structural fit.
+    Identify,
+    /// The missing-effect diagnosis.
+    Diagnose,
 }
 
 impl Stage {
@@ -89,6 +116,9 @@ impl Stage {
             Stage::Load => "load",
             Stage::Motion => "observer",
             Stage::Spectra => "spectra",
+            Stage::Factorisation => "factorisation",
+            Stage::Identify => "identification",
+            Stage::Diagnose => "diagnosis",
         }
     }
 }
@@ -110,6 +140,8 @@ pub struct RunSummary {
     pub duration_s: f64,
     /// Blocks present, gyro first.
     pub blocks: Vec<Block>,
+    /// SHA-256 of the file as stored (for the model's source).
+    pub sha256: String,
     /// Loader notices (missing sidecar, unknown columns, ...).
     pub notices: Vec<String>,
 }
@@ -152,6 +184,24 @@ pub enum Event {
         generation: u64,
         /// The result.
         spectra: Arc<Spectra>,
+    },
+    /// The identification (model, curves) ready.
+    Identified {
+        /// The run.
+        run: RunId,
+        /// The job's generation.
+        generation: u64,
+        /// The result.
+        identification: Arc<Identification>,
+    },
+    /// The missing-effect report ready.
+    Diagnosed {
+        /// The run.
+        run: RunId,
+        /// The job's generation.
+        generation: u64,
+        /// The report.
+        report: Arc<Report>,
     },
     /// A stage failed (error or caught panic); earlier results stay valid.
     Failed {

@@ -1,11 +1,14 @@
 //! The stages' results and how each is computed from the one before.
 
-use egui_plot::PlotPoint;
+use std::sync::Arc;
 
+use super::display::{self, Spectra};
 use super::{RunSummary, Series};
 use crate::block::Block;
+use crate::ident;
+use crate::ident::signals::{BlockSignals, channel_names};
 use crate::run::{Run, Sidecar};
-use crate::spectral::{SpectralError, SpectralMatrix, WelchPlanner, WelchSettings};
+use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
 use crate::stand::inputs::{accel_input, differentiate, gyro_input};
 use crate::stand::observer::{NoiseSource, ObserverError, ObserverSettings, observe};
 
@@ -59,40 +62,6 @@ impl Motion {
     }
 }
 
-/// Welch spectra of one block: inputs then outputs, six channels.
-#[derive(Debug)]
-pub struct BlockSpectra {
-    /// The block.
-    pub block: Block,
-    /// `[wx, wy, wz, gx, gy, gz]` or `[fx, fy, fz, ax, ay, az]`.
-    pub channels: [&'static str; 6],
-    /// One-sided CSD matrix, units^2/Hz.
-    pub matrix: SpectralMatrix,
-    /// Per channel, `(log10 f, log10 PSD)` for the bins above DC with positive power.
-    pub psd_log: Vec<Vec<PlotPoint>>,
-    /// Channel pairs `(i, j)`, `i < j`, in the order of the pair grids' rows.
-    pub pairs: Vec<(usize, usize)>,
-    /// `10 log10 |S_ij|` per pair row and bin (`[pair][bin]`), dB re 1 unit^2/Hz.
-    pub pair_magnitude_db: Vec<f32>,
-    /// Magnitude-squared coherence per pair row and bin, `[0, 1]`.
-    pub pair_coherence: Vec<f32>,
-}
-
-/// All blocks' spectra for one Welch setting.
-#[derive(Debug)]
-pub struct Spectra {
-    /// The settings they were computed with (the stage's cache key).
-    pub welch: WelchSettings,
-    /// Blocks present in the run, gyro first.
-    pub blocks: Vec<BlockSpectra>,
-}
-
-/// `10 log10 x`, with a floor for zero power.
-#[must_use]
-pub fn decibels(x: f64) -> f64 {
-    10.0 * x.max(1e-300).log10()
-}
-
 /// Splits a loaded run into its summary and its plotted columns (moved, not copied).
 #[must_use]
 pub fn split_run(run: Run) -> (RunSummary, Measured, Sidecar) {
@@ -106,6 +75,7 @@ pub fn split_run(run: Run) -> (RunSummary, Measured, Sidecar) {
         sample_rate_hz: run.sample_rate_hz,
         duration_s: run.duration_s(),
         blocks: run.blocks(),
+        sha256: run.source.sha256.clone(),
         notices: run.notices.clone(),
     };
     let triple = |names: [&str; 3], cols: [Vec<f64>; 3]| {
@@ -163,7 +133,8 @@ pub fn motion(measured: &Measured, sample_rate_hz: f64, sidecar: &Sidecar) -> Re
     })
 }
 
-/// Welch spectra of every block present: inputs from the observer, outputs as measured.
+/// The identifier's Welch spectra of every block present (inputs from the observer, outputs as
+/// measured), with what the spectra tab draws.
 ///
 /// # Errors
 /// What Welch refuses (segment longer than the run, bad overlap, ...).
@@ -179,57 +150,21 @@ pub fn spectra(
         let Some(outputs) = measured.outputs(block) else {
             continue;
         };
-        let inputs = motion.inputs(block);
-        let channels: Vec<&[f64]> = inputs
-            .iter()
-            .chain(outputs)
-            .map(|s| s.values.as_slice())
-            .collect();
-        let matrix = planner.welch_matrix(&channels, sample_rate_hz, welch)?;
-        let names = match block {
-            Block::Gyro => ["wx", "wy", "wz", "gx", "gy", "gz"],
-            Block::Accel => ["fx", "fy", "fz", "ax", "ay", "az"],
+        let column = |s: &Series| s.values.clone();
+        let signals = BlockSignals {
+            block,
+            input: motion.inputs(block).each_ref().map(column),
+            output: outputs.each_ref().map(column),
         };
-        blocks.push(block_spectra(block, names, matrix));
+        let core = ident::spectra::block_spectra(planner, &signals, sample_rate_hz, welch)?;
+        let (inputs, outputs) = channel_names(block);
+        let names = [
+            inputs[0], inputs[1], inputs[2], outputs[0], outputs[1], outputs[2],
+        ];
+        blocks.push(display::block_spectra(block, names, Arc::new(core)));
     }
     Ok(Spectra {
         welch: *welch,
         blocks,
     })
-}
-
-fn block_spectra(block: Block, channels: [&'static str; 6], matrix: SpectralMatrix) -> BlockSpectra {
-    let psd_log = (0..channels.len())
-        .map(|i| {
-            matrix
-                .psd(i)
-                .iter()
-                .zip(&matrix.frequency_hz)
-                .skip(1)
-                .filter(|&(&p, _)| p > 0.0)
-                .map(|(&p, &f)| PlotPoint::new(f.log10(), p.log10()))
-                .collect()
-        })
-        .collect();
-    let pairs: Vec<(usize, usize)> = (0..channels.len())
-        .flat_map(|i| (i + 1..channels.len()).map(move |j| (i, j)))
-        .collect();
-    let mut pair_magnitude_db = Vec::with_capacity(pairs.len() * matrix.n_bins());
-    let mut pair_coherence = Vec::with_capacity(pairs.len() * matrix.n_bins());
-    for &(i, j) in &pairs {
-        for f in 0..matrix.n_bins() {
-            let s = matrix.get(f, i, j).map_or(0.0, num_complex::Complex::norm);
-            pair_magnitude_db.push(decibels(s) as f32);
-        }
-        pair_coherence.extend(matrix.coherence(i, j).iter().map(|&c| c as f32));
-    }
-    BlockSpectra {
-        block,
-        channels,
-        matrix,
-        psd_log,
-        pairs,
-        pair_magnitude_db,
-        pair_coherence,
-    }
 }

@@ -8,10 +8,11 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 
-use super::stages::{self, Measured, Motion, Spectra};
-use super::{Event, Job, JobKind, RunId, RunSummary, Stage};
+use super::analyse::{Analysis, RunCache};
+use super::stages;
+use super::{Event, Job, JobKind, RunId, Stage};
 use crate::ident::settings::Settings;
-use crate::run::{LoadError, LoadOptions, Sidecar, load_with_progress};
+use crate::run::{LoadError, LoadOptions, load_with_progress};
 use crate::spectral::WelchPlanner;
 
 /// Called after every event so the UI wakes up (egui's `request_repaint`).
@@ -24,78 +25,85 @@ pub enum WorkerMode {
     Thread,
     /// Inside [`Worker::submit`], before it returns (tests: deterministic, no repaint loop).
     Synchronous,
+    /// Queued until [`Worker::run_queued`] (tests that act while a job is pending, e.g. cancel
+    /// a load from the UI).
+    Manual,
 }
 
 /// Sends jobs and receives events.
 pub struct Worker {
     jobs: Option<Sender<Job>>,
     inline: Option<Box<Pipeline>>,
+    queued: Option<Vec<Job>>,
     /// Events from the worker, drained by the app's `logic`.
     pub events: Receiver<Event>,
 }
 
 impl Worker {
-    /// Starts the worker. If the thread cannot be spawned, falls back to synchronous mode.
+    /// Starts the worker with the default load options.
     #[must_use]
     pub fn start(mode: WorkerMode, waker: Waker) -> Self {
+        Self::start_with(mode, waker, LoadOptions::default())
+    }
+
+    /// Starts the worker; runs load with `load` (memory limit, chunk size). If the thread cannot
+    /// be spawned, falls back to synchronous mode.
+    #[must_use]
+    pub fn start_with(mode: WorkerMode, waker: Waker, load: LoadOptions) -> Self {
         let (event_tx, events) = channel();
-        let pipeline = Pipeline {
-            runs: HashMap::new(),
-            planner: WelchPlanner::new(),
-            events: event_tx,
-            waker,
-        };
-        if mode == WorkerMode::Thread {
-            let (job_tx, job_rx) = channel::<Job>();
-            let spare = pipeline.events.clone();
-            let spawned = std::thread::Builder::new()
-                .name("imu-attest-worker".into())
-                .spawn(move || pipeline.serve(&job_rx));
-            if spawned.is_ok() {
-                return Self {
-                    jobs: Some(job_tx),
-                    inline: None,
-                    events,
-                };
-            }
-            // Spawning failed: the closure (and the pipeline) is gone; run inline instead.
-            let pipeline = Pipeline {
-                runs: HashMap::new(),
-                planner: WelchPlanner::new(),
-                events: spare,
-                waker: Arc::new(|| {}),
-            };
-            return Self {
-                jobs: None,
-                inline: Some(Box::new(pipeline)),
-                events,
-            };
-        }
-        Self {
+        let inline = |events, pipeline, queued| Self {
             jobs: None,
             inline: Some(Box::new(pipeline)),
+            queued,
             events,
+        };
+        match mode {
+            WorkerMode::Thread => {
+                let (job_tx, job_rx) = channel::<Job>();
+                let spare = event_tx.clone();
+                let pipeline = Pipeline::new(event_tx, waker, load.clone());
+                let spawned = std::thread::Builder::new()
+                    .name("imu-attest-worker".into())
+                    .spawn(move || pipeline.serve(&job_rx));
+                if spawned.is_ok() {
+                    return Self {
+                        jobs: Some(job_tx),
+                        inline: None,
+                        queued: None,
+                        events,
+                    };
+                }
+                // Spawning failed: the closure (and the pipeline) is gone; run inline instead.
+                inline(events, Pipeline::new(spare, Arc::new(|| {}), load), None)
+            }
+            WorkerMode::Synchronous => inline(events, Pipeline::new(event_tx, waker, load), None),
+            WorkerMode::Manual => inline(events, Pipeline::new(event_tx, waker, load), Some(Vec::new())),
         }
     }
 
     /// Queues a job (or runs it now in synchronous mode).
     pub fn submit(&mut self, job: Job) {
-        if let Some(pipeline) = self.inline.as_mut() {
+        if let Some(queued) = self.queued.as_mut() {
+            queued.push(job);
+        } else if let Some(pipeline) = self.inline.as_mut() {
             pipeline.run_caught(job);
         } else if let Some(jobs) = &self.jobs {
             // A send fails only if the worker thread is gone; its panic was already reported.
             let _ = jobs.send(job);
         }
     }
-}
 
-/// A loaded run's cached stages.
-struct RunCache {
-    summary: Arc<RunSummary>,
-    sidecar: Sidecar,
-    measured: Arc<Measured>,
-    motion: Option<Arc<Motion>>,
-    spectra: Option<Arc<Spectra>>,
+    /// Runs the jobs queued in [`WorkerMode::Manual`]; returns how many ran.
+    pub fn run_queued(&mut self) -> usize {
+        let jobs = self.queued.as_mut().map(std::mem::take).unwrap_or_default();
+        let n = jobs.len();
+        if let Some(pipeline) = self.inline.as_mut() {
+            for job in jobs {
+                pipeline.run_caught(job);
+            }
+        }
+        n
+    }
 }
 
 /// The stage caches and the reusable FFT planner.
@@ -104,6 +112,19 @@ struct Pipeline {
     planner: WelchPlanner,
     events: Sender<Event>,
     waker: Waker,
+    load: LoadOptions,
+}
+
+impl Pipeline {
+    fn new(events: Sender<Event>, waker: Waker, load: LoadOptions) -> Self {
+        Self {
+            runs: HashMap::new(),
+            planner: WelchPlanner::new(),
+            events,
+            waker,
+            load,
+        }
+    }
 }
 
 impl Pipeline {
@@ -148,11 +169,32 @@ impl Pipeline {
         match job.kind {
             JobKind::Load { path, cancel } => self.load(run, generation, &path, &cancel),
             JobKind::Analyse { settings } => self.analyse(run, generation, &settings, stage),
+            JobKind::Diagnose { settings, rejected } => {
+                *stage = Stage::Diagnose;
+                let Some(cache) = self.runs.get(&run) else { return };
+                let event = match super::diagnosis::diagnose(cache, &settings, &rejected) {
+                    Ok(report) => Event::Diagnosed {
+                        run,
+                        generation,
+                        report: Arc::new(report),
+                    },
+                    Err(message) => Event::Failed {
+                        run,
+                        generation,
+                        stage: Stage::Diagnose,
+                        message,
+                        cancelled: false,
+                    },
+                };
+                self.send(event);
+            }
             JobKind::Forget => {
                 self.runs.remove(&run);
             }
-            #[cfg(test)]
-            JobKind::PanicForTest => panic!("deliberate test panic"),
+            JobKind::InjectPanic { stage: at } => {
+                *stage = at;
+                panic!("deliberate fault injected in the {} stage", at.name());
+            }
         }
     }
 
@@ -168,20 +210,12 @@ impl Pipeline {
             });
             ControlFlow::Continue(())
         };
-        match load_with_progress(path, &LoadOptions::default(), &mut progress) {
+        match load_with_progress(path, &self.load.clone(), &mut progress) {
             Ok(loaded) => {
                 let (summary, measured, sidecar) = stages::split_run(loaded);
                 let (summary, measured) = (Arc::new(summary), Arc::new(measured));
-                self.runs.insert(
-                    run,
-                    RunCache {
-                        summary: summary.clone(),
-                        sidecar,
-                        measured: measured.clone(),
-                        motion: None,
-                        spectra: None,
-                    },
-                );
+                self.runs
+                    .insert(run, RunCache::new(summary.clone(), sidecar, measured.clone()));
                 self.send(Event::Loaded {
                     run,
                     generation,
@@ -205,6 +239,7 @@ impl Pipeline {
             planner,
             events,
             waker,
+            ..
         } = self;
         let send = |event: Event| {
             // The app is gone when this fails; nothing left to tell.
@@ -212,67 +247,12 @@ impl Pipeline {
             waker();
         };
         let Some(cache) = runs.get_mut(&run) else { return };
-        let fs = cache.summary.sample_rate_hz;
-        *stage = Stage::Motion;
-        let motion = if let Some(m) = &cache.motion {
-            m.clone()
-        } else {
-            match stages::motion(&cache.measured, fs, &cache.sidecar) {
-                Ok(m) => {
-                    let m = Arc::new(m);
-                    cache.motion = Some(m.clone());
-                    send(Event::Motion {
-                        run,
-                        generation,
-                        motion: m.clone(),
-                    });
-                    m
-                }
-                Err(e) => {
-                    let message = e.to_string();
-                    send(Event::Failed {
-                        run,
-                        generation,
-                        stage: Stage::Motion,
-                        message,
-                        cancelled: false,
-                    });
-                    return;
-                }
-            }
-        };
-        *stage = Stage::Spectra;
-        let cached = cache
-            .spectra
-            .as_ref()
-            .filter(|s| s.welch == settings.welch)
-            .cloned();
-        let spectra = match cached {
-            Some(s) => Ok(s),
-            None => stages::spectra(planner, &cache.measured, &motion, fs, &settings.welch).map(Arc::new),
-        };
-        match spectra {
-            Ok(spectra) => {
-                cache.spectra = Some(spectra.clone());
-                send(Event::Spectra {
-                    run,
-                    generation,
-                    spectra,
-                });
-            }
-            Err(e) => {
-                let message = e.to_string();
-                send(Event::Failed {
-                    run,
-                    generation,
-                    stage: Stage::Spectra,
-                    message,
-                    cancelled: false,
-                });
-            }
+        Analysis {
+            run,
+            generation,
+            send: &send,
         }
-        // The identification stages (factorisation -> identifier -> structural fit) follow here,
-        // keyed on `settings` minus `welch`, reusing `cache.spectra`.
+        .analyse(cache, planner, settings, stage);
     }
 }
 
@@ -327,7 +307,7 @@ mod tests {
         worker.submit(Job {
             run: 1,
             generation: 1,
-            kind: JobKind::PanicForTest,
+            kind: JobKind::InjectPanic { stage: Stage::Load },
         });
         let events: Vec<Event> = worker.events.try_iter().collect();
         let [
@@ -343,7 +323,7 @@ mod tests {
             panic!("{events:?}");
         };
         assert!(
-            message.contains("panic") && message.contains("deliberate test panic"),
+            message.contains("panic") && message.contains("deliberate fault injected"),
             "{message}"
         );
         // Still serving: a job after the panic runs.
@@ -355,7 +335,7 @@ mod tests {
         worker.submit(Job {
             run: 1,
             generation: 3,
-            kind: JobKind::PanicForTest,
+            kind: JobKind::InjectPanic { stage: Stage::Load },
         });
         assert_eq!(worker.events.try_iter().count(), 1);
     }

@@ -22,7 +22,7 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
     let mut s = settings.clone();
     ui.heading("Identifier settings");
     ui.weak(
-        "Welch settings drive the spectra now; band, A, Λ, order and blocks are kept for the identifier.",
+        "A, Λ and order changes redo only the Wiener and structural fit; Welch changes redo the spectra.",
     );
     welch(ui, &mut s);
     ui.separator();

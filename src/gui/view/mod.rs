@@ -1,9 +1,13 @@
 //! Widgets: each draws from borrowed state and pushes [`Command`](crate::gui::app::Command)s.
 
+pub mod bode;
 pub mod colormap;
+pub mod compare;
 pub mod controls;
+pub mod discrepancy;
 pub mod errors;
 pub mod heatmap;
+pub mod results;
 pub mod runs;
 pub mod spectra;
 pub mod timeseries;

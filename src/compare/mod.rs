@@ -1,0 +1,199 @@
+//! Comparing identified models of several runs (regimes) of the same unit: K and tau side by side,
+//! their pairwise differences, and whether each difference is significant
+//! (`|diff| > SIGNIFICANCE_SIGMAS * sqrt(std_a^2 + std_b^2)`). Written by `imu-attest compare`
+//! (schema [`COMPARISON_SCHEMA`]) and shown by the app's Compare tab.
+//!
+//! Units: K dimensionless, tau in s, as in the model file. A standard deviation the data cannot
+//! determine is `None` (`null` in JSON); a difference involving one is not judged (`significant`
+//! is `None`). Non-finite inputs propagate to `None` standard deviations and are never flagged.
+//! Blocks are compared only where both runs have them.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::ident::settings::Settings;
+use crate::model::{BlockModel, Model, Source};
+
+/// The schema id of the comparison file.
+pub const COMPARISON_SCHEMA: &str = "imu-attest/comparison/1";
+
+/// How many combined standard deviations make a difference significant.
+pub const SIGNIFICANCE_SIGMAS: f64 = 3.0;
+
+/// A comparison file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Comparison {
+    /// Always [`COMPARISON_SCHEMA`].
+    pub schema: String,
+    /// The identifier settings (those of the first run's model).
+    pub settings: Settings,
+    /// The significance threshold, in combined standard deviations.
+    pub significance_sigmas: f64,
+    /// Each run, in the order given.
+    pub runs: Vec<ComparedRun>,
+    /// Every pair of runs `a < b`, per block both have.
+    pub differences: Vec<Difference>,
+}
+
+/// One run's figures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ComparedRun {
+    /// Where the model came from.
+    pub source: Source,
+    /// Per block (`"gyro"`, `"accel"`).
+    pub blocks: BTreeMap<String, BlockFigures>,
+}
+
+/// A block's static gain and delay with their standard deviations.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BlockFigures {
+    /// Static gain.
+    #[serde(rename = "K")]
+    pub k: [[f64; 3]; 3],
+    /// Its standard deviation.
+    #[serde(rename = "K_std")]
+    pub k_std: [[Option<f64>; 3]; 3],
+    /// Delay, s.
+    pub tau_s: f64,
+    /// Its standard deviation, s.
+    pub tau_std_s: Option<f64>,
+    /// Structural order.
+    pub order: usize,
+}
+
+impl BlockFigures {
+    fn from_model(b: &BlockModel) -> Self {
+        Self {
+            k: b.k,
+            k_std: b.fit.k_std,
+            tau_s: b.tau_s,
+            tau_std_s: b.fit.tau_std_s,
+            order: b.order,
+        }
+    }
+}
+
+/// One figure's difference `b - a` between two runs.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Delta {
+    /// `b - a`.
+    pub diff: f64,
+    /// `sqrt(std_a^2 + std_b^2)`, when both are known.
+    pub std: Option<f64>,
+    /// `|diff| > SIGNIFICANCE_SIGMAS * std`; `None` when `std` is unknown.
+    pub significant: Option<bool>,
+}
+
+impl Delta {
+    /// The difference of `b - a` with standard deviations `sa`, `sb`.
+    #[must_use]
+    pub fn new(a: f64, sa: Option<f64>, b: f64, sb: Option<f64>) -> Self {
+        let diff = b - a;
+        let std = match (sa, sb) {
+            (Some(x), Some(y)) => Some(x.hypot(y)).filter(|s| s.is_finite()),
+            _ => None,
+        };
+        let significant = std
+            .filter(|_| diff.is_finite())
+            .map(|s| diff.abs() > SIGNIFICANCE_SIGMAS * s);
+        Self {
+            diff: if diff.is_finite() { diff } else { 0.0 },
+            std,
+            significant: if diff.is_finite() { significant } else { None },
+        }
+    }
+}
+
+/// Differences between two runs for one block.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Difference {
+    /// The block.
+    pub block: String,
+    /// Indices into [`Comparison::runs`], `a < b`.
+    pub runs: [usize; 2],
+    /// Their regimes.
+    pub regimes: [String; 2],
+    /// Per element of K.
+    #[serde(rename = "K")]
+    pub k: [[Delta; 3]; 3],
+    /// Of tau, s.
+    pub tau_s: Delta,
+    /// Any element of K or tau significantly different.
+    pub significant: bool,
+}
+
+/// Why a comparison cannot be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CompareError {
+    /// Fewer than two models.
+    #[error("a comparison needs at least two runs, got {0}")]
+    TooFewRuns(usize),
+}
+
+/// Compares `models` (at least two), pairwise in the order given.
+///
+/// # Errors
+/// [`CompareError::TooFewRuns`] for fewer than two models.
+pub fn compare(models: &[Model]) -> Result<Comparison, CompareError> {
+    let [first, _, ..] = models else {
+        return Err(CompareError::TooFewRuns(models.len()));
+    };
+    let runs: Vec<ComparedRun> = models
+        .iter()
+        .map(|m| ComparedRun {
+            source: m.source.clone(),
+            blocks: m
+                .blocks
+                .iter()
+                .map(|(name, b)| (name.clone(), BlockFigures::from_model(b)))
+                .collect(),
+        })
+        .collect();
+    let mut differences = Vec::new();
+    for a in 0..runs.len() {
+        for b in a + 1..runs.len() {
+            for (name, fa) in &runs[a].blocks {
+                if let Some(fb) = runs[b].blocks.get(name) {
+                    differences.push(difference(name, [a, b], &runs, fa, fb));
+                }
+            }
+        }
+    }
+    Ok(Comparison {
+        schema: COMPARISON_SCHEMA.to_owned(),
+        settings: first.settings.clone(),
+        significance_sigmas: SIGNIFICANCE_SIGMAS,
+        runs,
+        differences,
+    })
+}
+
+fn difference(
+    block: &str,
+    [a, b]: [usize; 2],
+    runs: &[ComparedRun],
+    fa: &BlockFigures,
+    fb: &BlockFigures,
+) -> Difference {
+    let k: [[Delta; 3]; 3] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| Delta::new(fa.k[i][j], fa.k_std[i][j], fb.k[i][j], fb.k_std[i][j]))
+    });
+    let tau_s = Delta::new(fa.tau_s, fa.tau_std_s, fb.tau_s, fb.tau_std_s);
+    let significant = k
+        .iter()
+        .flatten()
+        .chain([&tau_s])
+        .any(|d| d.significant == Some(true));
+    Difference {
+        block: block.to_owned(),
+        runs: [a, b],
+        regimes: [runs[a].source.regime.clone(), runs[b].source.regime.clone()],
+        k,
+        tau_s,
+        significant,
+    }
+}
+
+#[cfg(test)]
+mod tests;

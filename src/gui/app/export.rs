@@ -1,0 +1,138 @@
+//! Exports: the selected run's model JSON (contract section 4) and the current view as PNG, both
+//! written atomically and never over an input; failures go to the error panel.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
+
+use eframe::egui::{self, ColorImage};
+
+use super::App;
+use crate::output::{OutputError, ensure_not_input, write_atomic};
+use crate::run::sidecar_path;
+
+/// Screenshot requests and the images egui hands back.
+pub(super) struct Screenshots {
+    /// Where the next screenshot goes (set by the command, sent to egui in `logic`).
+    pub pending: Option<PathBuf>,
+    tx: Sender<(PathBuf, Arc<ColorImage>)>,
+    rx: Receiver<(PathBuf, Arc<ColorImage>)>,
+}
+
+impl Default for Screenshots {
+    fn default() -> Self {
+        let (tx, rx) = channel();
+        Self {
+            pending: None,
+            tx,
+            rx,
+        }
+    }
+}
+
+/// Writes `image` as an 8-bit RGBA PNG, atomically.
+///
+/// # Errors
+/// [`OutputError`] when the file cannot be written (nothing is left under `path`).
+pub fn write_png(path: &Path, image: &ColorImage) -> Result<(), OutputError> {
+    write_atomic(path, |w| {
+        let [width, height] = image.size;
+        let mut encoder = png::Encoder::new(&mut *w, width as u32, height as u32);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+        writer
+            .write_image_data(image.as_raw())
+            .map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)?;
+        w.flush()
+    })
+}
+
+impl App {
+    pub(super) fn save_dialog(&self, what: &str, extension: &str, suffix: &str) -> Option<PathBuf> {
+        let stem = self
+            .selected()
+            .and_then(|r| r.summary.as_ref())
+            .map_or_else(|| "imu-attest".to_owned(), |s| crate::run::run_stem(&s.path));
+        rfd::FileDialog::new()
+            .set_title(format!("Save {what}"))
+            .add_filter(what, &[extension])
+            .set_file_name(format!("{stem}{suffix}"))
+            .save_file()
+    }
+
+    /// Writes the selected run's model to `path`.
+    pub(super) fn export_model(&mut self, path: &Path) {
+        let outcome = self.try_export_model(path);
+        match outcome {
+            Ok(()) => self.status = Some(format!("model written to {}", path.display())),
+            Err(e) => self.errors.push(format!("export: {e}")),
+        }
+    }
+
+    fn try_export_model(&self, path: &Path) -> Result<(), String> {
+        let run = self.selected().ok_or("no run selected")?;
+        let id = run
+            .identification
+            .as_ref()
+            .ok_or_else(|| format!("{} is not identified yet", run.name()))?;
+        let inputs: Vec<PathBuf> = self
+            .runs
+            .iter()
+            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
+            .collect();
+        ensure_not_input(path, &inputs).map_err(|e| e.to_string())?;
+        id.model
+            .check_finite()
+            .map_err(|e| format!("model not written: {e}"))?;
+        write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &id.model).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        })
+        .map_err(|e| e.to_string())
+    }
+
+    /// Sends a pending screenshot request to egui and writes the images it has returned.
+    pub(super) fn screenshot_pass(&mut self, ctx: &egui::Context) {
+        if let Some(path) = self.screenshots.pending.take() {
+            let tx = self.screenshots.tx.clone();
+            let waker = ctx.clone();
+            ctx.request_screenshot(move |image| {
+                // The app is gone when this fails; nothing left to save.
+                let _ = tx.send((path, image));
+                waker.request_repaint();
+            });
+        }
+        while let Ok((path, image)) = self.screenshots.rx.try_recv() {
+            let inputs: Vec<PathBuf> = self.runs.iter().map(|r| r.path.clone()).collect();
+            match ensure_not_input(&path, &inputs).and_then(|()| write_png(&path, &image)) {
+                Ok(()) => self.status = Some(format!("view written to {}", path.display())),
+                Err(e) => self.errors.push(format!("export: {e}")),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::write_png;
+    use eframe::egui::{Color32, ColorImage};
+
+    #[test]
+    fn a_png_reads_back_with_its_size_and_pixels() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("view.png");
+        let mut image = ColorImage::new([3, 2], vec![Color32::BLACK; 6]);
+        image[(2, 1)] = Color32::from_rgb(200, 10, 30);
+        write_png(&path, &image).expect("written");
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).expect("open")));
+        let mut reader = decoder.read_info().expect("a PNG");
+        let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+        let info = reader.next_frame(&mut buf).expect("frame");
+        assert_eq!((info.width, info.height), (3, 2));
+        let last = &buf[(5 * 4)..(6 * 4)];
+        assert_eq!(last, [200, 10, 30, 255]);
+    }
+}

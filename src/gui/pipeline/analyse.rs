@@ -1,0 +1,170 @@
+//! The analysis of one loaded run, stage by stage, each cached with the key it depends on:
+//! observer (the run), spectra (Welch settings), factorisation (the spectra, per block), and the
+//! identification (`identify_block_from`: band, A, Lambda, order, blocks) — so a change of A,
+//! Lambda or the order redoes only the Wiener and structural fit.
+
+use std::sync::Arc;
+
+use super::display::Spectra;
+use super::identified::Identification;
+use super::stages::{self, Measured, Motion};
+use super::{Event, RunId, RunSummary, Stage};
+use crate::block::Block;
+use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise};
+use crate::ident::identify::identify_block_from;
+use crate::ident::settings::Settings;
+use crate::run::Sidecar;
+use crate::spectral::WelchPlanner;
+
+/// A loaded run's cached stages.
+pub(super) struct RunCache {
+    pub summary: Arc<RunSummary>,
+    pub sidecar: Sidecar,
+    pub measured: Arc<Measured>,
+    pub motion: Option<Arc<Motion>>,
+    pub spectra: Option<Arc<Spectra>>,
+    /// Factorisations of `spectra`'s blocks.
+    pub factorisations: Vec<(Block, Arc<Factorisation>)>,
+    pub identification: Option<Arc<Identification>>,
+}
+
+impl RunCache {
+    pub fn new(summary: Arc<RunSummary>, sidecar: Sidecar, measured: Arc<Measured>) -> Self {
+        Self {
+            summary,
+            sidecar,
+            measured,
+            motion: None,
+            spectra: None,
+            factorisations: Vec::new(),
+            identification: None,
+        }
+    }
+}
+
+/// One analysis job's context.
+pub(super) struct Analysis<'a> {
+    pub run: RunId,
+    pub generation: u64,
+    pub send: &'a dyn Fn(Event),
+}
+
+impl Analysis<'_> {
+    fn fail(&self, stage: Stage, message: String) {
+        (self.send)(Event::Failed {
+            run: self.run,
+            generation: self.generation,
+            stage,
+            message,
+            cancelled: false,
+        });
+    }
+
+    /// Brings every stage of `cache` up to date with `settings`, sending each new result.
+    pub fn analyse(
+        &self,
+        cache: &mut RunCache,
+        planner: &mut WelchPlanner,
+        settings: &Settings,
+        stage: &mut Stage,
+    ) {
+        let (run, generation) = (self.run, self.generation);
+        let fs = cache.summary.sample_rate_hz;
+        *stage = Stage::Motion;
+        let motion = if let Some(m) = &cache.motion {
+            m.clone()
+        } else {
+            match stages::motion(&cache.measured, fs, &cache.sidecar) {
+                Ok(m) => {
+                    let m = Arc::new(m);
+                    cache.motion = Some(m.clone());
+                    (self.send)(Event::Motion {
+                        run,
+                        generation,
+                        motion: m.clone(),
+                    });
+                    m
+                }
+                Err(e) => return self.fail(Stage::Motion, e.to_string()),
+            }
+        };
+        *stage = Stage::Spectra;
+        let cached = cache
+            .spectra
+            .as_ref()
+            .filter(|s| s.welch == settings.welch)
+            .cloned();
+        let spectra = if let Some(s) = cached {
+            s
+        } else {
+            match stages::spectra(planner, &cache.measured, &motion, fs, &settings.welch) {
+                Ok(s) => {
+                    let s = Arc::new(s);
+                    cache.spectra = Some(s.clone());
+                    cache.factorisations.clear();
+                    cache.identification = None;
+                    s
+                }
+                Err(e) => return self.fail(Stage::Spectra, e.to_string()),
+            }
+        };
+        (self.send)(Event::Spectra {
+            run,
+            generation,
+            spectra: spectra.clone(),
+        });
+        *stage = Stage::Identify;
+        let summary = &cache.summary;
+        if let Err(e) = settings.validate(summary.n_samples, fs, &summary.blocks) {
+            return self.fail(Stage::Identify, e.to_string());
+        }
+        let settings = Settings {
+            blocks: settings.blocks_for(&summary.blocks),
+            ..settings.clone()
+        };
+        if let Some(id) = cache.identification.as_ref().filter(|i| i.settings == settings) {
+            return (self.send)(Event::Identified {
+                run,
+                generation,
+                identification: id.clone(),
+            });
+        }
+        let mut blocks = Vec::new();
+        for &block in &settings.blocks {
+            let Some(core) = spectra
+                .blocks
+                .iter()
+                .find(|b| b.block == block)
+                .map(|b| &b.matrix.core)
+            else {
+                return self.fail(Stage::Identify, format!("the run has no {} block", block.name()));
+            };
+            *stage = Stage::Factorisation;
+            let known = cache.factorisations.iter().find(|(b, _)| *b == block);
+            let factorisation = if let Some((_, f)) = known {
+                f.clone()
+            } else {
+                match factorise(core, &FactorisationSettings::default()) {
+                    Ok(f) => {
+                        let f = Arc::new(f);
+                        cache.factorisations.push((block, f.clone()));
+                        f
+                    }
+                    Err(e) => return self.fail(Stage::Factorisation, format!("{}: {e}", block.name())),
+                }
+            };
+            *stage = Stage::Identify;
+            match identify_block_from(block, core.clone(), factorisation, &settings) {
+                Ok(b) => blocks.push(b),
+                Err(e) => return self.fail(Stage::Identify, format!("{}: {e}", block.name())),
+            }
+        }
+        let identification = Arc::new(Identification::new(summary, settings, blocks));
+        cache.identification = Some(identification.clone());
+        (self.send)(Event::Identified {
+            run,
+            generation,
+            identification,
+        });
+    }
+}

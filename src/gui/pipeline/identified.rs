@@ -1,0 +1,215 @@
+//! The identification stage's snapshot for the UI: the core's per-block results, the model file
+//! they make (what Export writes), and the Bode, coherence and disturbance curves precomputed so
+//! the plots only borrow them.
+//!
+//! Curves use `x = log10 f` (Hz). Confidence bands are `|W_u| ± 2 W_u_std` (about 95 %) in dB (the
+//! lower edge at most [`BAND_FLOOR_DB`] below the estimate, where the band contains zero), and
+//! `± asin(2 W_u_std / |W_u|)` in phase (± 180° where the band contains zero). Phases are shown
+//! wrapped to (-180°, 180°]: unwrapping the noisy phase of a weak cross-axis element would let
+//! it drift by whole turns.
+
+use std::collections::BTreeMap;
+
+use egui_plot::PlotPoint;
+use num_complex::Complex64;
+
+use super::RunSummary;
+use crate::block::Block;
+use crate::ident::identify::BlockIdentification;
+use crate::ident::settings::Settings;
+use crate::model::{BlockModel, MODEL_SCHEMA, Model, Source};
+
+/// Number of standard deviations of the confidence bands.
+pub const BAND_SIGMAS: f64 = 2.0;
+
+/// Deepest the lower edge of a magnitude band goes below the estimate, dB.
+pub const BAND_FLOOR_DB: f64 = 40.0;
+
+/// One element `W_u[i][j]` on a Bode plot.
+#[derive(Debug, Default)]
+pub struct BodeElement {
+    /// `log10 f` of the band bins.
+    pub log_f: Vec<f64>,
+    /// `20 log10 |W|`, dB.
+    pub magnitude_db: Vec<PlotPoint>,
+    /// Confidence band, dB (lower, upper).
+    pub magnitude_band_db: (Vec<f64>, Vec<f64>),
+    /// Phase, degrees, in (-180, 180].
+    pub phase_deg: Vec<PlotPoint>,
+    /// Confidence band, degrees (lower, upper).
+    pub phase_band_deg: (Vec<f64>, Vec<f64>),
+    /// The fitted structural model, dB.
+    pub model_magnitude_db: Vec<PlotPoint>,
+    /// The fitted structural model's phase, degrees.
+    pub model_phase_deg: Vec<PlotPoint>,
+}
+
+/// A block's curves.
+#[derive(Debug)]
+pub struct BlockBode {
+    /// The block.
+    pub block: Block,
+    /// Input names (columns).
+    pub inputs: [String; 3],
+    /// Output names (rows).
+    pub outputs: [String; 3],
+    /// `W_u` elements, row-major (`3 i + j`).
+    pub elements: Vec<BodeElement>,
+    /// Multiple coherence of each output with the three inputs, `(log10 f, coherence)`.
+    pub coherence: [Vec<PlotPoint>; 3],
+    /// `10 log10 |S_psi,ij|` per element, row-major, dB re 1 unit^2/Hz.
+    pub noise_psd_db: Vec<Vec<PlotPoint>>,
+}
+
+/// A run's identification under one set of settings.
+#[derive(Debug)]
+pub struct Identification {
+    /// The settings as used (blocks resolved).
+    pub settings: Settings,
+    /// The core's results, stage by stage.
+    pub blocks: Vec<BlockIdentification>,
+    /// The model file (contract section 4).
+    pub model: Model,
+    /// Curves, one entry per block of `blocks`.
+    pub bode: Vec<BlockBode>,
+}
+
+impl Identification {
+    /// Builds the snapshot from the core's results.
+    #[must_use]
+    pub fn new(summary: &RunSummary, settings: Settings, blocks: Vec<BlockIdentification>) -> Self {
+        let models: Vec<BlockModel> = blocks.iter().map(BlockModel::from_identification).collect();
+        let bode = blocks.iter().zip(&models).map(|(b, m)| bode(b, m)).collect();
+        let model = Model {
+            schema: MODEL_SCHEMA.to_owned(),
+            source: Source {
+                file: summary.file_name.clone(),
+                sha256: summary.sha256.clone(),
+                regime: summary.regime.clone(),
+                sample_rate_hz: summary.sample_rate_hz,
+            },
+            settings: settings.clone(),
+            blocks: blocks
+                .iter()
+                .zip(models)
+                .map(|(b, m)| (b.block.name().to_owned(), m))
+                .collect::<BTreeMap<_, _>>(),
+        };
+        Self {
+            settings,
+            blocks,
+            model,
+            bode,
+        }
+    }
+
+    /// The model of `block`, if identified.
+    #[must_use]
+    pub fn block_model(&self, block: Block) -> Option<&BlockModel> {
+        self.model.blocks.get(block.name())
+    }
+}
+
+fn db20(x: f64) -> f64 {
+    20.0 * x.max(1e-300).log10()
+}
+
+/// The magnitude band `(|w| - s, |w| + s)` in dB, the lower edge at most [`BAND_FLOOR_DB`] below
+/// `|w|`.
+fn band_db(w: f64, s: f64) -> (f64, f64) {
+    (db20(w - s).max(db20(w) - BAND_FLOOR_DB), db20(w + s))
+}
+
+fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeElement {
+    let log_f: Vec<f64> = m.frequency_hz.iter().map(|f| f.log10()).collect();
+    let w: Vec<Complex64> = (0..log_f.len())
+        .map(|k| Complex64::new(m.w_u.re[k][i][j], m.w_u.im[k][i][j]))
+        .collect();
+    let std: Vec<f64> = m.w_u_std.iter().map(|s| BAND_SIGMAS * s[i][j]).collect();
+    let fitted: Vec<Complex64> = m
+        .frequency_hz
+        .iter()
+        .map(|&f| b.structural.response(f)[(i, j)])
+        .collect();
+    let phase: Vec<f64> = w.iter().map(|z| z.arg().to_degrees()).collect();
+    let model_phase: Vec<f64> = fitted.iter().map(|z| z.arg().to_degrees()).collect();
+    let points = |ys: &[f64]| {
+        log_f
+            .iter()
+            .zip(ys)
+            .map(|(&x, &y)| PlotPoint::new(x, y))
+            .collect()
+    };
+    let mag: Vec<f64> = w.iter().map(|z| db20(z.norm())).collect();
+    let spread: Vec<f64> = w
+        .iter()
+        .zip(&std)
+        .map(|(z, s)| {
+            if *s < z.norm() {
+                (s / z.norm()).asin().to_degrees()
+            } else {
+                180.0
+            }
+        })
+        .collect();
+    BodeElement {
+        magnitude_db: points(&mag),
+        magnitude_band_db: w.iter().zip(&std).map(|(z, &s)| band_db(z.norm(), s)).unzip(),
+        phase_deg: points(&phase),
+        phase_band_deg: (
+            phase.iter().zip(&spread).map(|(p, s)| p - s).collect(),
+            phase.iter().zip(&spread).map(|(p, s)| p + s).collect(),
+        ),
+        model_magnitude_db: points(&fitted.iter().map(|z| db20(z.norm())).collect::<Vec<_>>()),
+        model_phase_deg: points(&model_phase),
+        log_f,
+    }
+}
+
+fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
+    let log_f: Vec<f64> = m.frequency_hz.iter().map(|f| f.log10()).collect();
+    let elements = (0..9).map(|e| element(m, b, e / 3, e % 3)).collect();
+    let coherence = std::array::from_fn(|i| {
+        log_f
+            .iter()
+            .zip(&m.coherence)
+            .map(|(&x, c)| PlotPoint::new(x, c[i]))
+            .collect()
+    });
+    let noise_psd_db = (0..9)
+        .map(|e| {
+            let (i, j) = (e / 3, e % 3);
+            (0..log_f.len())
+                .map(|k| {
+                    let z = Complex64::new(m.noise_psd.re[k][i][j], m.noise_psd.im[k][i][j]);
+                    PlotPoint::new(log_f[k], 10.0 * z.norm().max(1e-300).log10())
+                })
+                .collect()
+        })
+        .collect();
+    BlockBode {
+        block: b.block,
+        inputs: m.inputs.clone(),
+        outputs: m.outputs.clone(),
+        elements,
+        coherence,
+        noise_psd_db,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{BAND_FLOOR_DB, band_db};
+
+    #[test]
+    fn a_band_containing_zero_is_floored_below_the_estimate() {
+        // |W| = 1e-3 with 2 std = 2e-3: the lower edge would be -inf dB.
+        let (lower, upper) = band_db(1e-3, 2e-3);
+        assert!((lower - (-60.0 - BAND_FLOOR_DB)).abs() < 1e-9, "{lower}");
+        assert!((upper - 20.0 * 3e-3f64.log10()).abs() < 1e-9, "{upper}");
+        // A tight band keeps its own edges.
+        let (lower, upper) = band_db(1.0, 0.01);
+        assert!((lower - 20.0 * 0.99f64.log10()).abs() < 1e-12);
+        assert!((upper - 20.0 * 1.01f64.log10()).abs() < 1e-12);
+    }
+}

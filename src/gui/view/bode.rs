@@ -1,0 +1,207 @@
+//! The Bode tab: a 3x3 grid of `W_u` (magnitude in dB over phase in degrees, log frequency) with
+//! confidence bands and the fitted structural model, then the multiple coherence and the
+//! disturbance PSD matrix. The same grid overlays several runs on the Compare tab.
+
+use eframe::egui::{self, Color32, Id};
+use egui_plot::{FilledArea, GridMark, Legend, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi};
+
+use super::palette;
+use crate::gui::app::{RunEntry, ViewState};
+use crate::gui::pipeline::BlockBode;
+
+/// One run's curves on the grid.
+pub struct BodeEntry<'a> {
+    /// Legend name.
+    pub label: String,
+    /// The curves.
+    pub bode: &'a BlockBode,
+    /// Line colour.
+    pub colour: Color32,
+    /// Draw the confidence band and the fitted model.
+    pub details: bool,
+}
+
+/// Axis labels of a `log10 f` axis, in Hz.
+#[must_use]
+pub fn hz_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+    let v = 10f64.powf(mark.value);
+    if v >= 10.0 {
+        format!("{v:.0}")
+    } else if v >= 1.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+fn plot(id: impl egui::AsIdSalt, width: f32, height: f32, group: &str) -> Plot<'static> {
+    Plot::new(id)
+        .width(width)
+        .height(height)
+        .link_axis(Id::unique(group), [true, false])
+        .link_cursor(Id::unique(group), [true, false])
+        .x_axis_formatter(hz_label)
+        .allow_scroll(false)
+}
+
+/// Draws the 3x3 `W_u` grid for `entries` (all of the same block).
+pub fn grid(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], group: &str) {
+    let Some(first) = entries.first() else { return };
+    let width = ((ui.available_width() - 24.0) / 3.0).max(120.0);
+    let height = (width * 0.42).clamp(80.0, 170.0);
+    egui::Grid::new((group, "bode"))
+        .spacing([6.0, 6.0])
+        .show(ui, |ui| {
+            for i in 0..3 {
+                for j in 0..3 {
+                    ui.vertical(|ui| {
+                        ui.strong(format!("{} from {}", first.bode.outputs[i], first.bode.inputs[j]));
+                        cell(ui, entries, 3 * i + j, width, height, group);
+                    });
+                }
+                ui.end_row();
+            }
+        });
+}
+
+/// The curves of one quantity: the estimate, its band, the fitted model.
+#[derive(Clone, Copy)]
+struct Curves<'a> {
+    estimate: &'a [PlotPoint],
+    band: &'a (Vec<f64>, Vec<f64>),
+    model: &'a [PlotPoint],
+}
+
+fn draw<'a>(p: &mut PlotUi<'a>, entry: &BodeEntry<'_>, log_f: &'a [f64], c: Curves<'a>) {
+    if entry.details {
+        p.add(
+            FilledArea::new("±2σ", log_f, &c.band.0, &c.band.1).fill_color(entry.colour.gamma_multiply(0.25)),
+        );
+        p.line(
+            Line::new("fitted model", PlotPoints::Borrowed(c.model))
+                .color(Color32::WHITE)
+                .style(LineStyle::dashed_dense())
+                .width(1.2),
+        );
+    }
+    p.line(
+        Line::new(entry.label.clone(), PlotPoints::Borrowed(c.estimate))
+            .color(entry.colour)
+            .width(1.4),
+    );
+}
+
+fn cell(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], e: usize, width: f32, height: f32, group: &str) {
+    let mag = plot((group, "mag", e), width, height, group).y_axis_label("dB");
+    let mag = if e == 0 {
+        mag.legend(Legend::default())
+    } else {
+        mag
+    };
+    mag.show(ui, |p| {
+        for entry in entries {
+            let el = &entry.bode.elements[e];
+            let curves = Curves {
+                estimate: &el.magnitude_db,
+                band: &el.magnitude_band_db,
+                model: &el.model_magnitude_db,
+            };
+            draw(p, entry, &el.log_f, curves);
+        }
+    });
+    plot((group, "phase", e), width, height * 0.6, group)
+        .y_axis_label("deg")
+        .show(ui, |p| {
+            for entry in entries {
+                let el = &entry.bode.elements[e];
+                let curves = Curves {
+                    estimate: &el.phase_deg,
+                    band: &el.phase_band_deg,
+                    model: &el.model_phase_deg,
+                };
+                draw(p, entry, &el.log_f, curves);
+            }
+        });
+}
+
+/// Multiple coherence of each output, and the disturbance PSD matrix `|S_psi,ij|` in dB.
+pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
+    let width = ((ui.available_width() - 24.0) / 3.0).max(120.0);
+    ui.strong("multiple coherence of each output with the three inputs");
+    plot("coherence", 3.0 * width, 150.0, "bode")
+        .legend(Legend::default())
+        .include_y(0.0)
+        .include_y(1.0)
+        .show(ui, |p| {
+            for (i, points) in bode.coherence.iter().enumerate() {
+                p.line(
+                    Line::new(bode.outputs[i].clone(), PlotPoints::Borrowed(points))
+                        .color(palette(i + 3))
+                        .width(1.4),
+                );
+            }
+        });
+    ui.strong("disturbance PSD matrix |S_ψ,ij|, dB re 1 unit²/Hz");
+    egui::Grid::new("noise-psd").spacing([6.0, 6.0]).show(ui, |ui| {
+        for i in 0..3 {
+            for j in 0..3 {
+                ui.vertical(|ui| {
+                    ui.label(format!("{} × {}", bode.outputs[i], bode.outputs[j]));
+                    plot(("noise", i, j), width, 90.0, "bode").show(ui, |p| {
+                        p.line(
+                            Line::new("S_ψ", PlotPoints::Borrowed(&bode.noise_psd_db[3 * i + j]))
+                                .color(palette(3 + i.min(j)))
+                                .width(1.2),
+                        );
+                    });
+                });
+            }
+            ui.end_row();
+        }
+    });
+}
+
+/// The Bode tab for `run`.
+pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
+    let Some(id) = &run.identification else {
+        if let Some(e) = &run.analysis_error {
+            ui.colored_label(ui.visuals().error_fg_color, e);
+        } else {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("identifying…");
+            });
+        }
+        return;
+    };
+    ui.horizontal(|ui| {
+        for b in &id.bode {
+            ui.selectable_value(&mut view.bode_block, b.block, b.block.name());
+        }
+        ui.separator();
+        ui.label("W_u: estimate (colour), ±2σ band (shaded), fitted structural model (dashed)");
+        if run.busy() {
+            ui.spinner();
+            ui.label("recomputing…");
+        }
+    });
+    let Some(bode) = id
+        .bode
+        .iter()
+        .find(|b| b.block == view.bode_block)
+        .or(id.bode.first())
+    else {
+        return;
+    };
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        let entry = BodeEntry {
+            label: run.name(),
+            bode,
+            colour: palette(2),
+            details: true,
+        };
+        grid(ui, &[entry], "bode");
+        ui.separator();
+        coherence_and_noise(ui, bode);
+    });
+}

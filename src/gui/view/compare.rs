@@ -1,0 +1,134 @@
+//! The Compare tab: pick two or more runs; their K and tau side by side, the pairwise differences
+//! with their combined standard deviation (significant when `|diff| > 3 std`, marked), and their
+//! `W_u` overlaid on one Bode grid.
+
+use eframe::egui;
+
+use super::bode::{BodeEntry, grid};
+use super::palette;
+use crate::compare::{Comparison, Delta, SIGNIFICANCE_SIGMAS};
+use crate::gui::app::{Command, RunEntry, ViewState};
+use crate::gui::pipeline::RunId;
+
+/// The line counting a block's significant differences, e.g. `gyro: 2 significant differences`.
+#[must_use]
+pub fn significance_label(comparison: &Comparison, block: &str) -> String {
+    let n: usize = comparison
+        .differences
+        .iter()
+        .filter(|d| d.block == block)
+        .map(|d| {
+            d.k.iter()
+                .flatten()
+                .chain([&d.tau_s])
+                .filter(|x| x.significant == Some(true))
+                .count()
+        })
+        .sum();
+    format!("{block}: {n} significant differences")
+}
+
+fn delta_text(d: &Delta, scale: f64) -> String {
+    let mark = if d.significant == Some(true) { " *" } else { "" };
+    match d.std {
+        Some(s) => format!("{:+.4} ± {:.4}{mark}", d.diff * scale, s * scale),
+        None => format!("{:+.4}{mark}", d.diff * scale),
+    }
+}
+
+/// Draws the tab.
+pub fn show(
+    ui: &mut egui::Ui,
+    runs: &[RunEntry],
+    compared: &[RunId],
+    comparison: Option<&Comparison>,
+    view: &mut ViewState,
+    commands: &mut Vec<Command>,
+) {
+    ui.horizontal_wrapped(|ui| {
+        ui.strong("compare:");
+        for run in runs.iter().filter(|r| r.summary.is_some()) {
+            let mut on = compared.contains(&run.id);
+            if ui.checkbox(&mut on, format!("compare {}", run.name())).changed() {
+                commands.push(Command::ToggleCompare(run.id));
+            }
+        }
+    });
+    let Some(c) = comparison else {
+        ui.weak("choose two or more identified runs");
+        return;
+    };
+    let blocks: Vec<String> = c
+        .runs
+        .first()
+        .map(|r| r.blocks.keys().cloned().collect())
+        .unwrap_or_default();
+    ui.horizontal(|ui| {
+        for b in crate::block::Block::BOTH {
+            if blocks.iter().any(|n| n == b.name()) {
+                ui.selectable_value(&mut view.bode_block, b, b.name());
+            }
+        }
+        ui.separator();
+        ui.label(format!(
+            "differences are later run minus earlier; * marks |diff| > {SIGNIFICANCE_SIGMAS} combined std"
+        ));
+    });
+    let block = view.bode_block.name();
+    ui.label(significance_label(c, block));
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        egui::Grid::new("compare-figures").striped(true).show(ui, |ui| {
+            ui.strong("figure");
+            for r in &c.runs {
+                ui.strong(format!("{} ({})", r.source.file, r.source.regime));
+            }
+            for d in c.differences.iter().filter(|d| d.block == block) {
+                ui.strong(format!("{} - {}", d.regimes[1], d.regimes[0]));
+            }
+            ui.end_row();
+            ui.label("τ, ms");
+            for r in &c.runs {
+                let f = r.blocks.get(block);
+                ui.monospace(f.map_or_else(String::new, |f| format!("{:.3}", f.tau_s * 1e3)));
+            }
+            for d in c.differences.iter().filter(|d| d.block == block) {
+                ui.monospace(delta_text(&d.tau_s, 1e3));
+            }
+            ui.end_row();
+            for i in 0..3 {
+                for j in 0..3 {
+                    ui.label(format!("K[{}][{}]", i + 1, j + 1));
+                    for r in &c.runs {
+                        let f = r.blocks.get(block);
+                        ui.monospace(f.map_or_else(String::new, |f| format!("{:+.6}", f.k[i][j])));
+                    }
+                    for d in c.differences.iter().filter(|d| d.block == block) {
+                        ui.monospace(delta_text(&d.k[i][j], 1.0));
+                    }
+                    ui.end_row();
+                }
+            }
+        });
+        ui.separator();
+        let entries: Vec<BodeEntry<'_>> = compared
+            .iter()
+            .filter_map(|id| runs.iter().find(|r| r.id == *id))
+            .enumerate()
+            .filter_map(|(k, r)| {
+                let bode = r
+                    .identification
+                    .as_ref()?
+                    .bode
+                    .iter()
+                    .find(|b| b.block == view.bode_block)?;
+                Some(BodeEntry {
+                    label: r.name(),
+                    bode,
+                    colour: palette(k),
+                    details: false,
+                })
+            })
+            .collect();
+        grid(ui, &entries, "compare");
+    });
+}

@@ -1,0 +1,162 @@
+//! The results panel: per block, K with scale-factor errors (ppm) and misalignments (mrad), tau in
+//! ms, the chosen order with every candidate's criterion (BIC), and the fit's figures, each with
+//! its standard deviation where the data determine it.
+
+use eframe::egui;
+
+use crate::gui::app::{Command, RunEntry};
+use crate::ident::settings::{LambdaSetting, OrderSetting};
+use crate::model::BlockModel;
+
+fn pm(v: f64, std: Option<f64>, decimals: usize) -> String {
+    match std {
+        Some(s) => format!("{v:.decimals$} ± {s:.decimals$}"),
+        None => format!("{v:.decimals$}"),
+    }
+}
+
+/// The delay line, e.g. `gyro τ = 4.012 ± 0.010 ms`.
+#[must_use]
+pub fn tau_label(block: &str, m: &BlockModel) -> String {
+    format!(
+        "{block} τ = {} ms",
+        pm(m.tau_s * 1e3, m.fit.tau_std_s.map(|s| s * 1e3), 3)
+    )
+}
+
+/// Row `i` of K, e.g. `gyro K gx: +1.000012 -0.000340 +0.000101`.
+#[must_use]
+pub fn k_row_label(block: &str, m: &BlockModel, i: usize) -> String {
+    let [a, b, c] = m.k[i];
+    format!("{block} K {}: {a:+.6} {b:+.6} {c:+.6}", m.outputs[i])
+}
+
+/// Draws the results of the selected run, with the model export button.
+pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Command>) {
+    ui.horizontal(|ui| {
+        ui.heading("Results");
+        if let Some(run) = run
+            && run.busy()
+        {
+            ui.spinner();
+        }
+    });
+    let Some(run) = run else {
+        ui.weak("no run selected");
+        return;
+    };
+    let Some(id) = &run.identification else {
+        if let Some(e) = &run.analysis_error {
+            ui.colored_label(ui.visuals().error_fg_color, e);
+        } else {
+            ui.weak("identifying…");
+        }
+        return;
+    };
+    if let Some(e) = &run.analysis_error {
+        ui.colored_label(
+            ui.visuals().error_fg_color,
+            format!("current settings failed: {e}; showing the last good result"),
+        );
+    }
+    if ui.button("Export model JSON…").clicked() {
+        commands.push(Command::ExportModel(None));
+    }
+    let auto_order = id.settings.order == OrderSetting::Auto;
+    for (name, m) in id
+        .blocks
+        .iter()
+        .filter_map(|b| id.model.blocks.get_key_value(b.block.name()))
+    {
+        ui.separator();
+        ui.strong(format!(
+            "{name}: {} to {}",
+            m.inputs.join(" "),
+            m.outputs.join(" ")
+        ));
+        ui.label(tau_label(name, m));
+        ui.label(format!(
+            "order {} ({}), {}",
+            m.order,
+            if auto_order { "auto, lowest BIC" } else { "fixed" },
+            if m.fit.stable { "stable" } else { "UNSTABLE" }
+        ));
+        ui.label("K (rows: outputs; columns: inputs)");
+        for i in 0..3 {
+            ui.monospace(k_row_label(name, m, i));
+        }
+        figures(ui, name, m);
+        candidates(ui, name, m);
+        fit(ui, m, id.settings.lambda == LambdaSetting::Auto);
+    }
+}
+
+fn figures(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
+    let f = &m.fit;
+    ui.label("scale-factor errors, ppm");
+    for i in 0..3 {
+        ui.monospace(format!(
+            "  {}: {}",
+            m.outputs[i],
+            pm(f.scale_factor_error_ppm[i], f.scale_factor_error_std_ppm[i], 1)
+        ));
+    }
+    ui.label("misalignments, mrad (row: output, column: input)");
+    egui::Grid::new(("misalignment", name))
+        .striped(true)
+        .show(ui, |ui| {
+            for i in 0..3 {
+                ui.monospace(m.outputs[i].as_str());
+                for j in 0..3 {
+                    if i == j {
+                        ui.monospace("-");
+                    } else {
+                        ui.monospace(pm(f.misalignment_mrad[i][j], f.misalignment_std_mrad[i][j], 3));
+                    }
+                }
+                ui.end_row();
+            }
+        });
+}
+
+fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
+    ui.label("order candidates");
+    egui::Grid::new(("candidates", name))
+        .striped(true)
+        .show(ui, |ui| {
+            for h in ["order", "params", "χ²", "BIC", "τ, ms", "stable"] {
+                ui.strong(h);
+            }
+            ui.end_row();
+            for c in &m.fit.candidates {
+                let chosen = if c.order == m.order { " <" } else { "" };
+                ui.monospace(format!("{}{chosen}", c.order));
+                ui.monospace(c.parameters.to_string());
+                ui.monospace(format!("{:.1}", c.chi2));
+                ui.monospace(format!("{:.1}", c.criterion));
+                ui.monospace(format!("{:.3}", c.tau_s * 1e3));
+                ui.monospace(if c.stable { "yes" } else { "no" });
+                ui.end_row();
+            }
+        });
+}
+
+fn fit(ui: &mut egui::Ui, m: &BlockModel, lambda_auto: bool) {
+    let f = &m.fit;
+    ui.label(format!("χ² = {:.1} on {} degrees of freedom", f.chi2, f.dof));
+    ui.label(format!(
+        "Λ = [{:.4}, {:.4}, {:.4}]{}",
+        f.lambda[0],
+        f.lambda[1],
+        f.lambda[2],
+        if lambda_auto { " (auto)" } else { "" }
+    ));
+    ui.label(format!(
+        "constraint residual {:.2e}; {:.1} equivalent averages",
+        f.constraint_residual, f.equivalent_averages
+    ));
+    ui.label(format!(
+        "factor errors: input {:.1e}, disturbance {:.1e}",
+        f.factor_errors[0], f.factor_errors[1]
+    ));
+}

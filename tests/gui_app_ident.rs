@@ -1,0 +1,253 @@
+//! The app's identification, comparison, export and fault handling, driven through AccessKit
+//! (`egui_kittest`, no GPU). The worker runs synchronously (or, for the cancel test, only when
+//! told), so every assertion sees finished results and nothing depends on timing.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use imu_attest::gui::pipeline::Stage;
+use imu_attest::gui::view::compare::significance_label;
+use imu_attest::gui::view::results::{k_row_label, tau_label};
+use imu_attest::gui::{App, AppOptions, Command, WorkerMode, sample_run_path};
+use imu_attest::ident::settings::{LambdaSetting, OrderSetting};
+use imu_attest::model::{MODEL_SCHEMA, Model};
+use imu_attest::run::LoadOptions;
+
+fn app(options: AppOptions) -> Harness<'static, App> {
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::vec2(1500.0, 950.0))
+        .build_eframe(|cc| App::new(cc, options));
+    harness.run_steps(3);
+    harness
+}
+
+fn options(paths: Vec<PathBuf>, mode: WorkerMode) -> AppOptions {
+    AppOptions {
+        mode,
+        persist: false,
+        ..AppOptions::new(paths)
+    }
+}
+
+fn sample_app() -> Harness<'static, App> {
+    app(options(
+        vec![sample_run_path().expect("sample run")],
+        WorkerMode::Synchronous,
+    ))
+}
+
+/// The gyro block's shown tau line and first K row, from the app's current identification.
+fn gyro_labels(harness: &Harness<'_, App>) -> (String, String) {
+    let run = &harness.state().runs()[0];
+    let id = run.identification.as_ref().expect("identified");
+    let m = id.model.blocks.get("gyro").expect("gyro");
+    (tau_label("gyro", m), k_row_label("gyro", m, 0))
+}
+
+fn set(harness: &mut Harness<'_, App>, edit: impl FnOnce(&mut imu_attest::ident::settings::Settings)) {
+    let mut settings = harness.state().settings().clone();
+    edit(&mut settings);
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings)));
+    harness.run_steps(3);
+}
+
+#[test]
+fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
+    let mut harness = sample_app();
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    let (tau0, k0) = gyro_labels(&harness);
+    harness.get_by_label(&tau0);
+    harness.get_by_label(&k0);
+    let before = harness.state().runs()[0]
+        .identification
+        .clone()
+        .expect("identified");
+
+    set(&mut harness, |s| {
+        s.lambda = LambdaSetting::Values([0.2, 0.2, 0.2]);
+    });
+    let (_, k1) = gyro_labels(&harness);
+    assert_ne!(k1, k0, "K follows Lambda");
+    harness.get_by_label(&k1);
+    assert!(harness.query_by_label(&k0).is_none(), "the old K is gone");
+    let after = harness.state().runs()[0]
+        .identification
+        .clone()
+        .expect("identified");
+    assert!(!Arc::ptr_eq(&before, &after), "a new identification");
+    for (a, b) in before.blocks.iter().zip(&after.blocks) {
+        assert!(Arc::ptr_eq(&a.spectra, &b.spectra), "spectra not redone");
+        assert!(
+            Arc::ptr_eq(&a.factorisation, &b.factorisation),
+            "factorisation not redone"
+        );
+    }
+
+    let chosen = after.model.blocks["gyro"].order;
+    let other = if chosen == 2 { 1 } else { 2 };
+    set(&mut harness, |s| s.order = OrderSetting::Fixed(other));
+    let (tau2, _) = gyro_labels(&harness);
+    assert_ne!(tau2, tau0);
+    harness.get_by_label(&tau2);
+    let id = harness.state().runs()[0]
+        .identification
+        .clone()
+        .expect("identified");
+    assert_eq!(id.model.blocks["gyro"].order, other);
+    let shown = harness
+        .get_all_by_label_contains(&format!("order {other} (fixed)"))
+        .count();
+    assert_eq!(shown, 2, "both blocks at the fixed order");
+}
+
+#[test]
+fn a_worker_panic_is_shown_the_last_result_kept_and_the_app_goes_on() {
+    let mut harness = sample_app();
+    let good = harness.state().runs()[0]
+        .identification
+        .clone()
+        .expect("identified");
+    let id = harness.state().runs()[0].id;
+    harness
+        .state_mut()
+        .push_command(Command::InjectPanic(id, Stage::Identify));
+    harness.run_steps(2);
+    let app = harness.state();
+    let run = &app.runs()[0];
+    assert!(
+        app.errors()
+            .iter()
+            .any(|e| e.contains("panic") && e.contains("identification")),
+        "{:?}",
+        app.errors()
+    );
+    assert!(Arc::ptr_eq(run.identification.as_ref().expect("kept"), &good));
+    assert!(!run.busy(), "not spinning forever after a failure");
+    harness.get_by_label_contains("showing the last good result");
+    harness.get_by_label(&gyro_labels(&harness).0);
+    // Still responsive: a new order is identified and clears the failure.
+    set(&mut harness, |s| s.order = OrderSetting::Fixed(0));
+    let run = &harness.state().runs()[0];
+    assert!(run.analysis_error.is_none());
+    assert_eq!(
+        run.identification.as_ref().expect("new").model.blocks["gyro"].order,
+        0
+    );
+}
+
+#[test]
+fn two_runs_are_compared_side_by_side() {
+    let approach = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("sample_runs/approach.csv.gz");
+    let paths = vec![sample_run_path().expect("sample run"), approach];
+    let mut harness = app(options(paths, WorkerMode::Synchronous));
+    harness.run_steps(2);
+    harness.get_by_label("Compare").click();
+    harness.run_steps(2);
+    harness.get_by_label("compare cruise.csv.gz").click();
+    harness.run_steps(1);
+    harness.get_by_label("compare approach.csv.gz").click();
+    harness.run_steps(2);
+    let app = harness.state();
+    assert_eq!(app.compared().len(), 2);
+    let c = app.comparison().expect("two identified runs").clone();
+    let regimes: Vec<&str> = c.runs.iter().map(|r| r.source.regime.as_str()).collect();
+    assert_eq!(regimes, ["cruise", "approach"]);
+    for (run, compared) in app.runs().iter().zip(&c.runs) {
+        let model = &run.identification.as_ref().expect("identified").model;
+        for (name, b) in &model.blocks {
+            assert_eq!(compared.blocks[name].k, b.k);
+            assert_eq!(compared.blocks[name].tau_s.to_bits(), b.tau_s.to_bits(), "copied");
+        }
+    }
+    harness.get_by_label(&significance_label(&c, "gyro"));
+    harness.get_by_label("approach - cruise");
+}
+
+#[test]
+fn an_exported_model_reads_back_and_an_input_is_never_overwritten() {
+    let mut harness = sample_app();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cruise_model.json");
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(out.clone())));
+    harness.run_steps(2);
+    let text = std::fs::read_to_string(&out).expect("written");
+    let model: Model = serde_json::from_str(&text).expect("a model file");
+    assert_eq!(model.schema, MODEL_SCHEMA);
+    let shown = &harness.state().runs()[0]
+        .identification
+        .clone()
+        .expect("identified")
+        .model;
+    assert_eq!(&model, shown);
+    harness.get_by_label_contains("model written to");
+
+    let input = harness.state().runs()[0].path.clone();
+    let size = std::fs::metadata(&input).expect("input").len();
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(input.clone())));
+    harness.run_steps(2);
+    assert!(
+        harness.state().errors().iter().any(|e| e.contains("refusing")),
+        "{:?}",
+        harness.state().errors()
+    );
+    assert_eq!(std::fs::metadata(&input).expect("input").len(), size);
+}
+
+#[test]
+fn a_load_is_cancelled_from_its_cancel_button() {
+    let mut harness = app(options(
+        vec![sample_run_path().expect("sample run")],
+        WorkerMode::Manual,
+    ));
+    assert!(harness.state().runs()[0].busy(), "still loading: the job waits");
+    harness.get_by_label("Cancel").click();
+    harness.run_steps(2);
+    assert_eq!(harness.state_mut().run_worker_jobs(), 1);
+    harness.run_steps(2);
+    let app = harness.state();
+    assert!(app.runs().is_empty(), "nothing loaded");
+    assert_eq!(app.errors(), ["loading cruise.csv.gz cancelled"]);
+    harness.get_by_label("loading cruise.csv.gz cancelled");
+}
+
+#[test]
+fn a_run_too_large_for_memory_is_refused_in_the_error_panel() {
+    // 100 000 rows of 7 columns: about 5.6 MB decoded.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let big = dir.path().join("big.csv");
+    let mut text = String::from("t,roll,yaw,pitch,gx,gy,gz\n");
+    for k in 0..100_000 {
+        writeln!(text, "{},0.1,0.2,0.3,0.01,0.02,0.03", f64::from(k) * 0.002).expect("to a string");
+    }
+    std::fs::write(&big, text).expect("written");
+    let mut opts = options(vec![big], WorkerMode::Synchronous);
+    opts.load = LoadOptions {
+        memory_limit_bytes: Some(1_000_000),
+        // Several chunks: the size check runs after the first.
+        chunk_bytes: 1 << 16,
+        ..LoadOptions::default()
+    };
+    let harness = app(opts);
+    let app = harness.state();
+    assert!(app.runs().is_empty());
+    assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
+    assert!(
+        app.errors()[0].contains("only 1 MB available"),
+        "{}",
+        app.errors()[0]
+    );
+    harness.get_by_label_contains("only 1 MB available");
+}

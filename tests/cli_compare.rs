@@ -4,17 +4,12 @@
 #![expect(clippy::unwrap_used, reason = "tests")]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use imu_attest::compare::{COMPARISON_SCHEMA, Comparison};
 use imu_attest::model::Model;
 
-fn imu_attest(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imu-attest"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod binary;
+use binary::imu_attest;
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

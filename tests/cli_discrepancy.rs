@@ -4,14 +4,10 @@
 #![expect(clippy::unwrap_used, reason = "tests")]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn imu_attest(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imu-attest"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod binary;
+use binary::imu_attest;
 
 fn simulated_run(dir: &Path, name: &str, effect: Option<&str>) -> PathBuf {
     let run = dir.join(format!("{name}.csv"));

@@ -3,16 +3,11 @@
 #![expect(clippy::unwrap_used, reason = "tests")]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use imu_attest::model::{MODEL_SCHEMA, Model};
 
-fn imu_attest(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imu-attest"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod binary;
+use binary::imu_attest;
 
 fn simulated_run(dir: &Path) -> PathBuf {
     let run = dir.join("cruise.csv");

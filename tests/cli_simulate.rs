@@ -7,14 +7,9 @@
 
 use std::io::Read;
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn imu_attest(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imu-attest"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+mod binary;
+use binary::imu_attest;
 
 fn read_csv(path: &Path) -> String {
     let bytes = std::fs::read(path).unwrap();

@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod bench;
 mod identify;
 mod inspect;
 mod progress;
@@ -47,6 +48,9 @@ usage:
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
   imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest inspect RUN...                       check runs against the format, summarise them
+  imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]
+                                                  time the identifier's stages (default: a
+                                                  simulated 30-minute run at 1 kHz)
 ";
 
 /// Entry point of the binary: runs the command named by the process arguments.
@@ -76,6 +80,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "simulate" => simulate::run(&Args::parse(rest)?),
         "inspect" => inspect::run(&Args::parse(rest)?),
         "identify" => identify::run(&Args::parse(rest)?),
+        "bench" => bench::run(rest),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");

@@ -16,6 +16,13 @@ use std::sync::Arc;
 /// The most chunks the segments are split into (so the most threads one estimate uses).
 pub const MAX_CHUNKS: usize = 8;
 
+/// The length of the per-segment FFTs for segments of `segment_len` samples on a grid of `nfft`.
+#[must_use]
+pub fn transform_len(segment_len: usize, nfft: usize) -> usize {
+    let _ = segment_len;
+    nfft
+}
+
 /// Owns the FFT plans and window vectors, so repeated estimates reuse them (`RustFFT`'s planner
 /// pattern): keep one per worker and call [`WelchPlanner::welch_matrix`] on it.
 pub struct WelchPlanner {

@@ -15,6 +15,7 @@
 //!   stage's result that was not computed fails with [`BenchError::Missing`].
 
 pub mod bare;
+pub mod cpu;
 pub mod input;
 pub mod memory;
 pub mod report;
@@ -118,15 +119,20 @@ pub fn time_stages(
     for mut stage in stages {
         on_stage(stage.name);
         let mut samples = Vec::with_capacity(stage.repeats);
+        let cpu_start = cpu::process_cpu_s();
         for _ in 0..stage.repeats {
             let start = Instant::now();
             (stage.run)(state)?;
             samples.push(start.elapsed().as_secs_f64());
         }
+        let cpu_seconds = cpu_start
+            .zip(cpu::process_cpu_s())
+            .map(|(a, b)| (b - a).max(0.0) / stage.repeats as f64);
         times.push(StageTime {
             name: stage.name,
             seconds: median(&mut samples),
             repeats: stage.repeats,
+            cpu_seconds,
         });
     }
     Ok(times)

@@ -16,6 +16,8 @@ pub struct StageTime {
     pub seconds: f64,
     /// How many times it ran.
     pub repeats: usize,
+    /// CPU time of all threads per run (the mean of the repeats), s; `None` where unmeasurable.
+    pub cpu_seconds: Option<f64>,
 }
 
 /// What `bench` reports.
@@ -48,11 +50,34 @@ fn stages_as_map<S: serde::Serializer>(stages: &[StageTime], s: S) -> Result<S::
     map.end()
 }
 
+/// The stages' CPU times as a second map, `stages_cpu_s`.
+struct CpuTimes<'a>(&'a [StageTime]);
+
+impl Serialize for CpuTimes<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for stage in self.0 {
+            map.serialize_entry(stage.name, &stage.cpu_seconds)?;
+        }
+        map.end()
+    }
+}
+
 impl BenchReport {
-    /// The one-line JSON object.
+    /// The one-line JSON object (the report's fields plus `stages_cpu_s`).
     #[must_use]
     pub fn to_json(&self) -> String {
-        serde_json::to_string(self).unwrap_or_default()
+        #[derive(Serialize)]
+        struct Json<'a> {
+            #[serde(flatten)]
+            report: &'a BenchReport,
+            stages_cpu_s: CpuTimes<'a>,
+        }
+        serde_json::to_string(&Json {
+            report: self,
+            stages_cpu_s: CpuTimes(&self.stages),
+        })
+        .unwrap_or_default()
     }
 
     /// The table: one line per stage, then the run's size and memory.
@@ -60,14 +85,17 @@ impl BenchReport {
     pub fn to_table(&self) -> String {
         use std::fmt::Write as _;
         let mut out = String::new();
-        let _ = writeln!(out, "{:<16} {:>10}", "stage", "time (s)");
+        let _ = writeln!(out, "{:<16} {:>10} {:>10}", "stage", "time (s)", "cpu (s)");
         for s in &self.stages {
             let note = if s.repeats > 1 {
                 format!("  (median of {})", s.repeats)
             } else {
                 String::new()
             };
-            let _ = writeln!(out, "{:<16} {:>10.4}{note}", s.name, s.seconds);
+            let cpu = s
+                .cpu_seconds
+                .map_or_else(|| "n/a".to_owned(), |c| format!("{c:.2}"));
+            let _ = writeln!(out, "{:<16} {:>10.4} {cpu:>10}{note}", s.name, s.seconds);
         }
         let mb = |v: Option<f64>| v.map_or_else(|| "n/a".to_owned(), |v| format!("{v:.0} MB"));
         let _ = writeln!(
@@ -116,6 +144,10 @@ mod tests {
         assert!(!json.contains('\n'));
         assert!(json.contains(r#""stages_s":{"load":0.5,"aaa":0.25}"#), "{json}");
         assert!(json.contains(r#""peak_rss_mb":null"#), "{json}");
+        assert!(
+            json.contains(r#""stages_cpu_s":{"load":0.75,"aaa":null}"#),
+            "{json}"
+        );
         assert!(report.to_table().contains("(median of 3)"));
     }
 }

@@ -9,6 +9,7 @@
 //! | `identify` | the regularised Wiener estimate `W_u` (A, Lambda) of every block |
 //! | `structural_fit` | the structural fit (order) of every block |
 //! | `retune` | a change of Lambda: Wiener and structural fit of every block from cached spectra and factorisation ([`identify_block_from`]), median of [`RETUNES`] changes |
+//! | `retune_order0` | `retune` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
 //! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6): spectra, factorisation, Wiener and structural fit of every block from the cached observer inputs |
 //! | `spectra_bare` | the lower bound of `spectra`: [`super::bare`]'s loop of the same FFTs and cross products |
 
@@ -19,7 +20,7 @@ use super::{BenchError, Stage, bare};
 use crate::ident::IdentError;
 use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise};
 use crate::ident::identify::{identify_block_from, native_band, structural_fit};
-use crate::ident::settings::{LambdaSetting, Settings};
+use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::ident::signals::{BlockSignals, block_signals, channel_names};
 use crate::ident::spectra::{BlockSpectra, block_spectra};
 use crate::ident::wiener::{WienerEstimate, regularised_wiener};
@@ -219,6 +220,13 @@ fn retune_stage(state: &mut BenchState) -> Result<(), BenchError> {
     Ok(())
 }
 
+fn retune_order0_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    let order = std::mem::replace(&mut state.settings.order, OrderSetting::Fixed(0));
+    let result = retune_stage(state);
+    state.settings.order = order;
+    result
+}
+
 fn rewelch_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let rate = state.loaded("rewelch")?.sample_rate_hz;
     let signals = BenchState::need(&state.signals, "rewelch", "observer")?;
@@ -260,6 +268,7 @@ pub fn standard_stages() -> Vec<Stage<'static>> {
         Stage::once("identify", identify_stage),
         Stage::once("structural_fit", structural_stage),
         Stage::repeated("retune", RETUNES, retune_stage),
+        Stage::repeated("retune_order0", RETUNES, retune_order0_stage),
         // `diagnose` (the missing-effect workflow, crate::diagnose) is added by the lead after merging.
         Stage::once("rewelch", rewelch_stage),
         Stage::once("spectra_bare", bare_stage),

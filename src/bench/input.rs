@@ -34,13 +34,22 @@ impl TempRun {
         config.duration_s = minutes * 60.0;
         config.rate_hz = rate_hz;
         let run = simulate(&config)?;
+        let temp = Self::unwritten();
+        write_run_with_progress(&run, &temp.csv, progress)?;
+        Ok(temp)
+    }
+
+    /// A unique CSV path in [`std::env::temp_dir`] with nothing written there yet, for a run
+    /// written by another process (`imu-attest bench` simulates in a child process, so that the
+    /// simulation's memory does not count in the benchmark's peak). Whatever is written there and
+    /// to its sidecar is removed on drop.
+    #[must_use]
+    pub fn unwritten() -> Self {
         let nanos = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.subsec_nanos());
         let csv = std::env::temp_dir().join(format!("imu-attest-bench-{}-{nanos}.csv", std::process::id()));
-        let temp = Self { csv };
-        write_run_with_progress(&run, &temp.csv, progress)?;
-        Ok(temp)
+        Self { csv }
     }
 
     /// The CSV's path.

@@ -1,12 +1,15 @@
 //! `imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]` (issue 6): times the
 //! identifier's stages on RUN, or on a simulated run of M minutes at HZ (default 30 min at 1 kHz)
 //! written to a temporary CSV. Prints a table, or with `--json` one JSON object on one line.
+//!
+//! `--segment` defaults to the identifier's default (4096); for a simulated run shorter than four
+//! such segments it is halved until four fit (at least 64).
 
 use std::io::Write as _;
 use std::path::Path;
 
 use super::{Args, CliError};
-use crate::bench::input::TempRun;
+use crate::bench::input::{BENCH_REGIME, TempRun};
 use crate::bench::{BenchError, run_bench};
 use crate::ident::IdentError;
 use crate::ident::settings::Settings;
@@ -28,19 +31,28 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
         .get("rate")
         .map(|_| args.parsed_or("rate", 0.0))
         .transpose()?;
-    let mut settings = Settings::default();
-    settings.welch.segment_len = args.parsed_or("segment", settings.welch.segment_len)?;
+    let segment: Option<usize> = args
+        .get("segment")
+        .map(|_| args.parsed_or("segment", 0))
+        .transpose()?;
     args.reject_unknown()?;
+    let mut settings = Settings::default();
     let temp;
     let path = match args.positional.as_slice() {
         [] => {
-            temp = simulate(
+            let (minutes, rate) = (
                 minutes.unwrap_or(DEFAULT_MINUTES),
                 rate.unwrap_or(DEFAULT_RATE_HZ),
-            )?;
+            );
+            settings.welch.segment_len =
+                segment.unwrap_or_else(|| default_segment(settings.welch.segment_len, minutes * 60.0 * rate));
+            temp = simulate(minutes, rate)?;
             temp.path().to_owned()
         }
-        [run] if minutes.is_none() && rate.is_none() => Path::new(run).to_owned(),
+        [run] if minutes.is_none() && rate.is_none() => {
+            settings.welch.segment_len = segment.unwrap_or(settings.welch.segment_len);
+            Path::new(run).to_owned()
+        }
         [_] => {
             return Err(CliError::Input(
                 "bench: --minutes and --rate size the simulated run; they cannot be given with RUN".into(),
@@ -74,21 +86,57 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
         .map_err(|e| CliError::Internal(e.into()))
 }
 
-/// Simulates the benchmark run, with a spinner and a bar of rows written.
+/// The segment of a simulated run of `samples` when `--segment` is not given: the settings'
+/// default, halved while the run holds fewer than four segments (a short test run still has
+/// several averages).
+fn default_segment(default: usize, samples: f64) -> usize {
+    let mut segment = default;
+    while segment > 64 && (segment * 4) as f64 > samples {
+        segment /= 2;
+    }
+    segment
+}
+
+/// Simulates the benchmark run in a child process (`imu-attest simulate`), so that the
+/// simulation's memory is not in this process's peak; its progress bars show on a terminal.
 fn simulate(minutes: f64, rate_hz: f64) -> Result<TempRun, CliError> {
-    let spinner = super::progress::spinner("simulating the benchmark run");
-    let bar = super::progress::bar(0, "writing {wide_bar} {pos}/{len} rows {eta}");
-    let temp = TempRun::simulate(minutes, rate_hz, &mut |done, total| {
-        spinner.finish_and_clear();
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    });
-    spinner.finish_and_clear();
-    bar.finish_and_clear();
-    temp.map_err(|e| match e {
-        BenchError::Simulate(_) => CliError::Input(format!("bench: {e}")),
-        other => CliError::Internal(other.into()),
-    })
+    use std::io::IsTerminal as _;
+    use std::process::{Command, Stdio};
+    let temp = TempRun::unwritten();
+    let exe = std::env::current_exe().map_err(|e| CliError::Internal(e.into()))?;
+    let interactive = std::io::stderr().is_terminal();
+    let output = Command::new(exe)
+        .args(["simulate", "--regime", BENCH_REGIME.name()])
+        .args([
+            "--duration",
+            &(minutes * 60.0).to_string(),
+            "--rate",
+            &rate_hz.to_string(),
+        ])
+        .arg("--out")
+        .arg(temp.path())
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(if interactive {
+            Stdio::inherit()
+        } else {
+            Stdio::piped()
+        })
+        .output()
+        .map_err(|e| CliError::Internal(e.into()))?;
+    match output.status.code() {
+        Some(0) => Ok(temp),
+        code => {
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            let message = stderr.trim().trim_start_matches("imu-attest: ");
+            let message = format!("bench: simulating the run: {message}");
+            Err(if code == Some(2) {
+                CliError::Input(message)
+            } else {
+                CliError::Internal(anyhow::anyhow!(message))
+            })
+        }
+    }
 }
 
 /// Bad input (the run, the settings for it, the size asked) exits 2; anything else is ours.

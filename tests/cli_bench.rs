@@ -1,10 +1,5 @@
 //! `imu-attest bench` through the real binary on a tiny simulated run: one line of valid JSON
 //! with every key, finite positive times; bad arguments exit 2 with one line. No timed assertion.
-#![expect(
-    clippy::unwrap_used,
-    reason = "test helpers panic on the unexpected, like the tests"
-)]
-
 use std::process::{Command, Output};
 
 fn imu_attest(args: &[&str]) -> Output {

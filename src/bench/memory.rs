@@ -21,6 +21,7 @@ pub fn peak_rss_bytes() -> Option<u64> {
 /// Resets the peak resident set size to the current one (Linux 4.0 and later: writing `5` to
 /// `/proc/self/clear_refs`), so that a later [`peak_rss_bytes`] measures what follows. Returns
 /// whether the kernel accepted it.
+#[must_use = "a false return means the peak still includes earlier work"]
 pub fn reset_peak_rss() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }

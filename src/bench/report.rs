@@ -129,11 +129,13 @@ mod tests {
                     name: "load",
                     seconds: 0.5,
                     repeats: 1,
+                    cpu_seconds: Some(0.75),
                 },
                 StageTime {
                     name: "aaa",
                     seconds: 0.25,
                     repeats: 3,
+                    cpu_seconds: None,
                 },
             ],
             peak_rss_mb: None,

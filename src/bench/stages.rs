@@ -104,13 +104,16 @@ impl BenchState {
     }
 }
 
+/// One block's spectra and factorisation.
+type Cached = (Arc<BlockSpectra>, Arc<Factorisation>);
+
 /// Spectra and factorisation of every block's `signals` with `welch`.
 fn spectra_and_factorisations(
     planner: &mut WelchPlanner,
     signals: &[BlockSignals],
     sample_rate_hz: f64,
     welch: &WelchSettings,
-) -> Result<Vec<(Arc<BlockSpectra>, Arc<Factorisation>)>, BenchError> {
+) -> Result<Vec<Cached>, BenchError> {
     signals
         .iter()
         .map(|s| {

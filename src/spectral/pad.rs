@@ -9,8 +9,8 @@ use realfft::{ComplexToReal, RealToComplex};
 use super::SpectralError;
 
 /// `sums` holds one-sided spectra of `inverse.len() / 2 + 1` bins per pair, pair after pair;
-/// returns the same pairs on `forward.len() / 2 + 1` bins. Bins common to both grids (when the
-/// fine grid is a whole multiple of the coarse one) are copied unchanged.
+/// returns the same pairs on `forward.len() / 2 + 1` bins. Bins common to both grids (DC, and
+/// every coarse bin when the fine grid is a whole multiple of the coarse one) are copied unchanged.
 ///
 /// # Errors
 /// [`SpectralError::Fft`] should the FFTs refuse their buffers.
@@ -51,10 +51,10 @@ pub(super) fn refine_pairs(
                     padded[nfft - lag] = correlation[len - lag] * norm;
                 }
                 forward.process(padded, out).map_err(fft_error)?;
-                if nfft.is_multiple_of(len) {
-                    let step = nfft / len;
-                    for (k, s) in sum.iter().enumerate() {
-                        out[k * step] = *s;
+                // Coarse bin k lies on the fine grid when k nfft / len is whole (always DC).
+                for (k, s) in sum.iter().enumerate() {
+                    if (k * nfft).is_multiple_of(len) {
+                        out[k * nfft / len] = *s;
                     }
                 }
                 Ok(())

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Args, CliError};
 use crate::ident::IdentError;
-use crate::ident::identify::identify_run;
+use crate::ident::identify::identify_run_with_progress;
 use crate::ident::settings::Settings;
 use crate::model::Model;
 use crate::output::{ensure_not_input, write_atomic};
@@ -56,7 +56,17 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
         ..settings.clone()
     };
     // Settings that do not fit this run are the user's input; anything else is ours.
-    let id = identify_run(&run, &settings).map_err(|e| match e {
+    let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
+    let id = identify_run_with_progress(&run, &settings, &mut |step| {
+        bar.set_length(step.total as u64);
+        bar.set_position(step.done as u64);
+        bar.set_message(match step.block {
+            Some(block) => format!("{} {}", block.name(), step.stage),
+            None => step.stage.to_owned(),
+        });
+    });
+    bar.finish_and_clear();
+    let id = id.map_err(|e| match e {
         IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. } => {
             CliError::Input(format!("{}: {e}", run_path.display()))
         }

@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod bench;
 mod compare;
 mod discrepancy;
 mod identify;
@@ -51,6 +52,9 @@ usage:
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
   imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json
   imu-attest inspect RUN...                       check runs against the format, summarise them
+  imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]
+                                                  time the identifier's stages (default: a
+                                                  simulated 30-minute run at 1 kHz)
 ";
 
 /// Entry point of the binary: runs the command named by the process arguments.
@@ -82,6 +86,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "identify" => identify::run(&Args::parse(rest)?),
         "discrepancy" => discrepancy::run(&Args::parse(rest)?),
         "compare" => compare::run(&Args::parse(rest)?),
+        "bench" => bench::run(rest),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {
             eprint!("{USAGE}");

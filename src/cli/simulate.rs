@@ -6,7 +6,7 @@ use std::path::Path;
 use super::{Args, CliError};
 use crate::sim::effect::{Block, EffectSpec};
 use crate::sim::regime::Regime;
-use crate::sim::write::write_run;
+use crate::sim::write::write_run_with_progress;
 use crate::sim::{SimConfig, simulate};
 
 pub(super) fn run(args: &Args) -> Result<(), CliError> {
@@ -42,6 +42,16 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             args.positional[0]
         )));
     }
-    let run = simulate(&config).map_err(|e| CliError::Input(e.to_string()))?;
-    write_run(&run, Path::new(out)).map_err(|e| CliError::Input(e.to_string()))
+    let spinner = super::progress::spinner("simulating");
+    let run = simulate(&config).map_err(|e| CliError::Input(e.to_string()));
+    spinner.finish_and_clear();
+    let run = run?;
+    let bar = super::progress::bar(
+        run.time_s.len() as u64,
+        "writing {msg} {wide_bar} {pos}/{len} rows {eta}",
+    );
+    bar.set_message(super::progress::display_name(Path::new(out)));
+    let written = write_run_with_progress(&run, Path::new(out), &mut |done, _| bar.set_position(done as u64));
+    bar.finish_and_clear();
+    written.map_err(|e| CliError::Input(e.to_string()))
 }

@@ -142,7 +142,10 @@ fn block_design(run: &Run, motion: &EulerSeries, b: &BlockIdentification, band: 
 }
 
 /// `S_psi,ii` running-median smoothed over about four native Welch bins each side, so that a
-/// line does not raise the level it is tested against.
+/// line does not raise the level it is tested against; near zero frequency the window shrinks to
+/// a quarter of the bin's index each side, since there the density changes by a large factor
+/// within a few bins (the coloured disturbance below 0.5 Hz) and a wide window would
+/// underestimate it.
 fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
     let psd = &b.factorisation.noise_psd;
     let half = 4 * (b.spectra.fft_len / b.spectra.segment_len.max(1)).max(1);
@@ -156,8 +159,9 @@ fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
         let diag: Vec<f64> = psd.iter().map(|m| m[(i, i)].re.max(0.0) * unbias).collect();
         (0..diag.len())
             .map(|k| {
-                let lo = k.saturating_sub(half);
-                let hi = (k + half + 1).min(diag.len());
+                let h = half.min(k / 4);
+                let lo = k.saturating_sub(h);
+                let hi = (k + h + 1).min(diag.len());
                 let mut w = diag[lo..hi].to_vec();
                 let mid = w.len() / 2;
                 w.select_nth_unstable_by(mid, f64::total_cmp);

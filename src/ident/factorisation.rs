@@ -122,9 +122,13 @@ pub fn factorise(
         .collect();
 
     let eps = settings.loading * max_trace / 3.0;
-    let d_u = loaded_factor(&spectra.s_uu, eps, &settings.wilson)?;
     let noise_max = noise_psd.iter().map(|s| s.trace().re).fold(0.0, f64::max);
-    let w_psi = loaded_factor(&noise_psd, settings.loading * noise_max / 3.0, &settings.wilson)?;
+    // The two factorisations are independent: one per core.
+    let (d_u, w_psi) = rayon::join(
+        || loaded_factor(&spectra.s_uu, eps, &settings.wilson),
+        || loaded_factor(&noise_psd, settings.loading * noise_max / 3.0, &settings.wilson),
+    );
+    let (d_u, w_psi) = (d_u?, w_psi?);
     let d_u_inv = d_u.inverse().map_err(factor_error)?;
 
     // Consistent loading: (S_xu + eps H1) = H1 (S_uu + eps I) on every bin of the two-sided grid.

@@ -51,12 +51,38 @@ pub struct RunIdentification {
     pub blocks: Vec<BlockIdentification>,
 }
 
+/// Where [`identify_run_with_progress`] is: the stage about to start, and how many of `total`
+/// stages are done.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IdentStep {
+    /// Stages done.
+    pub done: usize,
+    /// Stages in all: the observer, then spectra, factorisation and fit per block.
+    pub total: usize,
+    /// The stage about to start (`observer`, `spectra`, `factorisation`, `fit`), or `done`.
+    pub stage: &'static str,
+    /// Its block, if it is a block's stage.
+    pub block: Option<Block>,
+}
+
 /// Identifies every block the settings name.
 ///
 /// # Errors
 /// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, or any stage's
 /// error for any block.
 pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification, IdentError> {
+    identify_run_with_progress(run, settings, &mut |_| {})
+}
+
+/// [`identify_run`], calling `progress` before each stage and once when done.
+///
+/// # Errors
+/// As [`identify_run`].
+pub fn identify_run_with_progress(
+    run: &Run,
+    settings: &Settings,
+    progress: &mut dyn FnMut(IdentStep),
+) -> Result<RunIdentification, IdentError> {
     let settings = &Settings {
         blocks: settings.blocks_for(&run.blocks()),
         ..settings.clone()
@@ -64,6 +90,18 @@ pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification,
     settings
         .validate(run.len(), run.sample_rate_hz, &run.blocks())
         .map_err(|e| IdentError::Settings(e.to_string()))?;
+    let total = 1 + 3 * settings.blocks.len();
+    let mut done = 0;
+    let mut step = |stage, block| {
+        progress(IdentStep {
+            done,
+            total,
+            stage,
+            block,
+        });
+        done += 1;
+    };
+    step("observer", None);
     let observer_settings = ObserverSettings {
         angle_noise_rad: run.sidecar.angle_noise_rad,
         ..ObserverSettings::default()
@@ -79,13 +117,17 @@ pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification,
     for &block in &settings.blocks {
         let signals =
             block_signals(run, &motion.euler, block).ok_or(IdentError::MissingBlock(block.name()))?;
+        step("spectra", Some(block));
         let spectra = Arc::new(
             block_spectra(&mut planner, &signals, run.sample_rate_hz, &settings.welch)
                 .map_err(|e| IdentError::Spectra(e.to_string()))?,
         );
+        step("factorisation", Some(block));
         let factorisation = Arc::new(factorise(&spectra, &FactorisationSettings::default())?);
+        step("fit", Some(block));
         blocks.push(identify_block_from(block, spectra, factorisation, settings)?);
     }
+    step("done", None);
     Ok(RunIdentification {
         motion: Arc::new(motion),
         blocks,
@@ -110,14 +152,7 @@ pub fn identify_block_from(
         settings.lambda,
         settings.band_hz,
     )?);
-    // The structural fit and the model use the native Welch bins: the zero-padded grid (needed
-    // for the causal projection) interpolates between them, and its neighbours are not
-    // independent, which would overstate the evidence by the padding factor.
-    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
-    let band: Vec<usize> = band_bins(&spectra.frequency_hz, settings.band_hz)
-        .into_iter()
-        .filter(|k| k % step == 0)
-        .collect();
+    let band = native_band(&spectra, settings.band_hz);
     let structural = Arc::new(structural_fit(
         &spectra,
         &factorisation,
@@ -133,6 +168,18 @@ pub fn identify_block_from(
         band,
         structural,
     })
+}
+
+/// Indices of the analysis band's native Welch bins. The structural fit and the model use these:
+/// the zero-padded grid (needed for the causal projection) interpolates between them, and its
+/// neighbours are not independent, which would overstate the evidence by the padding factor.
+#[must_use]
+pub fn native_band(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
+    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
+    band_bins(&spectra.frequency_hz, band_hz)
+        .into_iter()
+        .filter(|k| k % step == 0)
+        .collect()
 }
 
 /// Fits the structural model to `W_u` over the band by generalised least squares: the estimate of

@@ -19,14 +19,30 @@ use crate::run::sidecar_path;
 /// # Errors
 /// [`OutputError`] when either file cannot be written; neither is then left half-written.
 pub fn write_run(run: &SimulatedRun, path: &Path) -> Result<(), OutputError> {
+    write_run_with_progress(run, path, &mut |_, _| {})
+}
+
+/// Rows written between two calls of [`write_run_with_progress`]'s `progress`.
+pub const PROGRESS_ROWS: usize = 1 << 16;
+
+/// [`write_run`], calling `progress(rows_written, rows_total)` every [`PROGRESS_ROWS`] rows and
+/// once at the end.
+///
+/// # Errors
+/// As [`write_run`].
+pub fn write_run_with_progress(
+    run: &SimulatedRun,
+    path: &Path,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(), OutputError> {
     let gz = path.extension().is_some_and(|e| e == "gz");
     write_atomic(path, |w| {
         if gz {
             let mut enc = GzEncoder::new(w, Compression::best());
-            write_csv(run, &mut enc)?;
+            write_csv(run, &mut enc, progress)?;
             enc.finish()?.flush()
         } else {
-            write_csv(run, w)
+            write_csv(run, w, progress)
         }
     })?;
     let sidecar = sidecar_path(path);
@@ -36,7 +52,11 @@ pub fn write_run(run: &SimulatedRun, path: &Path) -> Result<(), OutputError> {
     })
 }
 
-fn write_csv(run: &SimulatedRun, w: &mut impl Write) -> io::Result<()> {
+fn write_csv(
+    run: &SimulatedRun,
+    w: &mut impl Write,
+    progress: &mut dyn FnMut(usize, usize),
+) -> io::Result<()> {
     let mut header = vec!["t", "roll", "yaw", "pitch"];
     let mut cols: Vec<&[f64]> = run.angles.iter().map(Vec::as_slice).collect();
     if let Some(g) = &run.gyro {
@@ -58,6 +78,10 @@ fn write_csv(run: &SimulatedRun, w: &mut impl Write) -> io::Result<()> {
         }
         line.push('\n');
         w.write_all(line.as_bytes())?;
+        if (n + 1) % PROGRESS_ROWS == 0 {
+            progress(n + 1, run.time_s.len());
+        }
     }
+    progress(run.time_s.len(), run.time_s.len());
     Ok(())
 }

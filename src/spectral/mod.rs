@@ -48,6 +48,7 @@ mod error;
 pub mod factor;
 pub mod grid;
 mod matrix;
+mod pad;
 mod settings;
 pub mod welch;
 mod window;

@@ -5,8 +5,20 @@
 //! split into at most [`MAX_CHUNKS`] contiguous chunks that rayon runs in parallel, each with its
 //! own buffers and accumulator; the chunk sums are added in chunk order. The chunking depends on
 //! the number of segments only, so the result is bit-identical whatever the thread count.
+//!
+//! **Zero-padding beyond twice the segment** (the identifier pads 4x) is not done per segment:
+//! a segment of `N` samples has cross-correlations at lags `|l| < N` only, so the averaged cross
+//! spectra on any grid of `M >= 2N - 1` points hold them without aliasing. The segments are
+//! transformed at `M = 2 fast_len(N)` ([`transform_len`]), and each summed cross spectrum is taken
+//! back to its correlation (one inverse FFT of length `M`), zero-padded to `fft_len` and
+//! transformed once more. In exact arithmetic this is the same estimate; it halves both the FFTs
+//! and the cross products for a 4x grid. The bins common to both grids are copied from the
+//! direct sums, so they are bit-identical to the unpadded estimate's; auto-spectra are kept real
+//! and non-negative.
 
+use super::pad::refine_pairs;
 use super::{SpectralError, SpectralMatrix, WelchSettings, Window};
+use crate::fourier::fast_len;
 use num_complex::Complex64;
 use rayon::prelude::*;
 use realfft::{RealFftPlanner, RealToComplex};
@@ -15,6 +27,14 @@ use std::sync::Arc;
 
 /// The most chunks the segments are split into (so the most threads one estimate uses).
 pub const MAX_CHUNKS: usize = 8;
+
+/// The length of the per-segment FFTs for segments of `segment_len` samples on a grid of `nfft`:
+/// `nfft`, or `2 fast_len(segment_len)` when that is shorter (see the module docs).
+#[must_use]
+pub fn transform_len(segment_len: usize, nfft: usize) -> usize {
+    let short = 2 * fast_len(segment_len);
+    if short < nfft { short } else { nfft }
+}
 
 /// Owns the FFT plans and window vectors, so repeated estimates reuse them (`RustFFT`'s planner
 /// pattern): keep one per worker and call [`WelchPlanner::welch_matrix`] on it.
@@ -83,16 +103,17 @@ impl WelchPlanner {
         check_input(channels, sample_rate_hz, settings)?;
         let seg = settings.segment_len;
         let nfft = settings.nfft();
+        let len = transform_len(seg, nfft);
         let n_bins = nfft / 2 + 1;
         let n = channels.len();
         let window = self.window(settings.window, seg);
-        let fft = self.fft.plan_fft_forward(nfft);
+        let fft = self.fft.plan_fft_forward(len);
         let plan = Plan {
             channels,
             settings,
             window: &window,
             fft: fft.as_ref(),
-            n_bins,
+            n_bins: len / 2 + 1,
         };
 
         let n_segments = settings.n_segments(channels[0].len());
@@ -101,25 +122,36 @@ impl WelchPlanner {
             .into_par_iter()
             .map(|c| plan.accumulate(c * n_segments / n_chunks..(c + 1) * n_segments / n_chunks))
             .collect::<Result<Vec<_>, _>>()?;
-        let mut data = vec![Complex64::default(); n_bins * n * n];
+        let mut sums = vec![Complex64::default(); plan.n_bins * n * (n + 1) / 2];
         for partial in &partials {
-            data.iter_mut().zip(partial).for_each(|(d, p)| *d += p);
+            sums.iter_mut().zip(partial).for_each(|(d, p)| *d += p);
+        }
+        if len != nfft {
+            let inverse = self.fft.plan_fft_inverse(len);
+            let forward = self.fft.plan_fft_forward(nfft);
+            sums = refine_pairs(&sums, inverse.as_ref(), forward.as_ref(), seg)?;
         }
 
         let sum_w2: f64 = window.iter().map(|w| w * w).sum();
         let base = 1.0 / (sample_rate_hz * sum_w2 * n_segments as f64);
-        for (f, bin) in data.chunks_exact_mut(n * n).enumerate() {
-            let scale = if f == 0 || f == n_bins - 1 {
-                base
-            } else {
-                2.0 * base
-            };
-            for i in 0..n {
-                bin[i * n + i] *= scale; // real, with +0 imaginary part
-                for j in i + 1..n {
-                    let s = bin[i * n + j] * scale;
-                    bin[i * n + j] = s;
-                    bin[j * n + i] = s.conj();
+        let mut data = vec![Complex64::default(); n_bins * n * n];
+        let mut pairs = sums.chunks_exact(n_bins);
+        for i in 0..n {
+            for j in i..n {
+                let pair = pairs.next().unwrap_or_default();
+                for (f, (bin, s)) in data.chunks_exact_mut(n * n).zip(pair).enumerate() {
+                    let scale = if f == 0 || f == n_bins - 1 {
+                        base
+                    } else {
+                        2.0 * base
+                    };
+                    if i == j {
+                        bin[i * n + i] = Complex64::new(s.re.max(0.0) * scale, 0.0);
+                    } else {
+                        let s = s * scale;
+                        bin[i * n + j] = s;
+                        bin[j * n + i] = s.conj();
+                    }
                 }
             }
         }
@@ -170,16 +202,16 @@ fn check_input(
 }
 
 impl Plan<'_> {
-    /// Sum over the segments in `segments` of `X_i X_j^*` for `i <= j` (lower triangle left 0),
-    /// laid out `[frequency][row][col]`. Allocates once, not per segment.
+    /// Sum over the segments in `segments` of `X_i X_j^*` for `i <= j`, laid out `[pair][bin]`
+    /// (pairs row by row of the upper triangle; auto-spectra real). Allocates once, not per segment.
     fn accumulate(&self, segments: std::ops::Range<usize>) -> Result<Vec<Complex64>, SpectralError> {
         let (n, nb) = (self.channels.len(), self.n_bins);
         let seg = self.settings.segment_len;
         let step = self.settings.step();
-        let mut input = vec![0.0; self.settings.nfft()];
+        let mut input = vec![0.0; self.fft.len()];
         let mut spectra = vec![Complex64::default(); n * nb];
         let mut scratch = vec![Complex64::default(); self.fft.get_scratch_len()];
-        let mut acc = vec![Complex64::default(); nb * n * n];
+        let mut acc = vec![Complex64::default(); nb * n * (n + 1) / 2];
         for s in segments {
             let start = s * step;
             for (x, out) in self.channels.iter().zip(spectra.chunks_exact_mut(nb)) {
@@ -192,12 +224,18 @@ impl Plan<'_> {
                     .process_with_scratch(&mut input, out, &mut scratch)
                     .map_err(|e| SpectralError::Fft(e.to_string()))?;
             }
-            for (f, bin) in acc.chunks_exact_mut(n * n).enumerate() {
-                for i in 0..n {
-                    let xi = spectra[i * nb + f];
-                    bin[i * n + i].re += xi.norm_sqr();
-                    for j in i + 1..n {
-                        bin[i * n + j] += xi * spectra[j * nb + f].conj();
+            let mut pairs = acc.chunks_exact_mut(nb);
+            for i in 0..n {
+                let xi = &spectra[i * nb..(i + 1) * nb];
+                for j in i..n {
+                    let pair = pairs.next().unwrap_or_default();
+                    if i == j {
+                        pair.iter_mut().zip(xi).for_each(|(a, x)| a.re += x.norm_sqr());
+                    } else {
+                        let xj = &spectra[j * nb..(j + 1) * nb];
+                        for ((a, p), q) in pair.iter_mut().zip(xi).zip(xj) {
+                            *a += p * q.conj();
+                        }
                     }
                 }
             }

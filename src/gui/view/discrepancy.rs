@@ -13,7 +13,7 @@ use crate::diagnose::map::DisagreementMap;
 use crate::diagnose::report::BlockReport;
 use crate::gui::app::{Command, RunEntry};
 
-const CELL_W: f32 = 46.0;
+const CELL_W: f32 = 36.0;
 const CELL_H: f32 = 20.0;
 const LABEL_W: f32 = 34.0;
 /// Significance at which a map cell is fully coloured.

@@ -26,6 +26,7 @@
 
 use faer::prelude::SolveLstsq;
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 
 use super::project::Projector;
 use num_complex::Complex64;
@@ -57,8 +58,13 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
         starts.push((extended, prev.tau));
     }
     let mut best: Option<(Model, f64)> = None;
-    for (den, tau) in starts {
-        consider(data, den, tau, max_iter, &mut best);
+    // The starts are refined in parallel and compared in order, as a sequential loop would.
+    let refined: Vec<Option<(Model, f64)>> = starts
+        .into_par_iter()
+        .map(|(den, tau)| refined(data, den, tau, max_iter))
+        .collect();
+    for candidate in refined.into_iter().flatten() {
+        keep_best(candidate, &mut best);
     }
     // Order 1: the mirror image of the best, 1 - T s, with the delay moved by 2 T to keep the
     // phase slope: a pole and its mirror have the same magnitude response, so each is a local
@@ -74,14 +80,24 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
     best.map(|b| b.0)
 }
 
+/// Refines from `(den, tau)`; the model and its chi2.
+fn refined(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<(Model, f64)> {
+    let model = refine(data, den, tau, max_iter)?;
+    let chi2 = model.chi2(data);
+    Some((model, chi2))
+}
+
+/// Keeps `candidate` in `best` if its chi2 is finite and smaller.
+fn keep_best(candidate: (Model, f64), best: &mut Option<(Model, f64)>) {
+    if candidate.1.is_finite() && best.as_ref().is_none_or(|b| candidate.1 < b.1) {
+        *best = Some(candidate);
+    }
+}
+
 /// Refines from `(den, tau)` and keeps the result in `best` if its chi2 is smaller.
 fn consider(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, best: &mut Option<(Model, f64)>) {
-    let Some(model) = refine(data, den, tau, max_iter) else {
-        return;
-    };
-    let chi2 = model.chi2(data);
-    if chi2.is_finite() && best.as_ref().is_none_or(|b| chi2 < b.1) {
-        *best = Some((model, chi2));
+    if let Some(candidate) = refined(data, den, tau, max_iter) {
+        keep_best(candidate, best);
     }
 }
 

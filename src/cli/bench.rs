@@ -1,0 +1,151 @@
+//! `imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]` (issue 6): times the
+//! identifier's stages on RUN, or on a simulated run of M minutes at HZ (default 30 min at 1 kHz)
+//! written to a temporary CSV. Prints a table, or with `--json` one JSON object on one line.
+//!
+//! `--segment` defaults to the identifier's default (4096); for a simulated run shorter than four
+//! such segments it is halved until four fit (at least 64).
+
+use std::io::Write as _;
+use std::path::Path;
+
+use super::{Args, CliError};
+use crate::bench::input::{BENCH_REGIME, TempRun};
+use crate::bench::{BenchError, run_bench};
+use crate::ident::IdentError;
+use crate::ident::settings::Settings;
+
+/// Default simulated duration, minutes.
+const DEFAULT_MINUTES: f64 = 30.0;
+/// Default simulated sample rate, Hz.
+const DEFAULT_RATE_HZ: f64 = 1000.0;
+
+pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
+    let json = argv.iter().any(|a| a == "--json");
+    let rest: Vec<String> = argv.iter().filter(|a| *a != "--json").cloned().collect();
+    let args = Args::parse(&rest)?;
+    let minutes: Option<f64> = args
+        .get("minutes")
+        .map(|_| args.parsed_or("minutes", 0.0))
+        .transpose()?;
+    let rate: Option<f64> = args
+        .get("rate")
+        .map(|_| args.parsed_or("rate", 0.0))
+        .transpose()?;
+    let segment: Option<usize> = args
+        .get("segment")
+        .map(|_| args.parsed_or("segment", 0))
+        .transpose()?;
+    args.reject_unknown()?;
+    let mut settings = Settings::default();
+    let temp;
+    let path = match args.positional.as_slice() {
+        [] => {
+            let (minutes, rate) = (
+                minutes.unwrap_or(DEFAULT_MINUTES),
+                rate.unwrap_or(DEFAULT_RATE_HZ),
+            );
+            settings.welch.segment_len =
+                segment.unwrap_or_else(|| default_segment(settings.welch.segment_len, minutes * 60.0 * rate));
+            temp = simulate(minutes, rate)?;
+            temp.path().to_owned()
+        }
+        [run] if minutes.is_none() && rate.is_none() => {
+            settings.welch.segment_len = segment.unwrap_or(settings.welch.segment_len);
+            Path::new(run).to_owned()
+        }
+        [_] => {
+            return Err(CliError::Input(
+                "bench: --minutes and --rate size the simulated run; they cannot be given with RUN".into(),
+            ));
+        }
+        more => {
+            return Err(CliError::Input(format!(
+                "bench takes at most one RUN, got {}",
+                more.len()
+            )));
+        }
+    };
+    let bar = super::progress::bar(0, "bench {wide_bar} {pos}/{len} {msg} {elapsed}");
+    let report = run_bench(&path, settings, &mut |name, count| {
+        bar.set_length(count as u64);
+        bar.set_message(name);
+        if name != "load" {
+            bar.inc(1);
+        }
+    });
+    bar.finish_and_clear();
+    let report = report.map_err(|e| classify(&path, e))?;
+    let text = if json {
+        report.to_json() + "\n"
+    } else {
+        report.to_table()
+    };
+    std::io::stdout()
+        .lock()
+        .write_all(text.as_bytes())
+        .map_err(|e| CliError::Internal(e.into()))
+}
+
+/// The segment of a simulated run of `samples` when `--segment` is not given: the settings'
+/// default, halved while the run holds fewer than four segments (a short test run still has
+/// several averages).
+fn default_segment(default: usize, samples: f64) -> usize {
+    let mut segment = default;
+    while segment > 64 && (segment * 4) as f64 > samples {
+        segment /= 2;
+    }
+    segment
+}
+
+/// Simulates the benchmark run in a child process (`imu-attest simulate`), so that the
+/// simulation's memory is not in this process's peak; its progress bars show on a terminal.
+fn simulate(minutes: f64, rate_hz: f64) -> Result<TempRun, CliError> {
+    use std::io::IsTerminal as _;
+    use std::process::{Command, Stdio};
+    let temp = TempRun::unwritten();
+    let exe = std::env::current_exe().map_err(|e| CliError::Internal(e.into()))?;
+    let interactive = std::io::stderr().is_terminal();
+    let output = Command::new(exe)
+        .args(["simulate", "--regime", BENCH_REGIME.name()])
+        .args([
+            "--duration",
+            &(minutes * 60.0).to_string(),
+            "--rate",
+            &rate_hz.to_string(),
+        ])
+        .arg("--out")
+        .arg(temp.path())
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(if interactive {
+            Stdio::inherit()
+        } else {
+            Stdio::piped()
+        })
+        .output()
+        .map_err(|e| CliError::Internal(e.into()))?;
+    match output.status.code() {
+        Some(0) => Ok(temp),
+        code => {
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            let message = stderr.trim().trim_start_matches("imu-attest: ");
+            let message = format!("bench: simulating the run: {message}");
+            Err(if code == Some(2) {
+                CliError::Input(message)
+            } else {
+                CliError::Internal(anyhow::anyhow!(message))
+            })
+        }
+    }
+}
+
+/// Bad input (the run, the settings for it, the size asked) exits 2; anything else is ours.
+fn classify(path: &Path, e: BenchError) -> CliError {
+    match e {
+        BenchError::Load(_) | BenchError::Simulate(_) => CliError::Input(e.to_string()),
+        BenchError::Ident(
+            IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. },
+        ) => CliError::Input(format!("{}: {e}", path.display())),
+        other => CliError::Internal(anyhow::anyhow!("{}: {other}", path.display())),
+    }
+}

@@ -1,6 +1,5 @@
 //! `imu-attest identify RUN [--settings S.json] --out MODEL.json` (contract sections 3 and 4).
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::{Args, CliError};
@@ -8,7 +7,7 @@ use crate::ident::IdentError;
 use crate::ident::identify::identify_run;
 use crate::ident::settings::Settings;
 use crate::model::Model;
-use crate::output::{ensure_not_input, write_atomic};
+use crate::output::{OutputError, ensure_not_input};
 use crate::run::sidecar_path;
 
 /// Reads `--settings` (or the defaults).
@@ -47,18 +46,20 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     };
     // Settings that do not fit this run are the user's input; anything else is ours.
     let id = identify_run(&run, &settings).map_err(|e| match e {
-        IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. } => {
-            CliError::Input(format!("{}: {e}", run_path.display()))
-        }
+        IdentError::Settings(_)
+        | IdentError::MissingBlock(_)
+        | IdentError::EmptyBand { .. }
+        | IdentError::NotExcited { .. } => CliError::Input(format!("{}: {e}", run_path.display())),
         other => CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display())),
     })?;
+    for block in &id.blocks {
+        for warning in &block.warnings {
+            eprintln!("imu-attest: warning: {} block: {warning}", block.block.name());
+        }
+    }
     let model = Model::from_identification(&run, &settings, &id);
-    model
-        .check_finite()
-        .map_err(|e| CliError::Internal(anyhow::anyhow!("model not written: {e}")))?;
-    write_atomic(&out, |w| {
-        serde_json::to_writer_pretty(&mut *w, &model).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
+    model.write_file(&out).map_err(|e| match e {
+        OutputError::NonFinite { .. } => CliError::Internal(anyhow::anyhow!("model not written: {e}")),
+        other => CliError::Input(other.to_string()),
     })
-    .map_err(|e| CliError::Input(e.to_string()))
 }

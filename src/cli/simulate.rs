@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::{Args, CliError};
+use crate::run::sidecar_path;
 use crate::sim::effect::{Block, EffectSpec};
 use crate::sim::regime::Regime;
 use crate::sim::write::write_run;
@@ -42,6 +43,14 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             args.positional[0]
         )));
     }
+    let out = Path::new(out);
+    // `--out x.json` would be its own sidecar: the sidecar would replace the run.
+    if sidecar_path(out) == out {
+        return Err(CliError::Input(format!(
+            "--out {}: the run and its sidecar would be the same file (name the run .csv or .csv.gz)",
+            out.display()
+        )));
+    }
     let run = simulate(&config).map_err(|e| CliError::Input(e.to_string()))?;
-    write_run(&run, Path::new(out)).map_err(|e| CliError::Input(e.to_string()))
+    write_run(&run, out).map_err(|e| CliError::Input(e.to_string()))
 }

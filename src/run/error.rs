@@ -176,7 +176,7 @@ pub enum LoadError {
     },
     /// The time column increases uniformly but spans no finite, positive duration in floating
     /// point (steps so small the rate overflows, or a span beyond the largest number).
-    #[error("{}:2:{column} (column 't'): time runs from {first} to {last} s: no finite sample rate", path.display())]
+    #[error("{}:2:{column} (column 't'): time runs from {first:e} to {last:e} s: no finite sample rate", path.display())]
     TimeSpan {
         /// The file.
         path: PathBuf,

@@ -5,7 +5,7 @@
 //! file and leaves the destination untouched: no partial output ever exists under the final name.
 
 use std::fs::{self, File};
-use std::io::{self, BufWriter};
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Why an output was not written.
@@ -23,8 +23,23 @@ pub enum OutputError {
         /// The destination.
         path: PathBuf,
     },
+    /// The destination exists and is not a regular file (a device, a FIFO, a socket): renaming
+    /// over it would replace it.
+    #[error("cannot write {path}: it exists and is not a regular file")]
+    NotRegular {
+        /// The destination.
+        path: PathBuf,
+    },
+    /// The content holds a number JSON or CSV cannot carry (NaN or infinity): nothing is written.
+    #[error("refusing to write {path}: {detail}")]
+    NonFinite {
+        /// The destination.
+        path: PathBuf,
+        /// Where the first non-finite number is.
+        detail: String,
+    },
     /// An I/O error; nothing was left under the destination's name.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {source}; nothing was written")]
     Io {
         /// The destination.
         path: PathBuf,
@@ -65,13 +80,29 @@ pub fn ensure_not_input(out: &Path, inputs: &[PathBuf]) -> Result<(), OutputErro
 ///
 /// # Errors
 /// [`OutputError::Io`] when the folder cannot be written, the disk is full, or `produce` fails;
-/// the temporary file is removed and `path` is untouched.
+/// the temporary file is removed and `path` is untouched. [`OutputError::IsDirectory`] or
+/// [`OutputError::NotRegular`] when `path` exists and is not a regular file.
 pub fn write_atomic(
     path: &Path,
     produce: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> Result<(), OutputError> {
+    write_atomic_via(path, |tmp| File::create(tmp), produce)
+}
+
+/// [`write_atomic`] with the temporary file opened by `create`: tests hand in a sink that fails
+/// like a full disk.
+fn write_atomic_via<W: Write + SyncAll>(
+    path: &Path,
+    create: impl FnOnce(&Path) -> io::Result<W>,
+    produce: impl FnOnce(&mut BufWriter<W>) -> io::Result<()>,
+) -> Result<(), OutputError> {
     if path.is_dir() {
         return Err(OutputError::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
+    if path.exists() && !path.is_file() {
+        return Err(OutputError::NotRegular {
             path: path.to_path_buf(),
         });
     }
@@ -88,7 +119,7 @@ pub fn write_atomic(
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
     let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| {
-        let file = File::create(&tmp)?;
+        let file = create(&tmp)?;
         let mut writer = BufWriter::with_capacity(1 << 20, file);
         produce(&mut writer)?;
         let file = writer.into_inner().map_err(io::IntoInnerError::into_error)?;
@@ -102,10 +133,21 @@ pub fn write_atomic(
     Ok(())
 }
 
+/// A sink whose bytes can be forced to the storage device before the rename.
+trait SyncAll {
+    /// Flushes the data to the device.
+    fn sync_all(&self) -> io::Result<()>;
+}
+
+impl SyncAll for File {
+    fn sync_all(&self) -> io::Result<()> {
+        File::sync_all(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::io::Write;
 
     #[test]
     fn writes_whole_file_and_replaces_atomically() {
@@ -137,6 +179,90 @@ mod tests {
         assert_eq!(fs::read(&p).unwrap(), b"old");
     }
 
+    /// A file that takes `room` bytes, then fails like a full disk.
+    struct FullDisk {
+        file: File,
+        room: usize,
+    }
+
+    impl Write for FullDisk {
+        fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+            if self.room == 0 {
+                return Err(io::Error::from(io::ErrorKind::StorageFull));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            self.file.write(&buf[..n])
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            self.file.flush()
+        }
+    }
+
+    impl SyncAll for FullDisk {
+        fn sync_all(&self) -> io::Result<()> {
+            self.file.sync_all()
+        }
+    }
+
+    #[test]
+    fn full_disk_leaves_no_partial_file_and_keeps_the_old_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("model.json");
+        fs::write(&p, b"old model").unwrap();
+        // 3 MB through a 1 MiB buffer: the disk fills while `produce` writes and again at the
+        // final flush, with 10 kB (then 0 bytes) of room.
+        for room in [10_000, 0] {
+            let err = write_atomic_via(
+                &p,
+                |tmp| {
+                    Ok(FullDisk {
+                        file: File::create(tmp)?,
+                        room,
+                    })
+                },
+                |w| w.write_all(&vec![b'x'; 3_000_000]),
+            )
+            .unwrap_err();
+            let OutputError::Io { source, .. } = &err else {
+                panic!("{err}")
+            };
+            assert_eq!(source.kind(), io::ErrorKind::StorageFull, "{err}");
+            assert!(err.to_string().contains("nothing was written"), "{err}");
+            assert_eq!(fs::read(&p).unwrap(), b"old model");
+            assert_eq!(
+                fs::read_dir(dir.path()).unwrap().count(),
+                1,
+                "temporary file removed"
+            );
+        }
+        // A disk that fills only when the buffer is flushed at the end.
+        let err = write_atomic_via(
+            &dir.path().join("small.json"),
+            |tmp| {
+                Ok(FullDisk {
+                    file: File::create(tmp)?,
+                    room: 10,
+                })
+            },
+            |w| w.write_all(b"a small file of 31 bytes ......"),
+        );
+        assert!(matches!(err, Err(OutputError::Io { .. })));
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_destination_that_is_not_a_regular_file_is_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+        assert!(made.success());
+        let err = write_atomic(&fifo, |w| w.write_all(b"x")).unwrap_err();
+        assert!(matches!(err, OutputError::NotRegular { .. }), "{err}");
+        assert!(!fifo.is_file(), "the FIFO was not replaced by a file");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
     #[test]
     fn unwritable_folder_and_directories_are_refused() {
         let dir = tempfile::tempdir().unwrap();
@@ -149,6 +275,13 @@ mod tests {
             write_atomic(dir.path(), |w| w.write_all(b"x")),
             Err(OutputError::IsDirectory { .. })
         ));
+        // A folder that is a regular file: as unwritable as a read-only one, even for root.
+        let file = dir.path().join("plain");
+        fs::write(&file, b"x").unwrap();
+        let err = write_atomic(&file.join("x.json"), |w| w.write_all(b"x")).unwrap_err();
+        assert!(matches!(err, OutputError::Io { .. }), "{err}");
+        assert_eq!(fs::read(&file).unwrap(), b"x");
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]

@@ -172,3 +172,138 @@ fn every_bad_input_exits_2_with_one_line() {
         assert!(err.contains(needle), "{sidecar}: expected '{needle}' in {err}");
     }
 }
+
+/// The cases beyond contract section 2's list (issue 7): each exits 2 with one line naming the
+/// file, and the line and column where they apply.
+#[test]
+fn more_bad_inputs_name_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rows = good_rows(40);
+    let long_line = format!("{HEADER}\n{}0.4,{}\n", good_rows(3), "1".repeat(2 << 20));
+    let cases: Vec<(&str, Vec<u8>, &[&str])> = vec![
+        (
+            "tab.csv",
+            format!("{}\n{}", HEADER.replace(',', "\t"), rows.replace(',', "\t")).into_bytes(),
+            &[":1:", "'\\t'", "comma-separated"],
+        ),
+        ("empty.csv", Vec::new(), &["empty file"]),
+        ("blank_lines.csv", b"\n\n  \n".to_vec(), &["empty file"]),
+        (
+            "blank_inside.csv",
+            format!("{HEADER}\n{}\n{}", good_rows(20), "0.5,0,0,0,0,0,0\n").into_bytes(),
+            &[":22:", "blank line"],
+        ),
+        (
+            "empty_name.csv",
+            format!("t,roll,,pitch,gx,gy,gz\n{rows}").into_bytes(),
+            &[":1:3", "no name"],
+        ),
+        (
+            "extra_field.csv",
+            format!("{HEADER}\n{}0.4,0,0,0,0,0,0,9\n", good_rows(40)).into_bytes(),
+            &[":42:", "has 8 fields, header has 7"],
+        ),
+        (
+            "duplicate_t.csv",
+            format!("t,roll,yaw,pitch,gx,gy,gz,t\n{}", rows.replace('\n', ",0\n")).into_bytes(),
+            &[":1:8 (column 't')", "duplicate column, also column 1"],
+        ),
+        ("long_line.csv", long_line.into_bytes(), &[":5:", "longer than"]),
+        (
+            "latin1.csv",
+            format!(
+                "{HEADER}\n{}0.4,0.01,0.02,0.03,0.1,0.2,0.3 \u{b0}\n",
+                good_rows(40)
+            )
+            .replace('\u{b0}', "\u{1}")
+            .into_bytes()
+            .into_iter()
+            .map(|b| if b == 1 { 0xB0 } else { b })
+            .collect(),
+            &[":42", "not text"],
+        ),
+        (
+            "huge_exponent.csv",
+            format!("{HEADER}\n{}0.4,0.01,1e999,0.03,0.1,0.2,0.3\n", good_rows(40)).into_bytes(),
+            &[":42:3 (column 'yaw')", "not a finite number: \"1e999\""],
+        ),
+        (
+            "quoted.csv",
+            format!("{HEADER}\n{}0.4,\"0.01\",0.02,0.03,0.1,0.2,0.3\n", good_rows(40)).into_bytes(),
+            &[":42:2 (column 'roll')", "not a number"],
+        ),
+        (
+            "decimal_comma.csv",
+            format!("{HEADER}\n{}", good_rows(40).replacen("0.01", "0,01", 1)).into_bytes(),
+            &[":2:", "has 8 fields, header has 7"],
+        ),
+        (
+            "time_span.csv",
+            std::fs::read(
+                Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("tests/data/fuzz_regressions/time_span_overflow.csv"),
+            )
+            .unwrap(),
+            &[":2:1 (column 't')", "no finite sample rate"],
+        ),
+    ];
+    for (name, bytes, needles) in cases {
+        let p = write(d, name, &bytes);
+        let (code, err) = inspect(&p);
+        assert_eq!(code, Some(2), "{name}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(name), "{name}: the message names the file: {err}");
+        for needle in needles {
+            assert!(err.contains(needle), "{name}: expected '{needle}' in: {err}");
+        }
+    }
+    // A directory given as a run, and a sidecar that is a directory.
+    let (code, err) = inspect(d);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("not a file (a directory?)"), "{err}");
+    write(d, "sided.csv", format!("{HEADER}\n{rows}").as_bytes());
+    std::fs::create_dir(d.join("sided.json")).unwrap();
+    let (code, err) = inspect(&d.join("sided.csv"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("sided.json: not a file"), "{err}");
+    // Sidecars of the wrong types or values, each naming the field.
+    for (sidecar, needles) in [
+        (
+            r#"{"g_mps2": "9.81"}"#,
+            &["side.json:1:", "invalid type: string"][..],
+        ),
+        (r#"{"g_mps2": -9.8}"#, &["field 'g_mps2'", "positive", "-9.8"][..]),
+        (
+            r#"{"gyro_lever_arm_m": [0, 0]}"#,
+            &["field 'gyro_lever_arm_m'", "3 numbers", "got 2"][..],
+        ),
+        (
+            r#"{"accel_lever_arm_m": 0.3}"#,
+            &["side.json:1:", "invalid type"][..],
+        ),
+        (r#"{"angle_noise_rad": -1}"#, &["field 'angle_noise_rad'"][..]),
+        ("\u{feff}[1, 2]", &["side.json:1:2", "invalid type"][..]),
+    ] {
+        write(d, "side.csv", format!("{HEADER}\n{rows}").as_bytes());
+        write(d, "side.json", sidecar.as_bytes());
+        let (code, err) = inspect(&d.join("side.csv"));
+        assert_eq!(code, Some(2), "{sidecar}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        for needle in needles {
+            assert!(err.contains(needle), "{sidecar}: expected '{needle}' in {err}");
+        }
+    }
+}
+
+/// Accepted oddities: a byte-order mark (removed with a notice), CRLF, no final newline.
+#[test]
+fn a_byte_order_mark_is_accepted_with_a_notice() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!("\u{feff}{HEADER}\r\n{}", good_rows(40).replace('\n', "\r\n"));
+    let p = write(dir.path(), "bom.csv", text.trim_end().as_bytes());
+    let (code, err) = inspect(&p);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("bom.csv: 40 samples"), "{err}");
+    assert!(err.contains("byte-order mark"), "{err}");
+}

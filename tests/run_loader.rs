@@ -756,6 +756,44 @@ fn too_large_is_refused_before_allocating() {
     );
 }
 
+/// A gzip file's size says little about its text, and the decompressor reads ahead: the first
+/// block's estimate is low, so the limit is checked again as the file streams.
+#[test]
+fn too_large_gzip_is_refused_as_it_streams() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, _) = csv(&ALL, 2000, 0.0, 0.01);
+    let path = write(dir.path(), "big.csv.gz", gzip(text.as_bytes()));
+    let options = LoadOptions {
+        chunk_bytes: 4096,
+        memory_limit_bytes: Some(100_000),
+        ..opts()
+    };
+    let mut calls = 0;
+    let err = load_with_progress(&path, &options, &mut |_| {
+        calls += 1;
+        ControlFlow::Continue(())
+    })
+    .unwrap_err();
+    let LoadError::TooLarge {
+        needed_bytes,
+        available_bytes,
+        ..
+    } = err
+    else {
+        panic!("{err}")
+    };
+    assert_eq!(available_bytes, 100_000);
+    // Refused once the rows read so far exceed the limit (1250 rows of 10 columns), before the
+    // 2000 rows were all decoded.
+    assert!((100_000..160_000).contains(&needed_bytes), "{needed_bytes}");
+    assert!(calls > 3, "the first blocks passed: {calls} progress calls");
+    assert!(
+        err.to_string()
+            .contains("big.csv.gz: the decoded run needs about"),
+        "{err}"
+    );
+}
+
 #[test]
 fn bad_sidecars() {
     let dir = tempfile::tempdir().unwrap();

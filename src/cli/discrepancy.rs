@@ -71,7 +71,10 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     )
     .map_err(|e| match e {
         DiagnoseError::Ident(
-            IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. },
+            IdentError::Settings(_)
+            | IdentError::MissingBlock(_)
+            | IdentError::EmptyBand { .. }
+            | IdentError::NotExcited { .. },
         )
         | DiagnoseError::TooShort { .. }
         | DiagnoseError::Degenerate(_) => CliError::Input(format!("{}: {e}", run_path.display())),

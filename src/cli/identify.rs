@@ -1,6 +1,5 @@
 //! `imu-attest identify RUN [--settings S.json] --out MODEL.json` (contract sections 3 and 4).
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::{Args, CliError};
@@ -8,7 +7,7 @@ use crate::ident::IdentError;
 use crate::ident::identify::identify_run_with_progress;
 use crate::ident::settings::Settings;
 use crate::model::Model;
-use crate::output::{ensure_not_input, write_atomic};
+use crate::output::{OutputError, ensure_not_input};
 use crate::run::sidecar_path;
 
 /// Reads `--settings` (or the defaults).
@@ -41,11 +40,10 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
 
     let model = identify_model(run_path, &settings)?;
-    write_atomic(&out, |w| {
-        serde_json::to_writer_pretty(&mut *w, &model).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
+    model.write_file(&out).map_err(|e| match e {
+        OutputError::NonFinite { .. } => CliError::Internal(anyhow::anyhow!("model not written: {e}")),
+        other => CliError::Input(other.to_string()),
     })
-    .map_err(|e| CliError::Input(e.to_string()))
 }
 
 /// Loads and identifies one run into its checked model (shared with `compare`).
@@ -67,11 +65,17 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
     });
     bar.finish_and_clear();
     let id = id.map_err(|e| match e {
-        IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. } => {
-            CliError::Input(format!("{}: {e}", run_path.display()))
-        }
+        IdentError::Settings(_)
+        | IdentError::MissingBlock(_)
+        | IdentError::EmptyBand { .. }
+        | IdentError::NotExcited { .. } => CliError::Input(format!("{}: {e}", run_path.display())),
         other => CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display())),
     })?;
+    for block in &id.blocks {
+        for warning in &block.warnings {
+            eprintln!("imu-attest: warning: {} block: {warning}", block.block.name());
+        }
+    }
     let model = Model::from_identification(&run, &settings, &id);
     model
         .check_finite()

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::{Args, CliError};
+use crate::run::sidecar_path;
 use crate::sim::effect::{Block, EffectSpec};
 use crate::sim::regime::Regime;
 use crate::sim::write::write_run_with_progress;
@@ -42,6 +43,14 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             args.positional[0]
         )));
     }
+    let out = Path::new(out);
+    // `--out x.json` would be its own sidecar: the sidecar would replace the run.
+    if sidecar_path(out) == out {
+        return Err(CliError::Input(format!(
+            "--out {}: the run and its sidecar would be the same file (name the run .csv or .csv.gz)",
+            out.display()
+        )));
+    }
     let spinner = super::progress::spinner("simulating");
     let run = simulate(&config).map_err(|e| CliError::Input(e.to_string()));
     spinner.finish_and_clear();
@@ -50,8 +59,8 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         run.time_s.len() as u64,
         "writing {msg} {wide_bar} {pos}/{len} rows {eta}",
     );
-    bar.set_message(super::progress::display_name(Path::new(out)));
-    let written = write_run_with_progress(&run, Path::new(out), &mut |done, _| bar.set_position(done as u64));
+    bar.set_message(super::progress::display_name(out));
+    let written = write_run_with_progress(&run, out, &mut |done, _| bar.set_position(done as u64));
     bar.finish_and_clear();
     written.map_err(|e| CliError::Input(e.to_string()))
 }

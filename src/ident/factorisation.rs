@@ -122,11 +122,11 @@ pub fn factorise(
         .collect();
 
     let eps = settings.loading * max_trace / 3.0;
-    let noise_max = noise_psd.iter().map(|s| s.trace().re).fold(0.0, f64::max);
     // The two factorisations are independent: one per core.
+    let residual_eps = residual_loading(spectra, &noise_psd, settings);
     let (d_u, w_psi) = rayon::join(
         || loaded_factor(&spectra.s_uu, eps, &settings.wilson),
-        || loaded_factor(&noise_psd, settings.loading * noise_max / 3.0, &settings.wilson),
+        || loaded_factor(&noise_psd, residual_eps, &settings.wilson),
     );
     let (d_u, w_psi) = (d_u?, w_psi?);
     let d_u_inv = d_u.inverse().map_err(factor_error)?;
@@ -166,6 +166,21 @@ pub fn factorise(
         floored_input_bins,
         converged: d_u.converged && w_psi.converged,
     })
+}
+
+/// The uniform loading added to the residual spectrum before its factorisation:
+/// `loading * max_f tr S_psi / 3`, but never below `loading * INVERSE_FLOOR * max_f tr S_xx / 3`,
+/// so that a residual that vanishes (an output explained exactly by the inputs) is still factored
+/// (as a tiny white disturbance) instead of refused; the warnings report it.
+#[must_use]
+pub fn residual_loading(
+    spectra: &BlockSpectra,
+    noise_psd: &[Matrix3<Complex64>],
+    settings: &FactorisationSettings,
+) -> f64 {
+    let max_trace = |s: &[Matrix3<Complex64>]| s.iter().map(|m| m.trace().re).fold(0.0, f64::max);
+    let scale = max_trace(noise_psd).max(INVERSE_FLOOR * max_trace(&spectra.s_xx));
+    settings.loading * scale / 3.0
 }
 
 /// Wilson factor of the two-sided `s + eps I` (loading added after the one-/two-sided conversion,

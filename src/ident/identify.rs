@@ -12,6 +12,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::IdentError;
+use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise};
 use super::settings::{OrderSetting, Settings};
 use super::signals::block_signals;
@@ -19,6 +20,7 @@ use super::spectra::{BlockSpectra, block_spectra};
 use super::structural::{
     OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure,
 };
+use super::warnings::{IdentWarning, block_warnings};
 use super::wiener::{WienerEstimate, band_bins, regularised_wiener};
 use crate::block::Block;
 use crate::run::Run;
@@ -40,6 +42,8 @@ pub struct BlockIdentification {
     pub band: Vec<usize>,
     /// Structural model (order).
     pub structural: Arc<StructuralFit>,
+    /// What was regularised or is inexact (empty when all is well).
+    pub warnings: Vec<IdentWarning>,
 }
 
 /// A whole run's identification.
@@ -68,8 +72,8 @@ pub struct IdentStep {
 /// Identifies every block the settings name.
 ///
 /// # Errors
-/// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, or any stage's
-/// error for any block.
+/// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, an input axis
+/// not excited in the band ([`IdentError::NotExcited`]), or any stage's error for any block.
 pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification, IdentError> {
     identify_run_with_progress(run, settings, &mut |_| {})
 }
@@ -122,6 +126,7 @@ pub fn identify_run_with_progress(
             block_spectra(&mut planner, &signals, run.sample_rate_hz, &settings.welch)
                 .map_err(|e| IdentError::Spectra(e.to_string()))?,
         );
+        check_excitation(&spectra, block, settings.band_hz)?;
         step("factorisation", Some(block));
         let factorisation = Arc::new(factorise(&spectra, &FactorisationSettings::default())?);
         step("fit", Some(block));
@@ -153,6 +158,7 @@ pub fn identify_block_from(
         settings.band_hz,
     )?);
     let band = native_band(&spectra, settings.band_hz);
+    let warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
     let structural = Arc::new(structural_fit(
         &spectra,
         &factorisation,
@@ -167,6 +173,7 @@ pub fn identify_block_from(
         wiener,
         band,
         structural,
+        warnings,
     })
 }
 

@@ -5,12 +5,14 @@
 //! (Welch) -> factorisation (Wilson, causal projection) -> regularised Wiener (A, Lambda) ->
 //! structural fit (order).
 
+pub mod excitation;
 pub mod factorisation;
 pub mod identify;
 pub mod settings;
 pub mod signals;
 pub mod spectra;
 pub mod structural;
+pub mod warnings;
 pub mod wiener;
 
 /// Why an identification step failed.
@@ -42,6 +44,25 @@ pub enum IdentError {
     /// The structural fit failed.
     #[error("structural fit: {0}")]
     Structural(String),
+    /// An input direction of a block carries (almost) no power in the band: a stand axis held
+    /// still. Its response cannot be identified from this run.
+    #[error(
+        "{block} block: axis {axis} not excited between {low_hz} and {high_hz} Hz (weakest input \
+         direction has {relative_power:.1e} of the strongest's power): move that stand axis, or \
+         identify from a run that does"
+    )]
+    NotExcited {
+        /// The block (`"gyro"` or `"accel"`).
+        block: &'static str,
+        /// The input axis (`"wz"`, `"fx"`, ...) with the largest share of the weakest direction.
+        axis: &'static str,
+        /// Low edge of the band, Hz.
+        low_hz: f64,
+        /// High edge of the band, Hz.
+        high_hz: f64,
+        /// Weakest over strongest principal input power over the band.
+        relative_power: f64,
+    },
     /// A matrix that must be inverted is singular.
     #[error("{0} is singular")]
     Singular(&'static str),
@@ -50,3 +71,7 @@ pub enum IdentError {
 #[cfg(test)]
 #[path = "ident_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "edges_tests.rs"]
+mod edges_tests;

@@ -10,6 +10,8 @@
 //! infinity is ever written: [`Model::check_finite`] runs before every write.
 
 use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::Path;
 
 use nalgebra::Matrix3;
 use num_complex::Complex64;
@@ -19,6 +21,8 @@ use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
 use crate::ident::structural::OrderCandidate;
+use crate::ident::warnings::IdentWarning;
+use crate::output::{OutputError, write_atomic};
 use crate::run::Run;
 
 /// The schema id of the model file.
@@ -162,6 +166,9 @@ pub struct Fit {
     pub equivalent_averages: f64,
     /// Reconstruction errors of the input and disturbance spectral factors.
     pub factor_errors: [f64; 2],
+    /// What was regularised or is inexact (absent or empty when all is well).
+    #[serde(default)]
+    pub warnings: Vec<IdentWarning>,
 }
 
 fn finite(v: f64) -> Option<f64> {
@@ -211,6 +218,7 @@ impl BlockModel {
                 constraint_residual: w.constraint_residual,
                 equivalent_averages: b.spectra.equivalent_averages,
                 factor_errors: [f.input_factor_error, f.noise_factor_error],
+                warnings: b.warnings.clone(),
             },
         }
     }
@@ -240,6 +248,23 @@ impl Model {
         let value = serde_json::to_value(self).map_err(|e| e.to_string())?;
         first_null(&value, "", false).map_or(Ok(()), |path| Err(format!("{path} is not a finite number")))
     }
+
+    /// Writes the model file (pretty JSON) atomically, after [`Model::check_finite`]: every writer
+    /// of a model goes through here, so no NaN or infinity reaches a file.
+    ///
+    /// # Errors
+    /// [`OutputError::NonFinite`] naming the first non-finite number (nothing is written), or the
+    /// errors of [`write_atomic`].
+    pub fn write_file(&self, path: &Path) -> Result<(), OutputError> {
+        self.check_finite().map_err(|detail| OutputError::NonFinite {
+            path: path.to_path_buf(),
+            detail,
+        })?;
+        write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        })
+    }
 }
 
 /// The path of the first `null` in `value` (where `serde_json` wrote NaN or infinity), outside
@@ -267,5 +292,50 @@ fn first_null(value: &serde_json::Value, path: &str, null_allowed: bool) -> Opti
             first_null(v, &child, null_allowed || k.contains("_std"))
         }),
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn empty_model() -> Model {
+        Model {
+            schema: MODEL_SCHEMA.to_owned(),
+            source: Source {
+                file: "run.csv".to_owned(),
+                sha256: "0".repeat(64),
+                regime: "cruise".to_owned(),
+                sample_rate_hz: 500.0,
+            },
+            settings: Settings::default(),
+            blocks: BTreeMap::new(),
+        }
+    }
+
+    #[test]
+    fn non_finite_numbers_never_reach_the_file() {
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let path = dir.path().join("model.json");
+        empty_model()
+            .write_file(&path)
+            .expect("a finite model is written");
+        let written = std::fs::read(&path).expect("written");
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut model = empty_model();
+            model.source.sample_rate_hz = bad;
+            let err = model.write_file(&path).expect_err("refused");
+            assert!(err.to_string().contains("source.sample_rate_hz"), "{err}");
+            let mut model = empty_model();
+            model.settings.band_hz = [0.1, bad];
+            let err = model.write_file(&path).expect_err("refused");
+            assert!(err.to_string().contains("settings.band_hz[1]"), "{err}");
+            assert_eq!(
+                std::fs::read(&path).expect("kept"),
+                written,
+                "the old file is untouched"
+            );
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).expect("listed").count(), 1);
     }
 }

@@ -174,6 +174,19 @@ pub enum LoadError {
         /// The nominal step (median of the first steps), s.
         nominal_dt: f64,
     },
+    /// The time column increases uniformly but spans no finite, positive duration in floating
+    /// point (steps so small the rate overflows, or a span beyond the largest number).
+    #[error("{}:2:{column} (column 't'): time runs from {first:e} to {last:e} s: no finite sample rate", path.display())]
+    TimeSpan {
+        /// The file.
+        path: PathBuf,
+        /// 1-based column number of `t`.
+        column: usize,
+        /// First time, s.
+        first: f64,
+        /// Last time, s.
+        last: f64,
+    },
     /// Fewer data rows than the minimum.
     #[error("{}: {n} samples, at least {min} needed", path.display())]
     TooFewSamples {

@@ -9,7 +9,7 @@ use std::path::Path;
 use super::csv::Rows;
 use super::header::Layout;
 use super::options::{LoadOptions, LoadProgress, MIN_SAMPLES, mem_available_bytes};
-use super::stream::{self, Chunk, Pipe, SourceError, TextChunk};
+use super::stream::{self, Chunk, Pipe, RawSource, SourceError, TextChunk};
 use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing};
 
 /// Capacity reserved per estimated row: the estimate from the first block is rough for gzip
@@ -35,10 +35,7 @@ pub fn load_with_progress(
     options: &LoadOptions,
     progress: &mut dyn FnMut(LoadProgress) -> ControlFlow<()>,
 ) -> Result<Run, LoadError> {
-    let io = |source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    };
+    let io = io_error(path);
     let meta = std::fs::metadata(path).map_err(io)?;
     if !meta.is_file() {
         return Err(LoadError::NotAFile {
@@ -48,12 +45,68 @@ pub fn load_with_progress(
     let mut notices = Vec::new();
     let sidecar = sidecar::read_sidecar(path, &mut notices)?;
     let file = File::open(path).map_err(io)?;
+    let stored = Stored {
+        bytes: Box::new(file),
+        size_bytes: meta.len(),
+        sidecar,
+        notices,
+    };
+    load_stored(path, stored, options, progress)
+}
+
+/// Parses a run held in memory (the bytes of a CSV or gzipped CSV file) as [`load`] parses a
+/// file; `name` names it in errors and in [`Run::source`]. No sidecar is read: the sidecar's
+/// defaults for the stem of `name` are used, without a notice. The fuzz targets and the property
+/// tests drive the parser through this.
+///
+/// # Errors
+/// As [`load`], but never [`LoadError::NotAFile`] or a sidecar error.
+pub fn load_bytes(name: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Run, LoadError> {
+    let stored = Stored {
+        bytes: Box::new(bytes),
+        size_bytes: bytes.len() as u64,
+        sidecar: sidecar::Sidecar::defaults(&sidecar::run_stem(name)),
+        notices: Vec::new(),
+    };
+    load_stored(name, stored, options, &mut |_| ControlFlow::Continue(()))
+}
+
+/// Maps an I/O error on `path` to [`LoadError::Io`].
+fn io_error(path: &Path) -> impl Fn(std::io::Error) -> LoadError + Copy + '_ {
+    move |source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+/// The stored bytes of a run and what was learnt before reading them.
+struct Stored<'a> {
+    bytes: RawSource<'a>,
+    size_bytes: u64,
+    sidecar: sidecar::Sidecar,
+    notices: Vec<String>,
+}
+
+/// Reads, parses and checks stored bytes into a [`Run`].
+fn load_stored(
+    path: &Path,
+    stored: Stored<'_>,
+    options: &LoadOptions,
+    progress: &mut dyn FnMut(LoadProgress) -> ControlFlow<()>,
+) -> Result<Run, LoadError> {
+    let io = io_error(path);
+    let Stored {
+        bytes,
+        size_bytes,
+        sidecar,
+        mut notices,
+    } = stored;
     let (sha256, rows) = std::thread::scope(|scope| {
-        let (pipe, reader) = stream::spawn(scope, file, options.chunk_bytes).map_err(io)?;
+        let (pipe, reader) = stream::spawn(scope, bytes, options.chunk_bytes).map_err(io)?;
         let parsed = Parse {
             path,
-            options,
-            bytes_total: meta.len(),
+            bytes_total: size_bytes,
+            memory_limit: options.memory_limit_bytes.or_else(mem_available_bytes),
             notices: &mut notices,
         }
         .run(&pipe, progress);
@@ -94,7 +147,7 @@ pub fn load_with_progress(
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default(),
         sha256,
-        size_bytes: meta.len(),
+        size_bytes,
     };
     Ok(Run {
         source,
@@ -112,8 +165,9 @@ pub fn load_with_progress(
 /// The consuming side of one load.
 struct Parse<'a> {
     path: &'a Path,
-    options: &'a LoadOptions,
     bytes_total: u64,
+    /// Bytes the decoded columns may take (`None`: no limit known).
+    memory_limit: Option<u64>,
     notices: &'a mut Vec<String>,
 }
 
@@ -146,6 +200,9 @@ impl Parse<'_> {
             pipe.recycle(std::mem::take(&mut chunk.text));
             chunk = self.recv(pipe, rows.next_line)?;
             rows.feed(&chunk.text)?;
+            // Checked again as the file streams: the first block's estimate can be low (a gzip
+            // file's size says little about its text, and the decompressor reads ahead).
+            self.estimate_fits(&rows, chunk.raw_done)?;
         }
     }
 
@@ -222,12 +279,25 @@ impl Parse<'_> {
     /// # Errors
     /// [`LoadError::TooLarge`] when the estimated columns exceed the available memory.
     fn reserve(&self, rows: &mut Rows, raw_done: u64) -> Result<(), LoadError> {
+        let estimate = self.estimate_fits(rows, raw_done)?;
+        // Generous: untouched capacity costs address space only, and the columns are shrunk at
+        // the end, whereas an estimate too small would copy every column once more.
+        let room = (estimate * RESERVE_MARGIN) as usize + 1024;
+        rows.reserve(room.saturating_sub(rows.len()));
+        Ok(())
+    }
+
+    /// The estimated rows of the whole file (rows so far over the share of the file read), after
+    /// checking that their columns fit in the memory limit.
+    ///
+    /// # Errors
+    /// [`LoadError::TooLarge`] with the estimated and the available bytes.
+    fn estimate_fits(&self, rows: &Rows, raw_done: u64) -> Result<f64, LoadError> {
         let parsed = rows.len().max(1) as f64;
         let share = raw_done.max(1) as f64 / self.bytes_total.max(1) as f64;
         let estimate = parsed / share.min(1.0);
         let needed_bytes = (estimate as u64).saturating_mul(rows.width() as u64 * 8);
-        let available = self.options.memory_limit_bytes.or_else(mem_available_bytes);
-        if let Some(available_bytes) = available
+        if let Some(available_bytes) = self.memory_limit
             && needed_bytes > available_bytes
         {
             return Err(LoadError::TooLarge {
@@ -236,10 +306,6 @@ impl Parse<'_> {
                 available_bytes,
             });
         }
-        // Generous: untouched capacity costs address space only, and the columns are shrunk at
-        // the end, whereas an estimate too small would copy every column once more.
-        let room = (estimate * RESERVE_MARGIN) as usize + 1024;
-        rows.reserve(room.saturating_sub(rows.len()));
-        Ok(())
+        Ok(estimate)
     }
 }

@@ -5,8 +5,7 @@
 //! Hashing and decompression thus run beside the parsing of the previous chunk. At most two
 //! chunks wait in the channel, so memory stays a few chunk sizes whatever the file size.
 
-use std::fs::File;
-use std::io::{self, BufReader, Read, Seek, SeekFrom};
+use std::io::{self, BufReader, Read};
 use std::sync::mpsc::{Receiver, Sender, SyncSender, channel, sync_channel};
 use std::thread::{Scope, ScopedJoinHandle};
 
@@ -44,15 +43,18 @@ pub(super) enum SourceError {
     Gzip(String),
 }
 
+/// The bytes as stored: a file, or a slice in memory ([`super::load_bytes`]).
+pub(super) type RawSource<'a> = Box<dyn Read + Send + 'a>;
+
 /// Reads a file, hashing and counting every byte that passes.
-struct HashingReader {
-    file: File,
+struct HashingReader<'a> {
+    file: RawSource<'a>,
     hasher: Sha256,
     bytes: u64,
     io_failed: bool,
 }
 
-impl Read for HashingReader {
+impl Read for HashingReader<'_> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         let n = self.file.read(buf).inspect_err(|_| self.io_failed = true)?;
         self.hasher.update(&buf[..n]);
@@ -62,13 +64,13 @@ impl Read for HashingReader {
 }
 
 /// The file, decompressed or not.
-enum Source {
-    Plain(HashingReader),
-    Gzip(Box<MultiGzDecoder<BufReader<HashingReader>>>),
+enum Source<'a> {
+    Plain(HashingReader<'a>),
+    Gzip(Box<MultiGzDecoder<BufReader<HashingReader<'a>>>>),
 }
 
-impl Source {
-    fn raw(&mut self) -> &mut HashingReader {
+impl<'a> Source<'a> {
+    fn raw(&mut self) -> &mut HashingReader<'a> {
         match self {
             Self::Plain(r) => r,
             Self::Gzip(d) => d.get_mut().get_mut(),
@@ -92,8 +94,9 @@ impl Source {
     }
 }
 
-/// Opens the source: gzip when the file starts with `1f 8b`, whatever its name.
-fn open(mut file: File) -> io::Result<Source> {
+/// Opens the source: gzip when the file starts with `1f 8b`, whatever its name. The bytes read to
+/// look are put back in front of the rest, so nothing needs to seek.
+fn open(mut file: RawSource<'_>) -> io::Result<Source<'_>> {
     let mut magic = [0u8; 2];
     let mut n = 0;
     while n < magic.len() {
@@ -104,9 +107,9 @@ fn open(mut file: File) -> io::Result<Source> {
             Err(e) => return Err(e),
         }
     }
-    file.seek(SeekFrom::Start(0))?;
+    let head = io::Cursor::new(magic).take(n as u64);
     let raw = HashingReader {
-        file,
+        file: Box::new(head.chain(file)),
         hasher: Sha256::new(),
         bytes: 0,
         io_failed: false,
@@ -143,7 +146,7 @@ impl Pipe {
 /// When the operating system cannot start a thread.
 pub(super) fn spawn<'scope>(
     scope: &'scope Scope<'scope, '_>,
-    file: File,
+    file: RawSource<'scope>,
     chunk_bytes: usize,
 ) -> io::Result<(Pipe, ScopedJoinHandle<'scope, ()>)> {
     let (tx, chunks) = sync_channel(1);
@@ -156,7 +159,7 @@ pub(super) fn spawn<'scope>(
 
 /// The reading thread's body: sends chunks of about `chunk_bytes` until the end, an error, or the
 /// receiver hanging up (cancel).
-fn produce(file: File, chunk_bytes: usize, tx: &SyncSender<Chunk>, recycled: &Receiver<Vec<u8>>) {
+fn produce(file: RawSource<'_>, chunk_bytes: usize, tx: &SyncSender<Chunk>, recycled: &Receiver<Vec<u8>>) {
     let mut source = match open(file) {
         Ok(source) => source,
         Err(e) => {

@@ -34,7 +34,8 @@ pub fn nominal_step(t: &[f64]) -> f64 {
 /// # Errors
 /// [`LoadError::TimeNotIncreasing`] at the first step that is not positive,
 /// [`LoadError::IrregularSampling`] at the first step more than `tolerance` (relative) away from
-/// the nominal step, whichever comes first in the file. `t_column` is the 0-based column of `t`.
+/// the nominal step, whichever comes first in the file; [`LoadError::TimeSpan`] when the span
+/// gives no finite positive rate. `t_column` is the 0-based column of `t`.
 pub(super) fn check_time(path: &Path, t: &[f64], t_column: usize, tolerance: f64) -> Result<f64, LoadError> {
     let nominal = nominal_step(t);
     let limit = tolerance * nominal;
@@ -62,8 +63,17 @@ pub(super) fn check_time(path: &Path, t: &[f64], t_column: usize, tolerance: f64
             });
         }
     }
-    let (Some(first), Some(last)) = (t.first(), t.last()) else {
+    let (Some(&first), Some(&last)) = (t.first(), t.last()) else {
         return Ok(0.0);
     };
-    Ok((t.len() - 1) as f64 / (last - first))
+    let rate = (t.len() - 1) as f64 / (last - first);
+    if t.len() > 1 && !(rate.is_finite() && rate > 0.0) {
+        return Err(LoadError::TimeSpan {
+            path: path.to_owned(),
+            column: t_column + 1,
+            first,
+            last,
+        });
+    }
+    Ok(rate)
 }

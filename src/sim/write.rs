@@ -69,6 +69,16 @@ fn write_csv(
     }
     writeln!(w, "{}", header.join(","))?;
     let mut line = String::with_capacity(16 * header.len());
+    // No NaN or infinity ever reaches a run file: the write fails and nothing is left.
+    if let Some((name, n)) = std::iter::once(("t", run.time_s.as_slice()))
+        .chain(header[1..].iter().copied().zip(cols.iter().copied()))
+        .find_map(|(name, c)| c.iter().position(|v| !v.is_finite()).map(|n| (name, n)))
+    {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("column '{name}' row {n} is not a finite number"),
+        ));
+    }
     for (n, t) in run.time_s.iter().enumerate() {
         use std::fmt::Write as _;
         line.clear();

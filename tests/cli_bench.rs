@@ -11,18 +11,20 @@ fn imu_attest(args: &[&str]) -> Output {
 
 #[test]
 fn tiny_run_gives_one_json_line_with_every_key() {
-    let out = imu_attest(&["bench", "--minutes", "0.05", "--rate", "200", "--json"]);
+    let out = imu_attest(&["bench", "--minutes", "0.25", "--rate", "200", "--json"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(stdout.lines().count(), 1, "{stdout}");
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(v["samples"], 600, "{v}");
+    assert_eq!(v["samples"], 3000, "{v}");
     assert_eq!(v["rate_hz"].as_f64().map(f64::round), Some(200.0), "{v}");
     // Gyro [w; g] and accelerometer [f; a]: twelve distinct channels.
     assert_eq!(v["channels"], 12, "{v}");
     assert!(
-        v["segment_len"].as_u64().is_some_and(|l| l >= 64 && l * 4 <= 600),
+        v["segment_len"]
+            .as_u64()
+            .is_some_and(|l| l >= 64 && l * 4 <= 3000),
         "{v}"
     );
     let stages = v["stages_s"].as_object().unwrap();
@@ -53,10 +55,17 @@ fn tiny_run_gives_one_json_line_with_every_key() {
 
 #[test]
 fn the_table_names_every_stage() {
-    let out = imu_attest(&["bench", "--minutes", "0.05", "--rate", "200", "--segment", "128"]);
+    let out = imu_attest(&["bench", "--minutes", "0.25", "--rate", "200", "--segment", "256"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let table = String::from_utf8(out.stdout).unwrap();
-    for name in ["load", "spectra", "retune", "600 samples", "segment 128"] {
+    for name in [
+        "load",
+        "spectra",
+        "retune",
+        "diagnose",
+        "3000 samples",
+        "segment 256",
+    ] {
         assert!(table.contains(name), "{name} missing from\n{table}");
     }
 }

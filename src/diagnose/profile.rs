@@ -17,8 +17,6 @@ use super::structure::{Filters, Layout, Structure, Theta};
 pub struct Profile {
     /// Weighted residual power, summed over channels and band bins (`chi2 / 2`).
     pub cost: f64,
-    /// Per-channel share of `cost`.
-    pub channel_cost: [f64; 3],
     /// The linear parameters.
     pub beta: Vec<f64>,
 }
@@ -74,33 +72,9 @@ pub fn project(
     if beta.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    // Per-channel cost: c0_i - 2 b_i.beta + beta N_i beta, with N and b split by channel.
-    let mut channel_cost = c0;
-    let mut channel_of = vec![usize::MAX; p];
-    let mut shared = vec![false; p];
-    for t in &layout.terms {
-        if channel_of[t.param] != usize::MAX && channel_of[t.param] != t.channel {
-            shared[t.param] = true;
-        }
-        channel_of[t.param] = t.channel;
-    }
     let total = c0.iter().sum::<f64>() - rhs.dot(&beta);
-    if shared.iter().any(|&s| s) {
-        // Parameters shared across channels: split the reduction in proportion to c0.
-        let c0_sum: f64 = c0.iter().sum();
-        for c in &mut channel_cost {
-            *c *= total / c0_sum.max(f64::MIN_POSITIVE);
-        }
-    } else {
-        for (k, &ch) in channel_of.iter().enumerate() {
-            if ch < 3 {
-                channel_cost[ch] -= rhs[k] * beta[k];
-            }
-        }
-    }
     Some(Profile {
         cost: total,
-        channel_cost,
         beta: beta.iter().copied().collect(),
     })
 }

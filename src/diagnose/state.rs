@@ -35,14 +35,9 @@ impl State {
     pub fn base(design: Design, tau_s: f64, band_hz: [f64; 2]) -> Option<Self> {
         let outputs = design.outputs();
         let grams = design.grams(&outputs);
-        let theta = Theta {
-            tau_s,
-            skew_s: [0.0; 2],
-            lag_s: 0.0,
-            resonances: Vec::new(),
-        };
+        let theta = Theta::delay_only(tau_s);
         let fitted = fit(&design, &grams, &Structure::default(), &theta, band_hz)?;
-        let residual = residual(&design, &outputs, &fitted);
+        let residual = fitted_residual(&design, &outputs, &fitted);
         Some(Self {
             design,
             grams,
@@ -75,7 +70,7 @@ impl State {
                 next.tones.push(tone.clone());
             }
         }
-        next.residual = residual(&next.design, &next.outputs, &next.fitted);
+        next.residual = fitted_residual(&next.design, &next.outputs, &next.fitted);
         Some(next)
     }
 
@@ -90,19 +85,17 @@ impl State {
     pub fn gap_of(&self, k: [[f64; 3]; 3], tau_s: f64) -> [f64; 3] {
         let structure = Structure::default();
         let layout = structure.layout();
-        let theta = Theta {
-            tau_s,
-            skew_s: [0.0; 2],
-            lag_s: 0.0,
-            resonances: Vec::new(),
-        };
+        let theta = Theta::delay_only(tau_s);
         let beta: Vec<f64> = k.iter().flatten().copied().collect();
-        let model = predict(&self.design, &structure, &layout, &theta, &beta);
-        let outputs = self.design.outputs();
-        gap_db(
+        let residual = residual(
             &self.design,
-            &[0, 1, 2].map(|i| outputs[i].iter().zip(&model[i]).map(|(x, m)| x - m).collect()),
-        )
+            &self.design.outputs(),
+            &structure,
+            &layout,
+            &theta,
+            &beta,
+        );
+        gap_db(&self.design, &residual)
     }
 
     /// The worst channel's gap, dB.
@@ -112,15 +105,29 @@ impl State {
     }
 }
 
-fn residual(design: &Design, outputs: &[Vec<Complex64>; 3], fitted: &Fitted) -> [Vec<Complex64>; 3] {
-    let model = predict(
+/// Measured (tones removed) minus simulated outputs, band bins.
+fn residual(
+    design: &Design,
+    outputs: &[Vec<Complex64>; 3],
+    structure: &Structure,
+    layout: &super::structure::Layout,
+    theta: &Theta,
+    beta: &[f64],
+) -> [Vec<Complex64>; 3] {
+    let model = predict(design, structure, layout, theta, beta);
+    [0, 1, 2].map(|i| outputs[i].iter().zip(&model[i]).map(|(x, m)| x - m).collect())
+}
+
+/// The residual `fitted` leaves.
+fn fitted_residual(design: &Design, outputs: &[Vec<Complex64>; 3], fitted: &Fitted) -> [Vec<Complex64>; 3] {
+    residual(
         design,
+        outputs,
         &fitted.structure,
         &fitted.layout,
         &fitted.theta,
         &fitted.profile.beta,
-    );
-    [0, 1, 2].map(|i| outputs[i].iter().zip(&model[i]).map(|(x, m)| x - m).collect())
+    )
 }
 
 /// Band power of `residual` relative to the measured output's, per channel, dB.

@@ -51,6 +51,17 @@ pub struct Theta {
 }
 
 impl Theta {
+    /// The paper's model: a delay and nothing else.
+    #[must_use]
+    pub fn delay_only(tau_s: f64) -> Self {
+        Self {
+            tau_s,
+            skew_s: [0.0; 2],
+            lag_s: 0.0,
+            resonances: Vec::new(),
+        }
+    }
+
     /// Channel skews relative to the common delay, s.
     #[must_use]
     pub fn channel_skew_s(&self) -> [f64; 3] {

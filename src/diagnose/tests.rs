@@ -67,12 +67,7 @@ fn base_fit_recovers_gain_and_delay_and_chi2_matches_the_noise() {
     let aux: Vec<Vec<f64>> = u.to_vec();
     let d = design(&x, &u, fs, noise, &aux);
     let grams = d.grams(&d.outputs());
-    let theta = Theta {
-        tau_s: 5e-3,
-        skew_s: [0.0; 2],
-        lag_s: 0.0,
-        resonances: vec![],
-    };
+    let theta = Theta::delay_only(5e-3);
     let f = fit(&d, &grams, &Structure::default(), &theta, [0.5, 40.0]).unwrap();
     assert!((f.theta.tau_s - 7.3e-3).abs() < 2e-5, "tau {}", f.theta.tau_s);
     for i in 0..3 {
@@ -98,12 +93,7 @@ fn a_hidden_tone_is_found_at_its_frequency_and_amplitude() {
     }
     let d = design(&x, &u, fs, noise, u.as_ref());
     let grams = d.grams(&d.outputs());
-    let theta = Theta {
-        tau_s: 2e-3,
-        skew_s: [0.0; 2],
-        lag_s: 0.0,
-        resonances: vec![],
-    };
+    let theta = Theta::delay_only(2e-3);
     let f = fit(&d, &grams, &Structure::default(), &theta, [0.5, 40.0]).unwrap();
     let model = super::profile::predict(&d, &f.structure, &f.layout, &f.theta, &f.profile.beta);
     let residual = [0, 1, 2].map(|i| d.z[i].iter().zip(&model[i]).map(|(a, b)| a - b).collect());

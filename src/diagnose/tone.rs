@@ -81,7 +81,8 @@ fn sinusoid_dft(design: &Design, f: f64, range: std::ops::Range<usize>) -> (Vec<
         .unzip()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+/// The upper median of `v` (reordered in place); `v` must not be empty.
+pub(super) fn median(v: &mut [f64]) -> f64 {
     let mid = v.len() / 2;
     v.select_nth_unstable_by(mid, f64::total_cmp);
     v[mid]
@@ -134,7 +135,7 @@ pub fn strongest_line(design: &Design, residual: &[Vec<Complex64>; 3]) -> Option
         .collect();
     let continuum = |k: usize| {
         let lo = k.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);
-        median(power[lo..=lo + 2 * MEDIAN_HALF].to_vec())
+        median(&mut power[lo..=lo + 2 * MEDIAN_HALF].to_vec())
     };
     // The largest ratio to the continuum among the ten strongest bins.
     let mut strongest: Vec<usize> = (0..n).collect();

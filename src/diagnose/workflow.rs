@@ -162,10 +162,7 @@ fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
                 let h = half.min(k / 4);
                 let lo = k.saturating_sub(h);
                 let hi = (k + h + 1).min(diag.len());
-                let mut w = diag[lo..hi].to_vec();
-                let mid = w.len() / 2;
-                w.select_nth_unstable_by(mid, f64::total_cmp);
-                w[mid]
+                super::tone::median(&mut diag[lo..hi].to_vec())
             })
             .collect()
     })

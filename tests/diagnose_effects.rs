@@ -10,7 +10,7 @@
 use imu_attest::diagnose::DiagnoseOptions;
 use imu_attest::diagnose::{Report, Verdict, diagnose_run};
 use imu_attest::ident::settings::Settings;
-use imu_attest::run::{LoadOptions, load};
+use imu_attest::run::{LoadOptions, Run, load};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::truth::{BlockTruth, EffectTruth};
 use imu_attest::sim::write::write_run;
@@ -19,7 +19,8 @@ use serde_json::Value;
 
 const DURATION_S: f64 = 120.0;
 
-fn diagnose(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Report) {
+/// A simulated run with `effects` hidden, loaded from its CSV as a stand run would be.
+fn simulated_run(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Run) {
     let mut config = SimConfig::new(regime);
     config.seed = seed;
     config.duration_s = DURATION_S;
@@ -29,6 +30,11 @@ fn diagnose(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Repor
     let path = dir.path().join("run.csv");
     write_run(&sim, &path).unwrap();
     let run = load(&path, &LoadOptions::default()).unwrap();
+    (sim, run)
+}
+
+fn diagnose(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Report) {
+    let (sim, run) = simulated_run(regime, seed, effects);
     let report = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).unwrap();
     (sim, report)
 }
@@ -397,15 +403,7 @@ fn two_hidden_effects_are_both_named() {
 
 #[test]
 fn a_rejected_effect_is_not_named_again() {
-    let mut config = SimConfig::new(Regime::Approach);
-    config.seed = 131;
-    config.duration_s = DURATION_S;
-    config.effects = vec!["sensor_lag:gyro".parse().unwrap()];
-    let sim = simulate(&config).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("run.csv");
-    write_run(&sim, &path).unwrap();
-    let run = load(&path, &LoadOptions::default()).unwrap();
+    let (_, run) = simulated_run(Regime::Approach, 131, &["sensor_lag:gyro"]);
     let options = DiagnoseOptions {
         given: None,
         rejected: vec![(

@@ -213,7 +213,7 @@ fn diagnose_block(
     let (input_names, _) = channel_names(b.block);
     let base = State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
     let mut state = base.clone();
-    let mut accepted: Vec<(Effect, usize, [f64; 2], f64, usize, f64)> = Vec::new();
+    let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
     for round in 0..MAX_FINDINGS {
         let mut cands = candidates(&state, band);
@@ -235,35 +235,34 @@ fn diagnose_block(
             Extension::Tone(_) => state.tones.len(),
             Extension::Structural(_) => state.fitted.structure.resonance_axes.len(),
         };
-        accepted.push((
-            best.effect,
-            index,
-            [state.worst_gap_db(), next.worst_gap_db()],
-            best.delta_chi2,
-            best.added_params,
-            rule.threshold(best.added_params),
-        ));
+        let (delta, added) = (best.delta_chi2, best.added_params);
+        let threshold = rule.threshold(added);
+        let gain = delta - threshold;
+        let (before, after) = (state.worst_gap_db(), next.worst_gap_db());
+        let finding = Finding {
+            block: name.to_owned(),
+            effect: best.effect.id().to_owned(),
+            name: effect_name(best.effect, b.block),
+            // Filled from the final model: every finding's size is re-identified with the others.
+            parameters: serde_json::Value::Null,
+            gap_before_db: before,
+            gap_after_db: after,
+            evidence: format!(
+                "removes chi2 {delta:.1} with {added} added parameters (threshold {threshold:.1}: BIC plus the \
+                 look-elsewhere cost; gain {gain:.1}); worst-channel gap {before:.2} dB -> {after:.2} dB"
+            ),
+            delta_chi2: delta,
+            added_parameters: added,
+            criterion_gain: gain,
+        };
+        accepted.push((best.effect, index, finding));
         state = next;
     }
     let findings = accepted
-        .iter()
-        .map(|&(effect, index, [before, after], delta, added, threshold)| {
-            let gain = delta - threshold;
-            Finding {
-                block: name.to_owned(),
-                effect: effect.id().to_owned(),
-                name: effect_name(effect, b.block),
-                parameters: parameters(effect, &state, index, input_names),
-                gap_before_db: before,
-                gap_after_db: after,
-                evidence: format!(
-                    "removes chi2 {delta:.1} with {added} added parameters (threshold {threshold:.1}: BIC plus the \
-                     look-elsewhere cost; gain {gain:.1}); worst-channel gap {before:.2} dB -> {after:.2} dB"
-                ),
-                delta_chi2: delta,
-                added_parameters: added,
-                criterion_gain: gain,
-            }
+        .into_iter()
+        .map(|(effect, index, mut finding)| {
+            finding.parameters = parameters(effect, &state, index, input_names);
+            finding
         })
         .collect();
     let mut report = block_report(&base, &state, first_round, dof);

@@ -36,6 +36,9 @@ fn tiny_run_gives_one_json_line_with_every_key() {
         "identify",
         "structural_fit",
         "retune",
+        "retune_order",
+        "retune_cold",
+        "retune_order0",
         "rewelch",
         "diagnose",
     ] {

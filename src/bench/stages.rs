@@ -5,17 +5,21 @@
 //! | `load` | reading the CSV and its sidecar into columns |
 //! | `observer` | the observer's motion estimate and every block's inputs `u` (the "observer inputs") |
 //! | `spectra` | the zero-padded Welch matrices of `[u; x]` of every block |
-//! | `factorisation` | the factorisation stage of every block |
+//! | `factorisation` | the factorisation stage of every block (the blocks in parallel) |
 //! | `identify` | the regularised Wiener estimate `W_u` (A, Lambda) of every block |
 //! | `structural_fit` | the structural fit (order) of every block |
-//! | `retune` | a change of Lambda: Wiener and structural fit of every block from cached spectra and factorisation ([`identify_block_from`]), median of [`RETUNES`] changes |
-//! | `retune_order0` | `retune` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
+//! | `retune` | a change of Lambda, as the app does it: Wiener and structural fit of every block from cached spectra and factorisation, the fit starting from the previous one ([`identify_block_from`] with `previous`), median of [`RETUNES`] successive changes |
+//! | `retune_order` | a change of the model order (cycling through `0..=4` and `auto`) on unchanged data, from the previous fit |
+//! | `retune_cold` | `retune` with the structural fit from scratch (what `identify` does) |
+//! | `retune_order0` | `retune_cold` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
 //! | `diagnose` | the missing-effect workflow ([`crate::diagnose::diagnose_run`]) on the loaded run, its own identification included |
-//! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6): spectra, factorisation, Wiener and structural fit of every block from the cached observer inputs |
+//! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6), as the app does it: spectra, factorisation, Wiener and structural fit (from the previous fit) of every block from the cached observer inputs |
 //! | `spectra_bare` | the lower bound of `spectra`: [`super::bare`]'s loop of the same FFTs and cross products |
 
 use std::path::PathBuf;
 use std::sync::Arc;
+
+use rayon::prelude::*;
 
 use super::{BenchError, Stage, bare};
 use crate::ident::IdentError;
@@ -24,6 +28,7 @@ use crate::ident::identify::{identify_block_from, native_band, structural_fit};
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::ident::signals::{BlockSignals, block_signals, channel_names};
 use crate::ident::spectra::{BlockSpectra, block_spectra};
+use crate::ident::structural::StructuralFit;
 use crate::ident::wiener::{WienerEstimate, regularised_wiener};
 use crate::run::{LoadOptions, Run, load};
 use crate::spectral::{WelchPlanner, WelchSettings};
@@ -53,8 +58,14 @@ pub struct BenchState {
     pub factorisations: Vec<Arc<Factorisation>>,
     /// Every block's Wiener estimate.
     pub wiener: Vec<WienerEstimate>,
-    /// Lambda changes done so far by `retune`.
+    /// Every block's latest structural fit, the start of the next retune.
+    pub fits: Vec<Arc<StructuralFit>>,
+    /// The settings of `fits`.
+    pub fitted_with: Option<Settings>,
+    /// Lambda changes done so far by `retune` and `retune_cold`.
     pub retunes: usize,
+    /// Order changes done so far by `retune_order`.
+    pub order_changes: usize,
 }
 
 impl BenchState {
@@ -70,7 +81,10 @@ impl BenchState {
             spectra: Vec::new(),
             factorisations: Vec::new(),
             wiener: Vec::new(),
+            fits: Vec::new(),
+            fitted_with: None,
             retunes: 0,
+            order_changes: 0,
         }
     }
 
@@ -108,19 +122,24 @@ impl BenchState {
 /// One block's spectra and factorisation.
 type Cached = (Arc<BlockSpectra>, Arc<Factorisation>);
 
-/// Spectra and factorisation of every block's `signals` with `welch`.
+/// Spectra and factorisation of every block's `signals` with `welch`: the spectra block by block
+/// (each parallel over segments), then the factorisations of all blocks at once (each block's two
+/// Wilson factorisations take unequal times; together they keep both cores busy).
 fn spectra_and_factorisations(
     planner: &mut WelchPlanner,
     signals: &[BlockSignals],
     sample_rate_hz: f64,
     welch: &WelchSettings,
 ) -> Result<Vec<Cached>, BenchError> {
-    signals
+    let spectra = signals
         .iter()
-        .map(|s| {
-            let spectra = block_spectra(planner, s, sample_rate_hz, welch)?;
-            let factorisation = factorise(&spectra, &FactorisationSettings::default())?;
-            Ok((Arc::new(spectra), Arc::new(factorisation)))
+        .map(|s| Ok(Arc::new(block_spectra(planner, s, sample_rate_hz, welch)?)))
+        .collect::<Result<Vec<_>, BenchError>>()?;
+    spectra
+        .into_par_iter()
+        .map(|sp| {
+            let factorisation = factorise(&sp, &FactorisationSettings::default())?;
+            Ok((sp, Arc::new(factorisation)))
         })
         .collect()
 }
@@ -177,8 +196,9 @@ fn spectra_stage(state: &mut BenchState) -> Result<(), BenchError> {
 
 fn factorisation_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let spectra = BenchState::need(&state.spectra, "factorisation", "spectra")?;
+    // The blocks at once, as `rewelch` and the app do.
     state.factorisations = spectra
-        .iter()
+        .par_iter()
         .map(|s| Ok(Arc::new(factorise(s, &FactorisationSettings::default())?)))
         .collect::<Result<_, BenchError>>()?;
     Ok(())
@@ -198,35 +218,89 @@ fn identify_stage(state: &mut BenchState) -> Result<(), BenchError> {
 
 fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let wiener = BenchState::need(&state.wiener, "structural_fit", "identify")?;
+    let mut fits = Vec::new();
     for ((sp, f), w) in state.spectra.iter().zip(&state.factorisations).zip(wiener) {
-        structural_fit(
+        let band = native_band(sp, state.settings.band_hz);
+        fits.push(Arc::new(structural_fit(
             sp,
             f,
             w,
-            &native_band(sp, state.settings.band_hz),
+            &band,
             state.settings.order,
-        )?;
+            None,
+        )?));
+    }
+    state.fits = fits;
+    state.fitted_with = Some(state.settings.clone());
+    Ok(())
+}
+
+/// Wiener and structural fit of every block with `settings` from the cached spectra and
+/// factorisations, from the latest fits when `warm` (which the results then replace).
+fn reidentify(state: &mut BenchState, settings: &Settings, warm: bool) -> Result<(), BenchError> {
+    let stage = if warm { "retune" } else { "retune_cold" };
+    let facts = BenchState::need(&state.factorisations, stage, "factorisation")?;
+    let fits = BenchState::need(&state.fits, stage, "structural_fit")?;
+    // The blocks in parallel, as the app does.
+    let next = (state.signals.par_iter().zip(&state.spectra).zip(facts).zip(fits))
+        .map(|(((sig, sp), f), fit)| {
+            let previous = warm.then_some(fit.as_ref());
+            identify_block_from(sig.block, Arc::clone(sp), Arc::clone(f), settings, previous)
+                .map(|b| b.structural)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if warm {
+        state.fits = next;
+        state.fitted_with = Some(settings.clone());
     }
     Ok(())
 }
 
-fn retune_stage(state: &mut BenchState) -> Result<(), BenchError> {
-    let facts = BenchState::need(&state.factorisations, "retune", "factorisation")?;
+/// The settings with the next Lambda of the `retune` stages.
+fn next_lambda(state: &mut BenchState) -> Settings {
     state.retunes += 1;
     let l = 0.01 * state.retunes as f64;
-    let settings = Settings {
+    Settings {
         lambda: LambdaSetting::Values([l, -l, 0.5 * l]),
         ..state.settings.clone()
-    };
-    for ((sig, sp), f) in state.signals.iter().zip(&state.spectra).zip(facts) {
-        identify_block_from(sig.block, Arc::clone(sp), Arc::clone(f), &settings)?;
     }
-    Ok(())
+}
+
+fn retune_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    let settings = next_lambda(state);
+    reidentify(state, &settings, true)
+}
+
+fn retune_cold_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    let settings = next_lambda(state);
+    reidentify(state, &settings, false)
+}
+
+fn retune_order_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    const ORDERS: [OrderSetting; 6] = [
+        OrderSetting::Fixed(0),
+        OrderSetting::Fixed(2),
+        OrderSetting::Auto,
+        OrderSetting::Fixed(1),
+        OrderSetting::Fixed(4),
+        OrderSetting::Fixed(3),
+    ];
+    let order = ORDERS[state.order_changes % ORDERS.len()];
+    state.order_changes += 1;
+    // The latest fits' own settings but the order: the same data, as after a retune.
+    let settings = Settings {
+        order,
+        ..state
+            .fitted_with
+            .clone()
+            .unwrap_or_else(|| state.settings.clone())
+    };
+    reidentify(state, &settings, true)
 }
 
 fn retune_order0_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let order = std::mem::replace(&mut state.settings.order, OrderSetting::Fixed(0));
-    let result = retune_stage(state);
+    let result = retune_cold_stage(state);
     state.settings.order = order;
     result
 }
@@ -241,13 +315,10 @@ fn rewelch_stage(state: &mut BenchState) -> Result<(), BenchError> {
         },
         ..state.settings.clone()
     };
-    for (sig, (sp, f)) in signals.iter().zip(spectra_and_factorisations(
-        &mut state.planner,
-        signals,
-        rate,
-        &settings.welch,
-    )?) {
-        identify_block_from(sig.block, sp, f, &settings)?;
+    let fits = BenchState::need(&state.fits, "rewelch", "structural_fit")?;
+    let cached = spectra_and_factorisations(&mut state.planner, signals, rate, &settings.welch)?;
+    for ((sig, (sp, f)), fit) in signals.iter().zip(cached).zip(fits) {
+        identify_block_from(sig.block, sp, f, &settings, Some(fit))?;
     }
     Ok(())
 }
@@ -280,6 +351,8 @@ pub fn standard_stages() -> Vec<Stage<'static>> {
         Stage::once("identify", identify_stage),
         Stage::once("structural_fit", structural_stage),
         Stage::repeated("retune", RETUNES, retune_stage),
+        Stage::repeated("retune_order", RETUNES, retune_order_stage),
+        Stage::repeated("retune_cold", RETUNES, retune_cold_stage),
         Stage::repeated("retune_order0", RETUNES, retune_order0_stage),
         Stage::once("diagnose", diagnose_stage),
         Stage::once("rewelch", rewelch_stage),

@@ -18,7 +18,7 @@ use super::settings::{OrderSetting, Settings};
 use super::signals::block_signals;
 use super::spectra::{BlockSpectra, block_spectra};
 use super::structural::{
-    OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure,
+    OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure, refit_structure,
 };
 use super::warnings::{IdentWarning, block_warnings};
 use super::wiener::{WienerEstimate, band_bins, regularised_wiener};
@@ -130,7 +130,13 @@ pub fn identify_run_with_progress(
         step("factorisation", Some(block));
         let factorisation = Arc::new(factorise(&spectra, &FactorisationSettings::default())?);
         step("fit", Some(block));
-        blocks.push(identify_block_from(block, spectra, factorisation, settings)?);
+        blocks.push(identify_block_from(
+            block,
+            spectra,
+            factorisation,
+            settings,
+            None,
+        )?);
     }
     step("done", None);
     Ok(RunIdentification {
@@ -140,7 +146,10 @@ pub fn identify_run_with_progress(
 }
 
 /// The cheap stages (Wiener with A and Lambda, structural fit) from cached spectra and
-/// factorisation.
+/// factorisation. With `previous` (an earlier structural fit of this block, e.g. before a change
+/// of A, Lambda, the order or the Welch settings), the structural fit starts from it
+/// ([`refit_structure`]): an order change alone reuses its fits exactly, other changes refine
+/// each order from it.
 ///
 /// # Errors
 /// An empty band, a singular A or auto-Lambda system, or a structural fit failure.
@@ -149,6 +158,7 @@ pub fn identify_block_from(
     spectra: Arc<BlockSpectra>,
     factorisation: Arc<Factorisation>,
     settings: &Settings,
+    previous: Option<&StructuralFit>,
 ) -> Result<BlockIdentification, IdentError> {
     let wiener = Arc::new(regularised_wiener(
         &spectra,
@@ -165,6 +175,7 @@ pub fn identify_block_from(
         &wiener,
         &band,
         settings.order,
+        previous,
     )?);
     Ok(BlockIdentification {
         block,
@@ -194,6 +205,8 @@ pub fn native_band(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
 /// `Omega_i = (n_eq - 3) S_uu / S_psi,ii`, which weighs collinear inputs correctly (the
 /// accelerometer's x and y specific forces are nearly collinear at high frequency).
 ///
+/// With `previous`, the fit starts from it ([`refit_structure`]).
+///
 /// # Errors
 /// [`IdentError::Structural`] when the fit refuses its input or fails numerically.
 pub fn structural_fit(
@@ -202,6 +215,7 @@ pub fn structural_fit(
     wiener: &WienerEstimate,
     band: &[usize],
     order: OrderSetting,
+    previous: Option<&StructuralFit>,
 ) -> Result<StructuralFit, IdentError> {
     let frequency_hz: Vec<f64> = band.iter().map(|&k| spectra.frequency_hz[k]).collect();
     let response: Vec<Matrix3<Complex64>> = band.iter().map(|&k| wiener.w_u[k]).collect();
@@ -225,6 +239,10 @@ pub fn structural_fit(
         response: &response,
         weights: Weights::RowWeight(&row_weight),
     };
-    fit_structure(&input, choice, &StructuralSettings::default())
-        .map_err(|e| IdentError::Structural(e.to_string()))
+    let settings = StructuralSettings::default();
+    match previous {
+        Some(previous) => refit_structure(&input, choice, &settings, previous),
+        None => fit_structure(&input, choice, &settings),
+    }
+    .map_err(|e| IdentError::Structural(e.to_string()))
 }

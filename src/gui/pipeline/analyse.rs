@@ -5,6 +5,8 @@
 
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use super::display::Spectra;
 use super::identified::Identification;
 use super::stages::{self, Measured, Motion};
@@ -13,6 +15,7 @@ use crate::block::Block;
 use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise};
 use crate::ident::identify::identify_block_from;
 use crate::ident::settings::Settings;
+use crate::ident::structural::StructuralFit;
 use crate::run::Sidecar;
 use crate::spectral::WelchPlanner;
 
@@ -26,6 +29,9 @@ pub(super) struct RunCache {
     /// Factorisations of `spectra`'s blocks.
     pub factorisations: Vec<(Block, Arc<Factorisation>)>,
     pub identification: Option<Arc<Identification>>,
+    /// Every block's latest structural fit, kept across changes of the Welch settings: the start
+    /// of the next fit.
+    pub fits: Vec<(Block, Arc<StructuralFit>)>,
 }
 
 impl RunCache {
@@ -38,6 +44,7 @@ impl RunCache {
             spectra: None,
             factorisations: Vec::new(),
             identification: None,
+            fits: Vec::new(),
         }
     }
 }
@@ -129,36 +136,58 @@ impl Analysis<'_> {
                 identification: id.clone(),
             });
         }
-        let mut blocks = Vec::new();
+        let mut cores = Vec::new();
         for &block in &settings.blocks {
-            let Some(core) = spectra
-                .blocks
-                .iter()
-                .find(|b| b.block == block)
-                .map(|b| &b.matrix.core)
-            else {
+            let Some(core) = spectra.blocks.iter().find(|b| b.block == block) else {
                 return self.fail(Stage::Identify, format!("the run has no {} block", block.name()));
             };
-            *stage = Stage::Factorisation;
-            let known = cache.factorisations.iter().find(|(b, _)| *b == block);
-            let factorisation = if let Some((_, f)) = known {
-                f.clone()
-            } else {
-                match factorise(core, &FactorisationSettings::default()) {
-                    Ok(f) => {
-                        let f = Arc::new(f);
-                        cache.factorisations.push((block, f.clone()));
-                        f
-                    }
-                    Err(e) => return self.fail(Stage::Factorisation, format!("{}: {e}", block.name())),
-                }
-            };
-            *stage = Stage::Identify;
-            match identify_block_from(block, core.clone(), factorisation, &settings) {
-                Ok(b) => blocks.push(b),
-                Err(e) => return self.fail(Stage::Identify, format!("{}: {e}", block.name())),
-            }
+            cores.push((block, core.matrix.core.clone()));
         }
+        *stage = Stage::Factorisation;
+        // The missing factorisations of all blocks at once: each block's two Wilson factorisations
+        // take unequal times, together they keep both cores busy.
+        let known = |list: &[(Block, Arc<Factorisation>)], block: Block| {
+            list.iter().find(|(b, _)| *b == block).map(|(_, f)| f.clone())
+        };
+        let computed: Result<Vec<_>, String> = cores
+            .par_iter()
+            .filter(|(block, _)| known(&cache.factorisations, *block).is_none())
+            .map(|(block, core)| {
+                factorise(core, &FactorisationSettings::default())
+                    .map(|f| (*block, Arc::new(f)))
+                    .map_err(|e| format!("{}: {e}", block.name()))
+            })
+            .collect();
+        match computed {
+            Ok(computed) => cache.factorisations.extend(computed),
+            Err(message) => return self.fail(Stage::Factorisation, message),
+        }
+        let mut prepared = Vec::new();
+        for (block, core) in cores {
+            let Some(factorisation) = known(&cache.factorisations, block) else {
+                return self.fail(Stage::Factorisation, format!("{}: not factorised", block.name()));
+            };
+            let previous = cache
+                .fits
+                .iter()
+                .find(|(b, _)| *b == block)
+                .map(|(_, f)| f.clone());
+            prepared.push((block, core, factorisation, previous));
+        }
+        *stage = Stage::Identify;
+        // The blocks in parallel: a retune's wait is the slower block's, not the sum.
+        let identified: Result<Vec<_>, String> = prepared
+            .into_par_iter()
+            .map(|(block, core, factorisation, previous)| {
+                identify_block_from(block, core, factorisation, &settings, previous.as_deref())
+                    .map_err(|e| format!("{}: {e}", block.name()))
+            })
+            .collect();
+        let blocks = match identified {
+            Ok(blocks) => blocks,
+            Err(message) => return self.fail(Stage::Identify, message),
+        };
+        cache.fits = blocks.iter().map(|b| (b.block, b.structural.clone())).collect();
         let identification = Arc::new(Identification::new(summary, settings, blocks));
         cache.identification = Some(identification.clone());
         (self.send)(Event::Identified {

@@ -64,7 +64,12 @@ mod tests;
 mod tests_gls;
 #[cfg(test)]
 mod tests_noise;
+#[cfg(test)]
+mod tests_warm;
+mod warm;
 mod weights;
+
+pub use warm::{FittedOrders, refit_structure};
 
 use nalgebra::Matrix3;
 use num_complex::Complex64;
@@ -217,6 +222,9 @@ pub struct StructuralFit {
     pub misalignment_mrad: [[f64; 3]; 3],
     /// Standard deviation of `misalignment_mrad`, mrad; 0 on the diagonal.
     pub misalignment_std_mrad: [[f64; 3]; 3],
+    /// Every order's model as fitted, kept for [`refit_structure`] (not serialised).
+    #[serde(skip)]
+    pub fitted: FittedOrders,
 }
 
 impl StructuralFit {
@@ -387,6 +395,16 @@ pub fn fit_structure(
     order: OrderChoice,
     settings: &StructuralSettings,
 ) -> Result<StructuralFit, StructuralError> {
+    let (data, highest) = prepare(input, order, settings)?;
+    finish(&data, highest, order, settings, order::Starts::Cold)
+}
+
+/// The validated, precomputed input and the highest order to fit.
+fn prepare(
+    input: &ResponseEstimate,
+    order: OrderChoice,
+    settings: &StructuralSettings,
+) -> Result<(model::Prepared, usize), StructuralError> {
     validate(input)?;
     let row_weights = weights::row_weights(&input.weights)?;
     if !(settings.tau_min_s.is_finite()
@@ -428,12 +446,23 @@ pub fn fit_structure(
             })?
         }
     };
-    let data = model::Prepared::new(input, &row_weights);
-    let selection = order::fit_orders(&data, highest, order, settings)?;
-    let fit = report::assemble(&data, &selection, settings.criterion);
+    Ok((model::Prepared::new(input, &row_weights), highest))
+}
+
+/// Fits the orders from `starts`, selects, and assembles the result.
+fn finish(
+    data: &model::Prepared,
+    highest: usize,
+    order: OrderChoice,
+    settings: &StructuralSettings,
+    starts: order::Starts,
+) -> Result<StructuralFit, StructuralError> {
+    let selection = order::fit_orders(data, highest, order, settings, starts)?;
+    let mut fit = report::assemble(data, &selection, settings.criterion);
     if report::has_nan(&fit) {
         return Err(StructuralError::NumericalFailure { order: fit.order });
     }
+    fit.fitted = FittedOrders::new(data, selection.models, settings);
     Ok(fit)
 }
 

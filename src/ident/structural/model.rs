@@ -31,6 +31,11 @@ pub(super) struct Prepared {
     pub rows: Vec<[RowWeight; 3]>,
     /// The response, element-major within a bin.
     pub h: Vec<[Complex64; ELEMENTS]>,
+    /// `Omega_i` of the rows, flattened as `(re, im)` pairs, row-major within each row's matrix,
+    /// row `i` at `18 i..18 i + 18`, per bin.
+    pub omega_flat: Vec<[f64; 54]>,
+    /// `(Omega_i W_i^H)_j` at element `3 i + j`, per bin (the projection's right-hand side).
+    pub g: Vec<[Complex64; ELEMENTS]>,
 }
 
 impl Prepared {
@@ -53,6 +58,25 @@ impl Prepared {
             .iter()
             .map(|r| std::array::from_fn(|e| r[(e / 3, e % 3)]))
             .collect();
+        let omega_flat = rows
+            .iter()
+            .map(|r| {
+                std::array::from_fn(|f| {
+                    let z = r[f / 18].omega[((f % 18) / 6, (f / 2) % 3)];
+                    if f % 2 == 0 { z.re } else { z.im }
+                })
+            })
+            .collect();
+        let g = rows
+            .iter()
+            .zip(&h)
+            .map(|(r, h): (&[RowWeight; 3], &[Complex64; ELEMENTS])| {
+                std::array::from_fn(|e| {
+                    let (i, j) = (e / 3, e % 3);
+                    (0..3).map(|l| r[i].omega[(j, l)] * h[3 * i + l].conj()).sum()
+                })
+            })
+            .collect();
         Self {
             omega,
             x,
@@ -60,6 +84,8 @@ impl Prepared {
             w,
             rows: rows.to_vec(),
             h,
+            omega_flat,
+            g,
         }
     }
 

@@ -1,10 +1,16 @@
 //! Fitting the orders in sequence and choosing among them.
 
+use rayon::prelude::*;
+
 use super::model::{Model, Prepared, parameter_count};
 use super::{
     InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings, gain_delay,
     rational,
 };
+
+/// Relative excess of chi2 over the order below that a refined order may keep (rounding: a
+/// first-order fit whose pole has gone to infinity has order 0's chi2).
+const NESTED_SLACK: f64 = 1e-6;
 
 /// Bins needed by order `n`: `2 n + 2`, enough distinct frequencies to separate the numerator's
 /// `n` coefficients, the denominator's `n` and the delay (and more than `p / 18` for every order).
@@ -26,8 +32,24 @@ pub(super) fn criterion_value(
     chi2 + penalty * parameters as f64
 }
 
+/// Where the fits of each order start.
+#[derive(Clone, Copy)]
+pub(super) enum Starts<'a> {
+    /// From scratch: the delay scan, then each order from the one below.
+    Cold,
+    /// The data are those these models (orders `0..`) were fitted to: they are kept as they are
+    /// (all of them, also above the highest order asked for), and only orders above them are
+    /// fitted (from the one below, as [`Starts::Cold`] does).
+    Same(&'a [Model]),
+    /// Nearby data (a retune): each order is refined from the model of the same order here
+    /// (normalised to this fit's `omega_ref`); the delay scan of order 0 is redone.
+    Near(&'a [Model]),
+}
+
 /// The chosen model and every candidate.
 pub(super) struct Selection {
+    /// Every order fitted (or kept), in increasing order: possibly beyond the candidates.
+    pub models: Vec<Model>,
     /// The model returned.
     pub chosen: Model,
     /// Its chi2.
@@ -36,19 +58,44 @@ pub(super) struct Selection {
     pub candidates: Vec<OrderCandidate>,
 }
 
-/// Fits orders `0..=highest` (each from the previous one's best) and picks the answer: the
-/// highest for `Fixed`, the stable candidate of smallest criterion for `Auto`.
+/// Fits orders `0..=highest` (each from the previous one's best, or as `starts` says) and picks
+/// the answer: the highest for `Fixed`, the stable candidate of smallest criterion for `Auto`.
 pub(super) fn fit_orders(
     data: &Prepared,
     highest: usize,
     choice: OrderChoice,
     settings: &StructuralSettings,
+    starts: Starts,
 ) -> Result<Selection, StructuralError> {
-    let zero = gain_delay::fit(data, settings.tau_min_s, settings.tau_max_s);
-    let mut models = vec![zero];
-    for n in 1..=highest {
+    let mut models = match starts {
+        Starts::Same(kept) if !kept.is_empty() => kept.to_vec(),
+        _ => vec![gain_delay::fit(data, settings.tau_min_s, settings.tau_max_s)],
+    };
+    // Near: every order's refinement at once (they are independent), in parallel.
+    let mut warm: Vec<Option<(Model, f64)>> = match starts {
+        Starts::Near(near) => (1..=highest)
+            .into_par_iter()
+            .map(|n| {
+                let start = near.get(n)?;
+                rational::refine_warm(data, start, settings.max_iterations)
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    for n in models.len()..=highest {
         // `models` holds orders 0..n here: the loop stops at the first failure.
-        match rational::fit(data, n, &models[n - 1], settings.max_iterations) {
+        let below = &models[n - 1];
+        // A refined order is kept unless it ends worse than the order below (which, from order 2
+        // on, nests in it): then it is fitted from scratch, which cannot.
+        let refined = warm
+            .get_mut(n - 1)
+            .and_then(Option::take)
+            .filter(|(_, chi2)| *chi2 <= below.chi2(data) * (1.0 + NESTED_SLACK));
+        let fitted = match refined {
+            Some((model, _)) => Some(model),
+            None => rational::fit(data, n, below, settings.max_iterations),
+        };
+        match fitted {
             Some(model) => models.push(model),
             // Fixed: every order below the requested one is its starting point.
             None if matches!(choice, OrderChoice::Fixed(_)) => {
@@ -57,9 +104,11 @@ pub(super) fn fit_orders(
             None => break,
         }
     }
-    let mut candidates = Vec::with_capacity(models.len());
-    let mut chi2s = Vec::with_capacity(models.len());
-    for model in &models {
+    // Kept models above `highest` stay in `models` (for a later change of order), out of the choice.
+    let considered = &models[..models.len().min(highest + 1)];
+    let mut candidates = Vec::with_capacity(considered.len());
+    let mut chi2s = Vec::with_capacity(considered.len());
+    for model in considered {
         let chi2 = model.chi2(data);
         let p = parameter_count(model.order());
         let value = criterion_value(settings.criterion, chi2, p, data.real_data());
@@ -77,7 +126,7 @@ pub(super) fn fit_orders(
         });
     }
     let pick = match choice {
-        OrderChoice::Fixed(_) => models.len() - 1,
+        OrderChoice::Fixed(_) => considered.len() - 1,
         OrderChoice::Auto => candidates
             .iter()
             .enumerate()
@@ -86,7 +135,8 @@ pub(super) fn fit_orders(
             .map_or(0, |(i, _)| i),
     };
     Ok(Selection {
-        chosen: models.swap_remove(pick),
+        chosen: models[pick].clone(),
+        models,
         chi2: chi2s[pick],
         candidates,
     })

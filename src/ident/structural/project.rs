@@ -5,7 +5,10 @@
 //! `3 max(n, 1) <= 12` numerator coefficients `n_mij` are coupled by the row weight `Omega_i`:
 //! minimising `sum_k r_i Omega_i r_i^H`, `r_i = W_i - sum_m u_m n_mi`, gives the normal system
 //! `G[(m, j), (l, j')] = sum_k Re(u_m conj(u_l) Omega_i[j, j'])`,
-//! `rhs[(m, j)] = sum_k Re(u_m (Omega_i W_i^H)_j)`, solved by a Jacobi-scaled Cholesky
+//! `rhs[(m, j)] = sum_k Re(u_m (Omega_i W_i^H)_j)`. Since `sigma = j x`,
+//! `u_m conj(u_l) = x^(m + l) j^(m - l) / |d|^2` (the delay cancels), so `G` is assembled from
+//! the `2 n - 1` moments `M_s = sum_k x_k^s Omega_ik / |d_k|^2` as `Re(j^(m - l) M_(m + l))`, and
+//! `Omega_i W_i^H` is precomputed ([`Prepared::g`]). The system is solved by a Jacobi-scaled Cholesky
 //! factorisation (with a tiny ridge only if it fails, e.g. a gain direction no bin weighs). The
 //! buffers are reused across calls, so an evaluation inside the Levenberg–Marquardt loop does not
 //! allocate.
@@ -18,6 +21,8 @@ use super::model::{ELEMENTS, Prepared};
 const MAX_NUM: usize = 4;
 /// Largest normal system: one row's coefficients.
 const MAX_SYS: usize = 3 * MAX_NUM;
+/// Powers of `x` in the normal system: `0..=2 (MAX_NUM - 1)`.
+const MAX_MOMENTS: usize = 2 * MAX_NUM - 1;
 
 /// Reusable buffers of the projection.
 pub(super) struct Projector<'a> {
@@ -43,7 +48,9 @@ impl<'a> Projector<'a> {
     pub fn project(&mut self, den: &[f64], tau: f64, out: &mut [f64]) -> Option<Vec<[f64; ELEMENTS]>> {
         let (data, nn) = (self.data, self.n_num);
         let size = 3 * nn;
-        let mut gram = [[[0.0; MAX_SYS]; MAX_SYS]; 3];
+        // moments[s][18 i + f] = sum_k |1 / d_k|^2 x_k^s Omega_ik, flattened (re, im) row-major
+        // (contiguous, so that the accumulation vectorises).
+        let mut moments = [[0.0; 54]; MAX_MOMENTS];
         let mut rhs = [[0.0; MAX_SYS]; 3];
         for k in 0..data.bins() {
             let x = data.x[k];
@@ -52,36 +59,45 @@ impl<'a> Projector<'a> {
             for c in den.iter().rev() {
                 d = (d + c) * sigma;
             }
-            let mut p = Complex64::from_polar(1.0, -data.omega[k] * tau) / (d + 1.0);
+            let d = d + 1.0;
+            let mut p = Complex64::from_polar(1.0, -data.omega[k] * tau) / d;
             let u = &mut self.u[k * nn..(k + 1) * nn];
             for um in u.iter_mut() {
                 *um = p;
                 p *= sigma;
             }
-            let mut prod = [[Complex64::new(0.0, 0.0); MAX_NUM]; MAX_NUM];
-            for m in 0..nn {
-                for l in 0..nn {
-                    prod[m][l] = u[m] * u[l].conj();
+            let mut c = 1.0 / d.norm_sqr();
+            let weight = &data.omega_flat[k];
+            for moment in &mut moments[..2 * nn - 1] {
+                for (a, w) in moment.iter_mut().zip(weight) {
+                    *a += c * w;
+                }
+                c *= x;
+            }
+            for (i, rhs) in rhs.iter_mut().enumerate() {
+                let g = &data.g[k][3 * i..3 * i + 3];
+                for (m, um) in u.iter().enumerate() {
+                    for (j, gj) in g.iter().enumerate() {
+                        rhs[3 * m + j] += (um * gj).re;
+                    }
                 }
             }
-            for (i, weight) in data.rows[k].iter().enumerate() {
-                let omega = &weight.omega;
-                let h = &data.h[k][3 * i..3 * i + 3];
-                for j in 0..3 {
-                    let g: Complex64 = (0..3).map(|l| omega[(j, l)] * h[l].conj()).sum();
-                    for m in 0..nn {
-                        let q = 3 * m + j;
-                        rhs[i][q] += (u[m] * g).re;
-                        for l in 0..=m {
-                            for jj in 0..3 {
-                                let q2 = 3 * l + jj;
-                                if q2 <= q {
-                                    let (a, b) = (prod[m][l], omega[(j, jj)]);
-                                    gram[i][q][q2] += a.re * b.re - a.im * b.im;
-                                }
-                            }
-                        }
-                    }
+        }
+        // G[(m, j), (l, jj)] = Re(j^(m - l) M[m + l][j][jj]), lower triangle (l <= m there).
+        let mut gram = [[[0.0; MAX_SYS]; MAX_SYS]; 3];
+        for (i, gram) in gram.iter_mut().enumerate() {
+            for q in 0..size {
+                let (m, j) = (q / 3, q % 3);
+                for q2 in 0..=q {
+                    let (l, jj) = (q2 / 3, q2 % 3);
+                    let e = 18 * i + 2 * (3 * j + jj);
+                    let (re, im) = (moments[m + l][e], moments[m + l][e + 1]);
+                    gram[q][q2] = match (m - l) % 4 {
+                        0 => re,
+                        1 => -im,
+                        2 => -re,
+                        _ => im,
+                    };
                 }
             }
         }

@@ -35,6 +35,10 @@ use super::model::{ELEMENTS, Model, Prepared};
 
 /// Sanathanan–Koerner iterations per start.
 const SK_ITERATIONS: usize = 8;
+/// Iterations over which a crawl at the noise level stops a refinement from scratch.
+const COLD_PATIENCE: usize = 5;
+/// The same for a refinement from a previous optimum (a retune), which starts in the valley.
+const WARM_PATIENCE: usize = 2;
 
 /// Fits order `order >= 1` starting from `prev` (the best fit of order `order - 1`).
 pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) -> Option<Model> {
@@ -46,17 +50,7 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
         }
         starts.push((reflected, prev.tau));
     }
-    {
-        let mut den = prev.den.clone();
-        den.push(0.0);
-        // d(sigma) (1 + sigma / 10): a pole ten times above the band.
-        let mut extended = den.clone();
-        extended[0] += 0.1;
-        for m in 1..order {
-            extended[m] += 0.1 * den[m - 1];
-        }
-        starts.push((extended, prev.tau));
-    }
+    starts.push((extended(&prev.den), prev.tau));
     let mut best: Option<(Model, f64)> = None;
     // The starts are refined in parallel and compared in order, as a sequential loop would.
     let refined: Vec<Option<(Model, f64)>> = starts
@@ -80,9 +74,29 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
     best.map(|b| b.0)
 }
 
+/// Refines `start`, a fit of its order to nearby data (a retune), with a short stall window
+/// ([`WARM_PATIENCE`]): the model and its chi2, `None` if the refinement fails.
+pub(super) fn refine_warm(data: &Prepared, start: &Model, max_iter: usize) -> Option<(Model, f64)> {
+    let model = refine(data, start.den.clone(), start.tau, max_iter, WARM_PATIENCE)?;
+    let chi2 = model.chi2(data);
+    chi2.is_finite().then_some((model, chi2))
+}
+
+/// `d(sigma) (1 + sigma / 10)`: the denominator `den` with a pole ten times above the band.
+fn extended(den: &[f64]) -> Vec<f64> {
+    let mut padded = den.to_vec();
+    padded.push(0.0);
+    let mut out = padded.clone();
+    out[0] += 0.1;
+    for m in 1..out.len() {
+        out[m] += 0.1 * padded[m - 1];
+    }
+    out
+}
+
 /// Refines from `(den, tau)`; the model and its chi2.
 fn refined(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<(Model, f64)> {
-    let model = refine(data, den, tau, max_iter)?;
+    let model = refine(data, den, tau, max_iter, COLD_PATIENCE)?;
     let chi2 = model.chi2(data);
     Some((model, chi2))
 }
@@ -226,11 +240,12 @@ fn sk_denominator(data: &Prepared, order: usize, tau: f64) -> Option<Vec<f64>> {
 /// forward-difference Jacobian of the projected residual (step `1e-7 max(|theta|, 0.1)`). Stops
 /// when the undamped Gauss–Newton step predicts a decrease of chi2 below `1e-10 chi2 + 1e-20`
 /// (converged), after ten rejected steps in a row (nothing left at machine precision), when
-/// chi2 has reached the noise level (`chi2 > 0.1 * 18 n_bins`) and five iterations together
-/// lowered it by less than `0.05` (a crawl along the flat valley of an over-parameterised order:
-/// such a difference is far below the criterion's penalty of `~8.7` per parameter and moves a
-/// parameter by well under its standard deviation), or after `max_iter` iterations.
-fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<Model> {
+/// chi2 has reached the noise level (`chi2 > 0.1 * 18 n_bins`) and `patience` iterations
+/// together lowered it by less than `0.05` (a crawl along the flat valley of an
+/// over-parameterised order: such a difference is far below the criterion's penalty of `~8.7` per
+/// parameter and moves a parameter by well under its standard deviation), or after `max_iter`
+/// iterations.
+fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, patience: usize) -> Option<Model> {
     let n = den.len();
     let rows = data.real_data();
     let w_ref = data.omega_ref;
@@ -299,7 +314,7 @@ fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<M
                 }
             }
         }
-        let stalled = history.len() > 5 && history[history.len() - 6] - cost < 0.05;
+        let stalled = history.len() > patience && history[history.len() - 1 - patience] - cost < 0.05;
         if cost > noise_level && stalled {
             break;
         }

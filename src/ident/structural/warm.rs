@@ -1,0 +1,181 @@
+//! Refitting from a previous fit: what makes a retune (a change of A, Lambda or the order) fast.
+//!
+//! A [`StructuralFit`] keeps every order's model ([`FittedOrders`]). [`refit_structure`] uses
+//! them in one of two ways:
+//! - **Same data** (the input's fingerprint and the settings match, i.e. only the order choice
+//!   changed): the models are reused as they are and only orders above them are fitted, each from
+//!   the one below. Orders are fitted in sequence and order `n` never depends on a higher one, so
+//!   the result is exactly what [`fit_structure`](super::fit_structure) gives on the same input
+//!   when the previous fit was one.
+//! - **Nearby data** (a retune): each order is refined by Levenberg–Marquardt from the previous
+//!   model of the same order (rescaled to the new band's `omega_ref`), instead of from the
+//!   Sanathanan–Koerner and far-pole starts; where that ends worse than the order below (which a
+//!   nested model cannot), the far-pole start is refined too. On a well-determined order this
+//!   lands on the optimum a cold fit finds; an over-parameterised order, whose optimum lies in a
+//!   flat valley, can stop at a different point of the valley (chi2 within the refinement's stall
+//!   tolerance). Callers who need the cold answer refit cold afterwards (the app does).
+//!
+//! Units and contracts are those of the module: the same errors as `fit_structure`, for the same
+//! inputs, and no NaN in any output.
+
+use std::hash::{Hash, Hasher};
+
+use super::model::{Model, Prepared};
+use super::order::Starts;
+use super::{OrderChoice, ResponseEstimate, StructuralError, StructuralFit, StructuralSettings};
+
+/// Every order's model as fitted, with what identifies the data they were fitted to.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FittedOrders {
+    /// Orders `0..`, normalised with `omega_ref`.
+    models: Vec<Model>,
+    /// The band's top, rad/s, the models' normalisation.
+    omega_ref: f64,
+    /// Hash of the prepared data's bits.
+    fingerprint: u64,
+    /// The settings of the fit.
+    settings: Option<StructuralSettings>,
+}
+
+impl FittedOrders {
+    /// Keeps `models`, fitted to `data` with `settings`.
+    pub(super) fn new(data: &Prepared, models: Vec<Model>, settings: &StructuralSettings) -> Self {
+        Self {
+            models,
+            omega_ref: data.omega_ref,
+            fingerprint: fingerprint(data),
+            settings: Some(*settings),
+        }
+    }
+
+    /// Number of orders kept (orders `0..len`).
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.models.len()
+    }
+
+    /// Whether no order is kept (a fit built some other way).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.models.is_empty()
+    }
+
+    /// The models rescaled to `omega_ref`: `den[m]` multiplies `sigma^(m + 1)` and `num[m]`
+    /// multiplies `sigma^m`, `sigma = s / omega_ref`.
+    fn rescaled(&self, omega_ref: f64) -> Vec<Model> {
+        let ratio = omega_ref / self.omega_ref;
+        self.models
+            .iter()
+            .map(|m| Model {
+                num: m
+                    .num
+                    .iter()
+                    .zip(0_i32..)
+                    .map(|(c, p)| c.map(|v| v * ratio.powi(p)))
+                    .collect(),
+                den: m
+                    .den
+                    .iter()
+                    .zip(1_i32..)
+                    .map(|(d, p)| d * ratio.powi(p))
+                    .collect(),
+                tau: m.tau,
+            })
+            .collect()
+    }
+}
+
+/// Hash of the bits of everything the fit reads from the data.
+fn fingerprint(data: &Prepared) -> u64 {
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    let mut put = |v: f64| v.to_bits().hash(&mut hasher);
+    for k in 0..data.bins() {
+        put(data.omega[k]);
+        for z in &data.h[k] {
+            put(z.re);
+            put(z.im);
+        }
+        for row in &data.rows[k] {
+            for z in &row.omega {
+                put(z.re);
+                put(z.im);
+            }
+        }
+    }
+    hasher.finish()
+}
+
+/// [`fit_structure`](super::fit_structure), starting from `previous` (see the module docs):
+/// instant for a change of the order choice alone, a few refinement steps per order for nearby
+/// data. A `previous` without kept models (or with a different band size in the rational
+/// orders' parameters) is no help and the fit runs cold.
+///
+/// # Errors
+/// Those of [`fit_structure`](super::fit_structure), for the same reasons.
+pub fn refit_structure(
+    input: &ResponseEstimate,
+    order: OrderChoice,
+    settings: &StructuralSettings,
+    previous: &StructuralFit,
+) -> Result<StructuralFit, StructuralError> {
+    let (data, highest) = super::prepare(input, order, settings)?;
+    let kept = &previous.fitted;
+    if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
+        return super::finish(&data, highest, order, settings, Starts::Cold);
+    }
+    let same = kept.settings == Some(*settings)
+        && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
+        && kept.fingerprint == fingerprint(&data);
+    if same {
+        return super::finish(&data, highest, order, settings, Starts::Same(&kept.models));
+    }
+    let near = kept.rescaled(data.omega_ref);
+    super::finish(&data, highest, order, settings, Starts::Near(&near))
+}
+
+#[cfg(test)]
+mod tests {
+    use num_complex::Complex64;
+
+    use super::{FittedOrders, Model};
+
+    /// `N(sigma) / d(sigma)` at `s = j omega`, `sigma = s / omega_ref`.
+    fn response(m: &Model, omega: f64, omega_ref: f64) -> [Complex64; 9] {
+        let x = omega / omega_ref;
+        let d = m.den_at(x);
+        std::array::from_fn(|e| Model::poly(m.num.iter().map(|c| c[e]), x, 0) / d)
+    }
+
+    #[test]
+    fn rescaled_models_keep_their_physical_response() {
+        let model = Model {
+            num: vec![
+                [1.0, 0.1, -0.2, 0.0, 1.1, 0.3, 0.05, 0.0, 0.9],
+                [0.2; 9],
+                [-0.03; 9],
+            ],
+            den: vec![0.4, 0.07, 0.01],
+            tau: 0.002,
+        };
+        let kept = FittedOrders {
+            models: vec![model],
+            omega_ref: 250.0,
+            fingerprint: 0,
+            settings: None,
+        };
+        let rescaled = &kept.rescaled(180.0)[0];
+        assert_eq!(rescaled.tau.to_bits(), 0.002_f64.to_bits(), "the delay is not rescaled");
+        for omega in [3.0, 60.0, 170.0, 250.0] {
+            let (a, b) = (
+                response(&kept.models[0], omega, 250.0),
+                response(rescaled, omega, 180.0),
+            );
+            for (za, zb) in a.iter().zip(&b) {
+                assert!(
+                    (za - zb).norm() < 1e-13 * za.norm().max(1.0),
+                    "{za} vs {zb} at {omega}"
+                );
+            }
+        }
+    }
+}

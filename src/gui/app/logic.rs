@@ -138,7 +138,8 @@ impl App {
                 identification,
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
-                if generation > entry.identification_generation {
+                // The same generation again is its refit from scratch (see `provisional`).
+                if generation >= entry.identification_generation {
                     entry.identification = Some(identification);
                     entry.identification_generation = generation;
                     if generation >= entry.requested_generation {

@@ -211,8 +211,10 @@ impl RunEntry {
     /// Computing: loading, or an analysis newer than the identification shown is under way.
     #[must_use]
     pub fn busy(&self) -> bool {
+        let refitting = self.identification.as_ref().is_some_and(|i| i.provisional());
         matches!(self.state, RunState::Loading { .. })
-            || (self.analysis_error.is_none() && self.identification_generation < self.requested_generation)
+            || (self.analysis_error.is_none()
+                && (self.identification_generation < self.requested_generation || refitting))
     }
 
     /// The file name shown.

@@ -196,4 +196,37 @@ impl Analysis<'_> {
             identification,
         });
     }
+
+    /// Refits from scratch the structural fits of a provisional identification (see
+    /// [`Identification::provisional`]) and sends the identification again, under the same
+    /// generation. Nothing to do if the cached identification is not provisional.
+    pub fn polish(&self, cache: &mut RunCache) {
+        let Some(id) = cache.identification.clone().filter(|i| i.provisional()) else {
+            return;
+        };
+        let refitted: Result<Vec<_>, String> = id
+            .blocks
+            .par_iter()
+            .map(|b| {
+                if b.structural.fitted.from_scratch() {
+                    return Ok(b.clone());
+                }
+                let (spectra, factorisation) = (b.spectra.clone(), b.factorisation.clone());
+                identify_block_from(b.block, spectra, factorisation, &id.settings, None)
+                    .map_err(|e| format!("{}: {e}", b.block.name()))
+            })
+            .collect();
+        let blocks = match refitted {
+            Ok(blocks) => blocks,
+            Err(message) => return self.fail(Stage::Identify, message),
+        };
+        cache.fits = blocks.iter().map(|b| (b.block, b.structural.clone())).collect();
+        let identification = Arc::new(Identification::new(&cache.summary, id.settings.clone(), blocks));
+        cache.identification = Some(identification.clone());
+        (self.send)(Event::Identified {
+            run: self.run,
+            generation: self.generation,
+            identification,
+        });
+    }
 }

@@ -103,6 +103,14 @@ impl Identification {
         }
     }
 
+    /// Whether a structural fit was refined from the previous settings' fit rather than fitted
+    /// from scratch: the worker then refits from scratch when idle and sends the result again
+    /// (what `imu-attest identify` gives for these settings).
+    #[must_use]
+    pub fn provisional(&self) -> bool {
+        self.blocks.iter().any(|b| !b.structural.fitted.from_scratch())
+    }
+
     /// The model of `block`, if identified.
     #[must_use]
     pub fn block_model(&self, block: Block) -> Option<&BlockModel> {

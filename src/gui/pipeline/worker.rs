@@ -6,7 +6,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::time::Duration;
 
 use super::analyse::{Analysis, RunCache};
 use super::stages;
@@ -87,6 +88,7 @@ impl Worker {
             queued.push(job);
         } else if let Some(pipeline) = self.inline.as_mut() {
             pipeline.run_caught(job);
+            pipeline.polish_caught();
         } else if let Some(jobs) = &self.jobs {
             // A send fails only if the worker thread is gone; its panic was already reported.
             let _ = jobs.send(job);
@@ -101,6 +103,7 @@ impl Worker {
             for job in jobs {
                 pipeline.run_caught(job);
             }
+            pipeline.polish_caught();
         }
         n
     }
@@ -113,7 +116,13 @@ struct Pipeline {
     events: Sender<Event>,
     waker: Waker,
     load: LoadOptions,
+    /// The latest analysis whose identification is provisional: refitted from scratch when idle.
+    unpolished: Option<(RunId, u64)>,
 }
+
+/// How long the worker waits without a job before it refits a provisional identification from
+/// scratch: a pause in a slider drag shorter than this does not start the slower refit.
+const POLISH_AFTER: Duration = Duration::from_millis(150);
 
 impl Pipeline {
     fn new(events: Sender<Event>, waker: Waker, load: LoadOptions) -> Self {
@@ -123,18 +132,65 @@ impl Pipeline {
             events,
             waker,
             load,
+            unpolished: None,
         }
     }
 }
 
 impl Pipeline {
     fn serve(mut self, jobs: &Receiver<Job>) {
-        while let Ok(first) = jobs.recv() {
+        loop {
+            let first = if self.unpolished.is_some() {
+                match jobs.recv_timeout(POLISH_AFTER) {
+                    Ok(job) => job,
+                    Err(RecvTimeoutError::Timeout) => {
+                        self.polish_caught();
+                        continue;
+                    }
+                    Err(RecvTimeoutError::Disconnected) => return,
+                }
+            } else {
+                match jobs.recv() {
+                    Ok(job) => job,
+                    Err(_) => return,
+                }
+            };
             let mut batch = vec![first];
             batch.extend(jobs.try_iter());
             for job in newest_only(batch) {
                 self.run_caught(job);
             }
+        }
+    }
+
+    /// Refits the provisional identification from scratch, if there is one (a panic is reported
+    /// like a job's).
+    fn polish_caught(&mut self) {
+        let Some((run, generation)) = self.unpolished.take() else {
+            return;
+        };
+        let Pipeline {
+            runs, events, waker, ..
+        } = self;
+        let send = |event: Event| {
+            // The app is gone when this fails; nothing left to tell.
+            let _ = events.send(event);
+            waker();
+        };
+        let Some(cache) = runs.get_mut(&run) else { return };
+        let analysis = Analysis {
+            run,
+            generation,
+            send: &send,
+        };
+        if catch_unwind(AssertUnwindSafe(|| analysis.polish(cache))).is_err() {
+            send(Event::Failed {
+                run,
+                generation,
+                stage: Stage::Identify,
+                message: "internal error (panic) while refitting the structural model".into(),
+                cancelled: false,
+            });
         }
     }
 
@@ -168,7 +224,26 @@ impl Pipeline {
         let (run, generation) = (job.run, job.generation);
         match job.kind {
             JobKind::Load { path, cancel } => self.load(run, generation, &path, &cancel),
-            JobKind::Analyse { settings } => self.analyse(run, generation, &settings, stage),
+            JobKind::Analyse { settings } => {
+                self.analyse(run, generation, &settings, stage);
+                // The identification of these settings (blocks resolved), if the job ended with one.
+                let current = self
+                    .runs
+                    .get(&run)
+                    .and_then(|c| c.identification.as_ref())
+                    .filter(|i| {
+                        i.settings
+                            == Settings {
+                                blocks: i.settings.blocks.clone(),
+                                ..(*settings).clone()
+                            }
+                    });
+                if current.is_some_and(|i| i.provisional()) {
+                    self.unpolished = Some((run, generation));
+                } else if self.unpolished.is_some_and(|(r, _)| r == run) {
+                    self.unpolished = None;
+                }
+            }
             JobKind::Diagnose { settings, rejected } => {
                 *stage = Stage::Diagnose;
                 let Some(cache) = self.runs.get(&run) else { return };
@@ -338,5 +413,68 @@ mod tests {
             kind: JobKind::InjectPanic { stage: Stage::Load },
         });
         assert_eq!(worker.events.try_iter().count(), 1);
+    }
+
+    #[test]
+    fn a_retune_is_sent_at_once_then_refitted_from_scratch() {
+        use crate::ident::identify::identify_run;
+        use crate::ident::settings::{LambdaSetting, Settings};
+
+        let path = crate::gui::sample_run_path().expect("sample run");
+        let mut worker = Worker::start(WorkerMode::Synchronous, Arc::new(|| {}));
+        let job = |generation, kind| Job {
+            run: 1,
+            generation,
+            kind,
+        };
+        let cancel = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        worker.submit(job(
+            1,
+            JobKind::Load {
+                path: path.clone(),
+                cancel,
+            },
+        ));
+        let analyse = |settings: &Settings| JobKind::Analyse {
+            settings: Box::new(settings.clone()),
+        };
+        let identified = |worker: &Worker| -> Vec<(u64, Arc<super::super::Identification>)> {
+            worker
+                .events
+                .try_iter()
+                .filter_map(|e| match e {
+                    Event::Identified {
+                        generation,
+                        identification,
+                        ..
+                    } => Some((generation, identification)),
+                    _ => None,
+                })
+                .collect()
+        };
+        let first = Settings::default();
+        worker.submit(job(2, analyse(&first)));
+        let sent = identified(&worker);
+        assert_eq!(sent.len(), 1, "a first fit is from scratch, sent once");
+        assert!(!sent[0].1.provisional());
+
+        let retuned = Settings {
+            lambda: LambdaSetting::Values([0.05, -0.05, 0.02]),
+            ..first
+        };
+        worker.submit(job(3, analyse(&retuned)));
+        let sent = identified(&worker);
+        assert_eq!(sent.len(), 2, "the refined fit, then the refit");
+        assert!(sent.iter().all(|(g, _)| *g == 3));
+        assert!(sent[0].1.provisional(), "refined from the previous fit");
+        let polished = &sent[1].1;
+        assert!(!polished.provisional());
+        // The refit is what `identify` gives for these settings.
+        let run = crate::run::load(&path, &crate::run::LoadOptions::default()).expect("sample run");
+        let reference = identify_run(&run, &retuned).expect("identify");
+        for (shown, cold) in polished.blocks.iter().zip(&reference.blocks) {
+            assert_eq!(shown.block, cold.block);
+            assert_eq!(*shown.structural, *cold.structural, "{:?}", shown.block);
+        }
     }
 }

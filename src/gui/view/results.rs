@@ -59,6 +59,9 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             format!("current settings failed: {e}; showing the last good result"),
         );
     }
+    if id.provisional() {
+        ui.weak("refined from the previous fit; refitting from scratch when the settings rest");
+    }
     if ui.button("Export model JSON…").clicked() {
         commands.push(Command::ExportModel(None));
     }

@@ -396,7 +396,7 @@ pub fn fit_structure(
     settings: &StructuralSettings,
 ) -> Result<StructuralFit, StructuralError> {
     let (data, highest) = prepare(input, order, settings)?;
-    finish(&data, highest, order, settings, order::Starts::Cold)
+    finish(&data, highest, order, settings, order::Starts::Cold, true)
 }
 
 /// The validated, precomputed input and the highest order to fit.
@@ -456,13 +456,14 @@ fn finish(
     order: OrderChoice,
     settings: &StructuralSettings,
     starts: order::Starts,
+    from_scratch: bool,
 ) -> Result<StructuralFit, StructuralError> {
     let selection = order::fit_orders(data, highest, order, settings, starts)?;
     let mut fit = report::assemble(data, &selection, settings.criterion);
     if report::has_nan(&fit) {
         return Err(StructuralError::NumericalFailure { order: fit.order });
     }
-    fit.fitted = FittedOrders::new(data, selection.models, settings);
+    fit.fitted = FittedOrders::new(data, selection.models, settings, from_scratch);
     Ok(fit)
 }
 

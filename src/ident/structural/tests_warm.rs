@@ -47,9 +47,11 @@ fn an_order_change_on_the_same_data_reuses_the_fits_exactly() {
     let data = synthesise(&lagged(&mut rng), &mut rng, 1.0);
     let auto = cold(&data, OrderChoice::Auto);
     assert_eq!(auto.fitted.len(), MAX_ORDER + 1);
+    assert!(auto.fitted.from_scratch());
     for n in 0..=MAX_ORDER {
         let reused = warm(&data, OrderChoice::Fixed(n), &auto);
         assert_eq!(reused.fitted.len(), MAX_ORDER + 1, "every order is kept");
+        assert!(reused.fitted.from_scratch());
         assert_eq!(
             reported(reused),
             reported(cold(&data, OrderChoice::Fixed(n))),
@@ -81,6 +83,8 @@ fn nearby_data_give_the_cold_answer_on_the_determined_orders() {
     }
     let previous = cold(&before, OrderChoice::Auto);
     let refit = warm(&after, OrderChoice::Auto, &previous);
+    assert!(!refit.fitted.from_scratch(), "refined from a fit to other data");
+    assert!(!warm(&after, OrderChoice::Fixed(1), &refit).fitted.from_scratch());
     let fresh = cold(&after, OrderChoice::Auto);
     assert_eq!(refit.order, fresh.order, "chosen order");
     assert_eq!(refit.order, 1, "the true order");

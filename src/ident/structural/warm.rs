@@ -35,17 +35,33 @@ pub struct FittedOrders {
     fingerprint: u64,
     /// The settings of the fit.
     settings: Option<StructuralSettings>,
+    /// Whether these models are what a fit from scratch gives on these data.
+    from_scratch: bool,
 }
 
 impl FittedOrders {
     /// Keeps `models`, fitted to `data` with `settings`.
-    pub(super) fn new(data: &Prepared, models: Vec<Model>, settings: &StructuralSettings) -> Self {
+    pub(super) fn new(
+        data: &Prepared,
+        models: Vec<Model>,
+        settings: &StructuralSettings,
+        from_scratch: bool,
+    ) -> Self {
         Self {
             models,
             omega_ref: data.omega_ref,
             fingerprint: fingerprint(data),
             settings: Some(*settings),
+            from_scratch,
         }
+    }
+
+    /// Whether the fit is the one [`fit_structure`](super::fit_structure) gives on its data: true
+    /// for a fit from scratch and for an order change reusing one; false once an order has been
+    /// refined from a fit to other data (see the module docs).
+    #[must_use]
+    pub fn from_scratch(&self) -> bool {
+        self.from_scratch
     }
 
     /// Number of orders kept (orders `0..len`).
@@ -121,16 +137,17 @@ pub fn refit_structure(
     let (data, highest) = super::prepare(input, order, settings)?;
     let kept = &previous.fitted;
     if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
-        return super::finish(&data, highest, order, settings, Starts::Cold);
+        return super::finish(&data, highest, order, settings, Starts::Cold, true);
     }
     let same = kept.settings == Some(*settings)
         && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
         && kept.fingerprint == fingerprint(&data);
     if same {
-        return super::finish(&data, highest, order, settings, Starts::Same(&kept.models));
+        let starts = Starts::Same(&kept.models);
+        return super::finish(&data, highest, order, settings, starts, kept.from_scratch);
     }
     let near = kept.rescaled(data.omega_ref);
-    super::finish(&data, highest, order, settings, Starts::Near(&near))
+    super::finish(&data, highest, order, settings, Starts::Near(&near), false)
 }
 
 #[cfg(test)]
@@ -162,9 +179,14 @@ mod tests {
             omega_ref: 250.0,
             fingerprint: 0,
             settings: None,
+            from_scratch: true,
         };
         let rescaled = &kept.rescaled(180.0)[0];
-        assert_eq!(rescaled.tau.to_bits(), 0.002_f64.to_bits(), "the delay is not rescaled");
+        assert_eq!(
+            rescaled.tau.to_bits(),
+            0.002_f64.to_bits(),
+            "the delay is not rescaled"
+        );
         for omega in [3.0, 60.0, 170.0, 250.0] {
             let (a, b) = (
                 response(&kept.models[0], omega, 250.0),

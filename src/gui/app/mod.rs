@@ -242,7 +242,15 @@ pub struct App {
     comparison: Option<(logic::ComparisonKey, Arc<Comparison>)>,
     status: Option<String>,
     screenshots: export::Screenshots,
+    /// CPU time of the previous frame (the app's `ui` and rendering), s.
+    frame_cpu_s: Option<f32>,
+    /// Print every frame's CPU time to stderr (environment variable [`FRAME_LOG_VAR`] set).
+    frame_log: bool,
 }
+
+/// Set (to anything) to print `frame_cpu_ms <ms>` to stderr after every frame: how the frame
+/// budget is measured (README, Speed).
+pub const FRAME_LOG_VAR: &str = "IMU_ATTEST_FRAME_LOG";
 
 impl App {
     /// Builds the app and starts loading `options.paths`.
@@ -275,6 +283,8 @@ impl App {
             comparison: None,
             status: None,
             screenshots: export::Screenshots::default(),
+            frame_cpu_s: None,
+            frame_log: std::env::var_os(FRAME_LOG_VAR).is_some(),
         };
         app.push_command(Command::Open(options.paths));
         app
@@ -342,7 +352,13 @@ impl App {
 }
 
 impl eframe::App for App {
-    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+    fn logic(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
+        self.frame_cpu_s = frame.info().cpu_usage;
+        if self.frame_log
+            && let Some(s) = self.frame_cpu_s
+        {
+            eprintln!("frame_cpu_ms {:.3}", 1e3 * s);
+        }
         self.logic_pass(ctx);
     }
 

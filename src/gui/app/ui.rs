@@ -36,6 +36,12 @@ impl App {
                     ui.separator();
                     ui.weak(status);
                 }
+                if let Some(s) = self.frame_cpu_s {
+                    ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                        ui.weak(format!("frame {:.1} ms", 1e3 * s))
+                            .on_hover_text("CPU time of the previous frame: drawing and rendering");
+                    });
+                }
             });
         });
         if !self.errors.is_empty() {

@@ -198,6 +198,62 @@ fn any_chunk_size_gives_the_same_run() {
     }
 }
 
+/// Cells in the forms a recorder may write, some of which the fast path leaves to `str::parse`
+/// (17 significant digits, long exponents, padding, `E`, a leading `+` or `.`).
+fn varied_cell(rng: &mut Rng, row: usize) -> String {
+    let x = rng.normal() * 10f64.powi((rng.uniform() * 12.0) as i32 - 8);
+    match rng.next_u64() % 9 {
+        0 => format!("{x}"),
+        1 => format!("{x:e}"),
+        2 => format!("{x:.6e}"),
+        3 => format!("{x:.17}"),
+        4 => {
+            let fixed = format!("{:.9}", x.abs());
+            fixed
+                .strip_prefix('0')
+                .map_or(fixed.clone(), |rest| format!("+{rest}"))
+        }
+        5 => format!("{x:.3E}"),
+        6 => format!(" {x:.12} "),
+        7 => format!("{:.5}e-0003", x * 1e3),
+        _ => format!("{}", (row % 1000) as f64 * 1e-3),
+    }
+}
+
+/// A naive reference: every line split at commas, every cell trimmed and read by `str::parse`.
+fn reference_columns(text: &str, width: usize) -> Vec<Vec<f64>> {
+    let mut columns = vec![Vec::new(); width];
+    for line in text.lines().skip(1).filter(|l| !l.trim().is_empty()) {
+        for (column, cell) in columns.iter_mut().zip(line.split(',')) {
+            column.push(cell.trim().parse().unwrap());
+        }
+    }
+    columns
+}
+
+#[test]
+fn varied_number_forms_load_as_str_parse_reads_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = Rng::new(23);
+    let mut text = ALL.join(",") + "\n";
+    for row in 0..3000 {
+        let t = 100.0 + row as f64 * 0.004;
+        let mut cells = vec![format!("{t:.4}")];
+        cells.extend((1..ALL.len()).map(|_| varied_cell(&mut rng, row)));
+        text += &cells.join(",");
+        text += if row % 5 == 0 { "\r\n" } else { "\n" };
+    }
+    let expected = reference_columns(&text, ALL.len());
+    assert_eq!(expected[0].len(), 3000);
+    let path = write(dir.path(), "varied.csv", &text);
+    for chunk_bytes in [8 << 20, 4096, 333, 61] {
+        let run = load(&path, &chunked(chunk_bytes)).unwrap();
+        assert_columns(&run, &ALL, &expected);
+    }
+    let gz = write(dir.path(), "varied.csv.gz", gzip(text.as_bytes()));
+    assert_columns(&load(&gz, &chunked(777)).unwrap(), &ALL, &expected);
+}
+
 #[test]
 fn permuted_columns_load_by_name() {
     let dir = tempfile::tempdir().unwrap();

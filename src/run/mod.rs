@@ -14,7 +14,7 @@
 //!   where they apply. Bad input never panics.
 //!
 //! # Reading
-//! One pass over the file: a named reader thread reads 8 MiB blocks, hashes the bytes as stored
+//! One pass over the file: a named reader thread reads 2 MiB blocks, hashes the bytes as stored
 //! (SHA-256), gunzips when the file starts with the gzip magic bytes (`1f 8b`) and cuts the text at
 //! the last newline; the calling thread parses each block's lines in parallel with rayon. The whole
 //! text is never held in memory; columns are reserved from the first block's rows per byte.

@@ -151,6 +151,57 @@ mod tests {
         assert!(taken > 300_000, "fast path took only {taken} of 600000");
     }
 
+    /// Random strings over the number alphabet, and numbers at the edges of the fast path (19
+    /// digits, 2^53, 10^+-22, leading zeros, lone signs and dots): whatever the fast path takes
+    /// is a whole number token that `str::parse` reads to the same bits.
+    #[test]
+    fn fast_path_matches_std_on_adversarial_strings() {
+        const ALPHABET: &[u8] = b"0123456789000999..eE+-";
+        let mut rng = crate::rng::Rng::new(11);
+        let mut pick = |n: usize| (rng.next_u64() % n as u64) as usize;
+        let mut texts: Vec<String> = Vec::new();
+        for _ in 0..300_000 {
+            let len = 1 + pick(24);
+            texts.push(
+                (0..len)
+                    .map(|_| char::from(ALPHABET[pick(ALPHABET.len())]))
+                    .collect(),
+            );
+        }
+        for digits in 15..=21 {
+            for lead in ["", "0.", "-0.000", "+", "9", "."] {
+                for exp in ["", "e-22", "e22", "e-23", "e+23", "E-0", "e0000"] {
+                    let nines = "9".repeat(digits);
+                    let ones = format!("1{}", "0".repeat(digits - 1));
+                    for body in [
+                        nines,
+                        ones,
+                        "9007199254740992".to_owned(),
+                        "9007199254740993".to_owned(),
+                    ] {
+                        texts.push(format!("{lead}{body}{exp}"));
+                    }
+                }
+            }
+        }
+        let mut taken = 0;
+        for text in &texts {
+            // A separator after the text, as in a row: the fast path must stop there.
+            let row = format!("{text},");
+            let Some((value, end)) = fast_number(row.as_bytes(), 0) else {
+                continue;
+            };
+            assert!(end <= text.len(), "{text}: read past the cell");
+            let token = &text[..end];
+            let std_value: f64 = token
+                .parse()
+                .unwrap_or_else(|_| panic!("fast path took {token:?}"));
+            assert_eq!(value.to_bits(), std_value.to_bits(), "{token}");
+            taken += usize::from(end == text.len());
+        }
+        assert!(taken > 10_000, "fast path took only {taken} whole strings");
+    }
+
     #[test]
     fn fast_path_refuses_what_it_cannot_round_exactly() {
         for text in [

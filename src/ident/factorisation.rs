@@ -22,6 +22,8 @@
 //!    accelerometer. With `g = 64`, `tests/identify_accuracy.rs` finds K within
 //!    0.1 % on simulated runs whose delays are not whole samples.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, SymmetricEigen};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -73,6 +75,13 @@ pub struct Factorisation {
     pub noise_psd: Vec<Matrix3<Complex64>>,
     /// Minimum-phase shaping filter `W_psi` (unit two-sided white input) per one-sided bin.
     pub shaping_filter: Vec<Matrix3<Complex64>>,
+    /// Standard deviation of each element of the frequency-response estimate per bin,
+    /// `sqrt(S_psi,ii (S_uu^-1)_jj / (n_eq - 3))` (complex magnitude): what A and Lambda leave
+    /// alone, so every Wiener estimate of these spectra shares it.
+    pub estimate_std: Arc<Vec<Matrix3<f64>>>,
+    /// Multiple coherence of each output with the three inputs per bin, `1 - S_psi,ii / S_xx,ii`
+    /// (0 for a silent output), shared the same way.
+    pub coherence: Arc<Vec<[f64; 3]>>,
     /// Reconstruction error of `D_u D_u^H = S_uu + eps I` (relative, worst bin).
     pub input_factor_error: f64,
     /// Reconstruction error of `W_psi W_psi^H = S_psi + eps I` (relative, worst bin).
@@ -155,7 +164,11 @@ pub fn factorise(
     shift_lags(&mut g, -(settings.lag_allowance as f64));
     let bins = spectra.frequency_hz.len();
     let causal_wiener = (0..bins).map(|k| g[k] * d_u_inv[k]).collect();
+    let estimate_std = Arc::new(estimate_std(spectra, &noise_psd, &s_uu_inv));
+    let coherence = Arc::new(coherence(spectra, &noise_psd));
     Ok(Factorisation {
+        estimate_std,
+        coherence,
         h1,
         causal_wiener,
         s_uu_inv,
@@ -166,6 +179,40 @@ pub fn factorise(
         floored_input_bins,
         converged: d_u.converged && w_psi.converged,
     })
+}
+
+/// `sqrt(S_psi,ii (S_uu^-1)_jj / (n_eq - 3))` per bin (see [`Factorisation::estimate_std`]).
+fn estimate_std(
+    spectra: &BlockSpectra,
+    noise_psd: &[Matrix3<Complex64>],
+    s_uu_inv: &[Matrix3<Complex64>],
+) -> Vec<Matrix3<f64>> {
+    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
+    noise_psd
+        .iter()
+        .zip(s_uu_inv)
+        .map(|(noise, inv)| {
+            Matrix3::from_fn(|i, j| (noise[(i, i)].re.max(0.0) * inv[(j, j)].re.max(0.0) / dof).sqrt())
+        })
+        .collect()
+}
+
+/// `1 - S_psi,ii / S_xx,ii` per bin, clamped to `[0, 1]`, 0 where `S_xx,ii` is 0.
+fn coherence(spectra: &BlockSpectra, noise_psd: &[Matrix3<Complex64>]) -> Vec<[f64; 3]> {
+    noise_psd
+        .iter()
+        .zip(&spectra.s_xx)
+        .map(|(noise, s_xx)| {
+            std::array::from_fn(|i| {
+                let sxx = s_xx[(i, i)].re;
+                if sxx > 0.0 {
+                    (1.0 - noise[(i, i)].re / sxx).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+        })
+        .collect()
 }
 
 /// The uniform loading added to the residual spectrum before its factorisation:

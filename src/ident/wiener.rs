@@ -15,6 +15,8 @@
 //! estimate, `E|dW_ij|^2 = S_psi,ii (S_uu^-1)_jj / (n_eq - 3)`, with `n_eq` the overlap-corrected
 //! number of averages; multiple coherence `gamma_i^2 = 1 - S_psi,ii / S_xx,ii`.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex64;
 use serde::Serialize;
@@ -34,12 +36,13 @@ pub struct WienerEstimate {
     /// `W_u` per bin.
     #[serde(skip)]
     pub w_u: Vec<Matrix3<Complex64>>,
-    /// Standard deviation of each element of `W_u` per bin (complex magnitude).
+    /// Standard deviation of each element of `W_u` per bin (complex magnitude): the
+    /// factorisation's [`Factorisation::estimate_std`], shared.
     #[serde(skip)]
-    pub w_u_std: Vec<Matrix3<f64>>,
-    /// Multiple coherence of each output with the three inputs, per bin.
+    pub w_u_std: Arc<Vec<Matrix3<f64>>>,
+    /// Multiple coherence of each output with the three inputs, per bin (shared likewise).
     #[serde(skip)]
-    pub coherence: Vec<[f64; 3]>,
+    pub coherence: Arc<Vec<[f64; 3]>>,
     /// Band-integrated residual of `W_u S_uu = S_xu`, relative to `S_xu` (A-weighted).
     pub constraint_residual: f64,
     /// The same for `Lambda = 0`, for comparison.
@@ -86,50 +89,48 @@ pub fn regularised_wiener(
         LambdaSetting::Values(v) => (v, false),
         LambdaSetting::Auto => (solve_lambda(&e, &f, &a_inv)?, true),
     };
-    let scale =
-        (Matrix3::identity() - a_inv * Matrix3::from_diagonal(&Vector3::from(values))).map(Complex64::from);
-    let w_u: Vec<Matrix3<Complex64>> = fact.causal_wiener.iter().map(|w| scale * w).collect();
-    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
-    let w_u_std = (0..w_u.len())
-        .map(|k| {
-            Matrix3::from_fn(|i, j| {
-                (fact.noise_psd[k][(i, i)].re.max(0.0) * fact.s_uu_inv[k][(j, j)].re.max(0.0) / dof).sqrt()
-            })
-        })
-        .collect();
-    let coherence = (0..w_u.len())
-        .map(|k| {
-            std::array::from_fn(|i| {
-                let sxx = spectra.s_xx[k][(i, i)].re;
-                if sxx > 0.0 {
-                    (1.0 - fact.noise_psd[k][(i, i)].re / sxx).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                }
-            })
-        })
-        .collect();
+    let scale = Matrix3::identity() - a_inv * Matrix3::from_diagonal(&Vector3::from(values));
+    let w_u: Vec<Matrix3<Complex64>> = fact.causal_wiener.iter().map(|w| real_times(&scale, w)).collect();
+    let den: f64 = band
+        .iter()
+        .map(|&k| weighted_square(weight_a, &spectra.s_xu[k]))
+        .sum();
     let residual = |lam: [f64; 3]| {
         let l = a_inv * Matrix3::from_diagonal(&Vector3::from(lam));
-        let (mut num, mut den) = (0.0, 0.0);
-        for (m, &k) in band.iter().enumerate() {
-            let r = e[m] - l.map(Complex64::from) * f[m];
-            num += (r.adjoint() * weight_a.map(Complex64::from) * r).trace().re;
-            den += (spectra.s_xu[k].adjoint() * weight_a.map(Complex64::from) * spectra.s_xu[k])
-                .trace()
-                .re;
-        }
+        let num: f64 = e
+            .iter()
+            .zip(&f)
+            .map(|(em, fm)| weighted_square(weight_a, &(em - real_times(&l, fm))))
+            .sum();
         if den > 0.0 { (num / den).sqrt() } else { 0.0 }
     };
     Ok(WienerEstimate {
         lambda: values,
         lambda_auto: auto,
         w_u,
-        w_u_std,
-        coherence,
+        w_u_std: Arc::clone(&fact.estimate_std),
+        coherence: Arc::clone(&fact.coherence),
         constraint_residual: residual(values),
         constraint_residual_unregularised: residual([0.0; 3]),
     })
+}
+
+/// `a m` for a real `a` (27 real-by-complex products instead of 27 complex ones).
+fn real_times(a: &Matrix3<f64>, m: &Matrix3<Complex64>) -> Matrix3<Complex64> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * m[(0, j)] + a[(i, 1)] * m[(1, j)] + a[(i, 2)] * m[(2, j)])
+}
+
+/// `tr(r^H A r)` for a real symmetric `A`.
+fn weighted_square(a: &Matrix3<f64>, r: &Matrix3<Complex64>) -> f64 {
+    let mut sum = 0.0;
+    for j in 0..3 {
+        for k in 0..3 {
+            for l in 0..3 {
+                sum += a[(k, l)] * (r[(k, j)].conj() * r[(l, j)]).re;
+            }
+        }
+    }
+    sum
 }
 
 /// Solves `M lambda = v` of the module docs.

@@ -2,9 +2,9 @@
 //! normalised variable `sigma = s / omega_ref`, shared by every order.
 
 use faer::Par;
+use faer::Spec;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::no_pivoting::factor as qr;
-use faer::Spec;
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 

@@ -202,13 +202,14 @@ pub fn wilson<const D: usize>(
     let mut g = vec![identity; n];
     let mut best = psi.clone();
     let mut best_error = reconstruction_error(&psi, &floored);
+    let floored_norms: Vec<f64> = floored.iter().map(SMatrix::norm).collect();
     let (mut iterations, mut converged) = (0, best_error <= settings.tolerance);
     while !converged && iterations < settings.max_iter {
         // g - I = psi^-1 S psi^-H - I on every bin.
         let mut singular = false;
         for ((gk, pk), sk) in g.iter_mut().zip(&psi).zip(&floored) {
             match pk.try_inverse() {
-                Some(inv) => *gk = inv * sk * inv.adjoint() - identity,
+                Some(inv) => *gk = sandwich(&inv, sk) - identity,
                 None => singular = true,
             }
         }
@@ -218,14 +219,14 @@ pub fn wilson<const D: usize>(
         let lag0 = hermitian_part(&mean(&g));
         projector.strictly_causal_part(&mut g)?;
         let delta0 = lower_rule(&lag0);
-        let mut step = 0.0_f64;
-        for (pk, dk) in psi.iter_mut().zip(&g) {
-            let next = *pk * (identity + dk + delta0);
+        let (mut step, mut error) = (0.0_f64, 0.0_f64);
+        for (((pk, dk), sk), s_norm) in psi.iter_mut().zip(&g).zip(&floored).zip(&floored_norms) {
+            let next = product(pk, &(identity + dk + delta0));
             step = step.max((next - *pk).norm() / pk.norm());
+            error = error.max((outer(&next) - sk).norm() / s_norm);
             *pk = next;
         }
         iterations += 1;
-        let error = reconstruction_error(&psi, &floored);
         if !error.is_finite() {
             break;
         }
@@ -336,8 +337,47 @@ fn reconstruction_error<const D: usize>(
 ) -> f64 {
     f.iter()
         .zip(s)
-        .map(|(fk, sk)| (fk * fk.adjoint() - sk).norm() / sk.norm())
+        .map(|(fk, sk)| (outer(fk) - sk).norm() / sk.norm())
         .fold(0.0, f64::max)
+}
+
+/// `a b`, written out so that the small fixed size unrolls (nalgebra's generic product is several
+/// times slower for 3x3 complex matrices).
+fn product<const D: usize>(
+    a: &SMatrix<Complex64, D, D>,
+    b: &SMatrix<Complex64, D, D>,
+) -> SMatrix<Complex64, D, D> {
+    SMatrix::from_fn(|i, j| (0..D).map(|k| a[(i, k)] * b[(k, j)]).sum())
+}
+
+/// `f f^H` (Hermitian: the lower triangle is computed, the upper mirrored).
+fn outer<const D: usize>(f: &SMatrix<Complex64, D, D>) -> SMatrix<Complex64, D, D> {
+    let mut out = SMatrix::<Complex64, D, D>::zeros();
+    for i in 0..D {
+        for j in 0..=i {
+            let v: Complex64 = (0..D).map(|k| f[(i, k)] * f[(j, k)].conj()).sum();
+            out[(i, j)] = v;
+            out[(j, i)] = v.conj();
+        }
+    }
+    out
+}
+
+/// `a s a^H` for a Hermitian `s` (the result is Hermitian: lower triangle computed, mirrored).
+fn sandwich<const D: usize>(
+    a: &SMatrix<Complex64, D, D>,
+    s: &SMatrix<Complex64, D, D>,
+) -> SMatrix<Complex64, D, D> {
+    let t = product(a, s);
+    let mut out = SMatrix::<Complex64, D, D>::zeros();
+    for i in 0..D {
+        for j in 0..=i {
+            let v: Complex64 = (0..D).map(|k| t[(i, k)] * a[(j, k)].conj()).sum();
+            out[(i, j)] = v;
+            out[(j, i)] = v.conj();
+        }
+    }
+    out
 }
 
 /// The lag-0 term of `Delta` from the (Hermitian) lag-0 term `m` of `g - I`: the strict lower

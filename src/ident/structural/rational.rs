@@ -35,10 +35,28 @@ use super::model::{ELEMENTS, Model, Prepared};
 
 /// Sanathanan–Koerner iterations per start.
 const SK_ITERATIONS: usize = 8;
-/// Iterations over which a crawl at the noise level stops a refinement from scratch.
-const COLD_PATIENCE: usize = 5;
-/// The same for a refinement from a previous optimum (a retune), which starts in the valley.
-const WARM_PATIENCE: usize = 2;
+/// When a refinement from scratch stops (see [`refine`]).
+const COLD: Stop = Stop {
+    patience: 5,
+    enough: 0.0,
+};
+/// When a refinement from a previous optimum (a retune) stops: it starts in the valley, and its
+/// result is provisional (the app refits from scratch once the settings rest), so a predicted
+/// gain below `0.01` in chi2 (parameters within about `0.1` standard deviation of the optimum)
+/// is enough.
+const WARM: Stop = Stop {
+    patience: 1,
+    enough: 0.01,
+};
+
+/// Stopping rules of [`refine`] beyond convergence to rounding.
+#[derive(Clone, Copy)]
+struct Stop {
+    /// Iterations over which a crawl at the noise level (less than `0.05` gained) stops.
+    patience: usize,
+    /// A predicted decrease of chi2 at or below this stops.
+    enough: f64,
+}
 
 /// Fits order `order >= 1` starting from `prev` (the best fit of order `order - 1`).
 pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) -> Option<Model> {
@@ -74,10 +92,10 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
     best.map(|b| b.0)
 }
 
-/// Refines `start`, a fit of its order to nearby data (a retune), with a short stall window
-/// ([`WARM_PATIENCE`]): the model and its chi2, `None` if the refinement fails.
+/// Refines `start`, a fit of its order to nearby data (a retune), with the looser stopping rules
+/// of [`WARM`]: the model and its chi2, `None` if the refinement fails.
 pub(super) fn refine_warm(data: &Prepared, start: &Model, max_iter: usize) -> Option<(Model, f64)> {
-    let model = refine(data, start.den.clone(), start.tau, max_iter, WARM_PATIENCE)?;
+    let model = refine(data, start.den.clone(), start.tau, max_iter, WARM)?;
     let chi2 = model.chi2(data);
     chi2.is_finite().then_some((model, chi2))
 }
@@ -96,7 +114,7 @@ fn extended(den: &[f64]) -> Vec<f64> {
 
 /// Refines from `(den, tau)`; the model and its chi2.
 fn refined(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<(Model, f64)> {
-    let model = refine(data, den, tau, max_iter, COLD_PATIENCE)?;
+    let model = refine(data, den, tau, max_iter, COLD)?;
     let chi2 = model.chi2(data);
     Some((model, chi2))
 }
@@ -238,14 +256,16 @@ fn sk_denominator(data: &Prepared, order: usize, tau: f64) -> Option<Vec<f64>> {
 
 /// Levenberg–Marquardt over `(den, tau omega_ref)` with the numerator projected out, with a
 /// forward-difference Jacobian of the projected residual (step `1e-7 max(|theta|, 0.1)`). Stops
-/// when the undamped Gauss–Newton step predicts a decrease of chi2 below `1e-10 chi2 + 1e-20`
-/// (converged), after ten rejected steps in a row (nothing left at machine precision), when
-/// chi2 has reached the noise level (`chi2 > 0.1 * 18 n_bins`) and `patience` iterations
+/// when the undamped Gauss–Newton step predicts a decrease of chi2 below
+/// `max(1e-10 chi2 + 1e-20, stop.enough)` (converged), after ten rejected steps in a row (nothing
+/// left at machine precision), when chi2 has reached the noise level (`chi2 > 0.1 * 18 n_bins`)
+/// and `stop.patience` iterations
 /// together lowered it by less than `0.05` (a crawl along the flat valley of an
 /// over-parameterised order: such a difference is far below the criterion's penalty of `~8.7` per
 /// parameter and moves a parameter by well under its standard deviation), or after `max_iter`
 /// iterations.
-fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, patience: usize) -> Option<Model> {
+fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, stop: Stop) -> Option<Model> {
+    let patience = stop.patience;
     let n = den.len();
     let rows = data.real_data();
     let w_ref = data.omega_ref;
@@ -277,7 +297,7 @@ fn refine(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, patience: u
         let a = DMatrix::from_fn(n + 1, n + 1, |i, j| dot(&jac[i], &jac[j]));
         let g = DVector::from_fn(n + 1, |i, _| dot(&jac[i], &r));
         let predicted = a.clone().cholesky().map(|c| g.dot(&c.solve(&g)));
-        if predicted.is_some_and(|p| p <= 1e-10 * cost + 1e-20) {
+        if predicted.is_some_and(|p| p <= (1e-10 * cost + 1e-20).max(stop.enough)) {
             break;
         }
         let mut rejected = 0;

@@ -70,6 +70,11 @@ fn an_order_change_on_the_same_data_reuses_the_fits_exactly() {
     assert_eq!(warm(&data, OrderChoice::Auto, &zero), auto);
 }
 
+/// How close a refined fit must come to the fit from scratch, in standard deviations: the
+/// refinement stops once the predicted gain in chi2 is below 0.01, i.e. about 0.1 standard
+/// deviation from the optimum in the worst direction.
+const REFINED_WITHIN_STD: f64 = 0.15;
+
 #[test]
 fn nearby_data_give_the_cold_answer_on_the_determined_orders() {
     let mut rng = Rng::new(32);
@@ -91,14 +96,18 @@ fn nearby_data_give_the_cold_answer_on_the_determined_orders() {
     for i in 0..3 {
         for j in 0..3 {
             let d = (refit.k[i][j] - fresh.k[i][j]).abs();
-            assert!(d < 1e-3 * fresh.k_std[i][j], "K[{i}][{j}] off by {d:e}");
+            let limit = REFINED_WITHIN_STD * fresh.k_std[i][j];
+            assert!(d < limit, "K[{i}][{j}] off by {d:e} (limit {limit:e})");
         }
     }
     let d_tau = (refit.tau_s - fresh.tau_s).abs();
-    assert!(d_tau < 1e-3 * fresh.tau_std_s, "tau off by {d_tau:e}");
+    assert!(
+        d_tau < REFINED_WITHIN_STD * fresh.tau_std_s,
+        "tau off by {d_tau:e}"
+    );
     for (r, f) in refit.candidates.iter().zip(&fresh.candidates) {
         // Far below the criterion's penalty per parameter (ln(18 n_bins) ~ 8.7).
-        let tolerance = if r.order <= 1 { 1e-6 * f.chi2 } else { 0.5 };
+        let tolerance = if r.order <= 1 { 0.05 } else { 0.5 };
         assert!(
             (r.chi2 - f.chi2).abs() <= tolerance,
             "order {}: chi2 {} from the previous fit, {} cold",
@@ -153,6 +162,12 @@ fn a_narrower_band_rescales_the_previous_models() {
     let refit = warm(&narrow, OrderChoice::Fixed(1), &previous);
     let fresh = cold(&narrow, OrderChoice::Fixed(1));
     let d_lag = (refit.denominator[0] - fresh.denominator[0]).abs();
-    assert!(d_lag < 1e-3 * fresh.denominator_std[0], "lag off by {d_lag:e}");
-    assert!((refit.chi2 - fresh.chi2).abs() < 1e-6 * fresh.chi2);
+    let limit = REFINED_WITHIN_STD * fresh.denominator_std[0];
+    assert!(d_lag < limit, "lag off by {d_lag:e} (limit {limit:e})");
+    assert!(
+        (refit.chi2 - fresh.chi2).abs() < 0.05,
+        "{} vs {}",
+        refit.chi2,
+        fresh.chi2
+    );
 }

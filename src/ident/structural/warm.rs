@@ -10,10 +10,11 @@
 //! - **Nearby data** (a retune): each order is refined by Levenberg–Marquardt from the previous
 //!   model of the same order (rescaled to the new band's `omega_ref`), instead of from the
 //!   Sanathanan–Koerner and far-pole starts; where that ends worse than the order below (which a
-//!   nested model cannot), the far-pole start is refined too. On a well-determined order this
-//!   lands on the optimum a cold fit finds; an over-parameterised order, whose optimum lies in a
-//!   flat valley, can stop at a different point of the valley (chi2 within the refinement's stall
-//!   tolerance). Callers who need the cold answer refit cold afterwards (the app does).
+//!   nested model cannot), it is fitted from scratch. The refinement stops once the predicted gain
+//!   is below 0.01 in chi2: on a well-determined order it lands within about 0.1 standard
+//!   deviation of the optimum a cold fit finds; an over-parameterised order, whose optimum lies
+//!   in a flat valley, can stop elsewhere in the valley, or in another valley. Callers who need
+//!   the cold answer refit cold afterwards (the app does).
 //!
 //! Units and contracts are those of the module: the same errors as `fit_structure`, for the same
 //! inputs, and no NaN in any output.

@@ -350,29 +350,29 @@ fn product<const D: usize>(
     SMatrix::from_fn(|i, j| (0..D).map(|k| a[(i, k)] * b[(k, j)]).sum())
 }
 
-/// `f f^H` (Hermitian: the lower triangle is computed, the upper mirrored).
+/// `f f^H`.
 fn outer<const D: usize>(f: &SMatrix<Complex64, D, D>) -> SMatrix<Complex64, D, D> {
-    let mut out = SMatrix::<Complex64, D, D>::zeros();
-    for i in 0..D {
-        for j in 0..=i {
-            let v: Complex64 = (0..D).map(|k| f[(i, k)] * f[(j, k)].conj()).sum();
-            out[(i, j)] = v;
-            out[(j, i)] = v.conj();
-        }
-    }
-    out
+    hermitian_product(f, f)
 }
 
-/// `a s a^H` for a Hermitian `s` (the result is Hermitian: lower triangle computed, mirrored).
+/// `a s a^H` for a Hermitian `s`.
 fn sandwich<const D: usize>(
     a: &SMatrix<Complex64, D, D>,
     s: &SMatrix<Complex64, D, D>,
 ) -> SMatrix<Complex64, D, D> {
-    let t = product(a, s);
+    hermitian_product(&product(a, s), a)
+}
+
+/// `x y^H` for factors whose product is known to be Hermitian: the lower triangle is computed,
+/// the upper mirrored.
+fn hermitian_product<const D: usize>(
+    x: &SMatrix<Complex64, D, D>,
+    y: &SMatrix<Complex64, D, D>,
+) -> SMatrix<Complex64, D, D> {
     let mut out = SMatrix::<Complex64, D, D>::zeros();
     for i in 0..D {
         for j in 0..=i {
-            let v: Complex64 = (0..D).map(|k| t[(i, k)] * a[(j, k)].conj()).sum();
+            let v: Complex64 = (0..D).map(|k| x[(i, k)] * y[(j, k)].conj()).sum();
             out[(i, j)] = v;
             out[(j, i)] = v.conj();
         }

@@ -13,7 +13,7 @@
 //! | `retune_cold` | `retune` with the structural fit from scratch (what `identify` does) |
 //! | `retune_order0` | `retune_cold` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
 //! | `diagnose` | the missing-effect workflow ([`crate::diagnose::diagnose_run`]) on the loaded run, its own identification included |
-//! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6), as the app does it: spectra, factorisation, Wiener and structural fit (from the previous fit) of every block from the cached observer inputs |
+//! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6), as the app shows it at once: spectra, factorisation (Wilson started from the previous factors), Wiener and structural fit (from the previous fit) of every block from the cached observer inputs |
 //! | `spectra_bare` | the lower bound of `spectra`: [`super::bare`]'s loop of the same FFTs and cross products |
 
 use std::path::PathBuf;
@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use super::{BenchError, Stage, bare};
 use crate::ident::IdentError;
-use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise};
+use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise, factorise_from};
 use crate::ident::identify::{identify_block_from, native_band, structural_fit};
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::ident::signals::{BlockSignals, block_signals, channel_names};
@@ -124,12 +124,14 @@ type Cached = (Arc<BlockSpectra>, Arc<Factorisation>);
 
 /// Spectra and factorisation of every block's `signals` with `welch`: the spectra block by block
 /// (each parallel over segments), then the factorisations of all blocks at once (each block's two
-/// Wilson factorisations take unequal times; together they keep both cores busy).
+/// Wilson factorisations take unequal times; together they keep both cores busy), started from
+/// `previous` (one per block, in order) where given.
 fn spectra_and_factorisations(
     planner: &mut WelchPlanner,
     signals: &[BlockSignals],
     sample_rate_hz: f64,
     welch: &WelchSettings,
+    previous: &[Arc<Factorisation>],
 ) -> Result<Vec<Cached>, BenchError> {
     let spectra = signals
         .iter()
@@ -137,8 +139,10 @@ fn spectra_and_factorisations(
         .collect::<Result<Vec<_>, BenchError>>()?;
     spectra
         .into_par_iter()
-        .map(|sp| {
-            let factorisation = factorise(&sp, &FactorisationSettings::default())?;
+        .enumerate()
+        .map(|(i, sp)| {
+            let start = previous.get(i).map(AsRef::as_ref);
+            let factorisation = factorise_from(&sp, &FactorisationSettings::default(), start)?;
             Ok((sp, Arc::new(factorisation)))
         })
         .collect()
@@ -316,7 +320,8 @@ fn rewelch_stage(state: &mut BenchState) -> Result<(), BenchError> {
         ..state.settings.clone()
     };
     let fits = BenchState::need(&state.fits, "rewelch", "structural_fit")?;
-    let cached = spectra_and_factorisations(&mut state.planner, signals, rate, &settings.welch)?;
+    let previous = &state.factorisations;
+    let cached = spectra_and_factorisations(&mut state.planner, signals, rate, &settings.welch, previous)?;
     for ((sig, (sp, f)), fit) in signals.iter().zip(cached).zip(fits) {
         identify_block_from(sig.block, sp, f, &settings, Some(fit))?;
     }

@@ -168,3 +168,37 @@ fn empty_band_and_singular_weight_are_errors() {
     let singular = regularised_wiener(&sp, &fact, &Matrix3::zeros(), LambdaSetting::Auto, [1.0, 80.0]);
     assert!(matches!(singular, Err(super::IdentError::Singular(_))));
 }
+
+#[test]
+fn refactorising_after_an_overlap_change_starts_from_the_previous_factors() {
+    let sig = synthetic(5, 60_000, k_true(), 0.05);
+    let welch = |overlap| WelchSettings {
+        segment_len: 1024,
+        overlap,
+        ..WelchSettings::default()
+    };
+    let mut planner = WelchPlanner::new();
+    let before = block_spectra(&mut planner, &sig, RATE, &welch(0.5)).unwrap();
+    let after = block_spectra(&mut planner, &sig, RATE, &welch(0.6)).unwrap();
+    let settings = FactorisationSettings::default();
+    let previous = factorise(&before, &settings).unwrap();
+    let cold = factorise(&after, &settings).unwrap();
+    let warm = super::factorisation::factorise_from(&after, &settings, Some(&previous)).unwrap();
+    assert!(previous.from_scratch && cold.from_scratch);
+    assert!(!warm.from_scratch, "started from the previous factors");
+    assert!(warm.converged);
+    assert!(warm.input_factor_error < 1e-9 && warm.noise_factor_error < 1e-9);
+    // Within the factor's own indeterminacy on this grid (about 1e-4), far below the estimate's
+    // noise.
+    let band = band_bins(&after.frequency_hz, [1.0, 80.0]);
+    for &k in &band {
+        let d = (warm.causal_wiener[k] - cold.causal_wiener[k]).norm();
+        assert!(d < 1e-3 * cold.causal_wiener[k].norm(), "bin {k}: {d:e}");
+    }
+    // The overlap changed the spectra: the previous factors are not the answer.
+    let moved = band
+        .iter()
+        .map(|&k| (previous.causal_wiener[k] - cold.causal_wiener[k]).norm())
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-4, "{moved:e}");
+}

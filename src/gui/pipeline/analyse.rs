@@ -12,7 +12,7 @@ use super::identified::Identification;
 use super::stages::{self, Measured, Motion};
 use super::{Event, RunId, RunSummary, Stage};
 use crate::block::Block;
-use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise};
+use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise, factorise_from};
 use crate::ident::identify::identify_block_from;
 use crate::ident::settings::Settings;
 use crate::ident::structural::StructuralFit;
@@ -28,6 +28,9 @@ pub(super) struct RunCache {
     pub spectra: Option<Arc<Spectra>>,
     /// Factorisations of `spectra`'s blocks.
     pub factorisations: Vec<(Block, Arc<Factorisation>)>,
+    /// The factorisations before the latest change of the Welch settings: the start of the next
+    /// factorisation of their block.
+    pub previous_factorisations: Vec<(Block, Arc<Factorisation>)>,
     pub identification: Option<Arc<Identification>>,
     /// Every block's latest structural fit, kept across changes of the Welch settings: the start
     /// of the next fit.
@@ -43,6 +46,7 @@ impl RunCache {
             motion: None,
             spectra: None,
             factorisations: Vec::new(),
+            previous_factorisations: Vec::new(),
             identification: None,
             fits: Vec::new(),
         }
@@ -108,7 +112,9 @@ impl Analysis<'_> {
                 Ok(s) => {
                     let s = Arc::new(s);
                     cache.spectra = Some(s.clone());
-                    cache.factorisations.clear();
+                    if !cache.factorisations.is_empty() {
+                        cache.previous_factorisations = std::mem::take(&mut cache.factorisations);
+                    }
                     cache.identification = None;
                     s
                 }
@@ -153,7 +159,8 @@ impl Analysis<'_> {
             .par_iter()
             .filter(|(block, _)| known(&cache.factorisations, *block).is_none())
             .map(|(block, core)| {
-                factorise(core, &FactorisationSettings::default())
+                let start = known(&cache.previous_factorisations, *block);
+                factorise_from(core, &FactorisationSettings::default(), start.as_deref())
                     .map(|f| (*block, Arc::new(f)))
                     .map_err(|e| format!("{}: {e}", block.name()))
             })
@@ -197,8 +204,8 @@ impl Analysis<'_> {
         });
     }
 
-    /// Refits from scratch the structural fits of a provisional identification (see
-    /// [`Identification::provisional`]) and sends the identification again, under the same
+    /// Redoes from scratch the factorisations and structural fits of a provisional identification
+    /// (see [`Identification::provisional`]) and sends the identification again, under the same
     /// generation. Nothing to do if the cached identification is not provisional.
     pub fn polish(&self, cache: &mut RunCache) {
         let Some(id) = cache.identification.clone().filter(|i| i.provisional()) else {
@@ -208,11 +215,18 @@ impl Analysis<'_> {
             .blocks
             .par_iter()
             .map(|b| {
-                if b.structural.fitted.from_scratch() {
+                if b.structural.fitted.from_scratch() && b.factorisation.from_scratch {
                     return Ok(b.clone());
                 }
-                let (spectra, factorisation) = (b.spectra.clone(), b.factorisation.clone());
-                identify_block_from(b.block, spectra, factorisation, &id.settings, None)
+                let factorisation = if b.factorisation.from_scratch {
+                    b.factorisation.clone()
+                } else {
+                    Arc::new(
+                        factorise(&b.spectra, &FactorisationSettings::default())
+                            .map_err(|e| format!("{}: {e}", b.block.name()))?,
+                    )
+                };
+                identify_block_from(b.block, b.spectra.clone(), factorisation, &id.settings, None)
                     .map_err(|e| format!("{}: {e}", b.block.name()))
             })
             .collect();
@@ -221,6 +235,10 @@ impl Analysis<'_> {
             Err(message) => return self.fail(Stage::Identify, message),
         };
         cache.fits = blocks.iter().map(|b| (b.block, b.structural.clone())).collect();
+        cache.factorisations = blocks
+            .iter()
+            .map(|b| (b.block, b.factorisation.clone()))
+            .collect();
         let identification = Arc::new(Identification::new(&cache.summary, id.settings.clone(), blocks));
         cache.identification = Some(identification.clone());
         (self.send)(Event::Identified {

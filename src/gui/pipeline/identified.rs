@@ -103,12 +103,15 @@ impl Identification {
         }
     }
 
-    /// Whether a structural fit was refined from the previous settings' fit rather than fitted
-    /// from scratch: the worker then refits from scratch when idle and sends the result again
-    /// (what `imu-attest identify` gives for these settings).
+    /// Whether a structural fit was refined from the previous settings' fit, or a factorisation
+    /// started from the previous Welch settings' factors, rather than computed from scratch: the
+    /// worker then redoes them from scratch when idle and sends the result again (what
+    /// `imu-attest identify` gives for these settings).
     #[must_use]
     pub fn provisional(&self) -> bool {
-        self.blocks.iter().any(|b| !b.structural.fitted.from_scratch())
+        self.blocks
+            .iter()
+            .any(|b| !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch)
     }
 
     /// The model of `block`, if identified.

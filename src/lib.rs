@@ -15,6 +15,7 @@ pub mod gui;
 pub mod ident;
 pub mod model;
 pub mod output;
+mod procfs;
 pub mod rng;
 pub mod run;
 pub mod sim;

@@ -6,16 +6,7 @@
 /// The process's peak resident set size so far (`VmHWM`), bytes; `None` where unreadable.
 #[must_use]
 pub fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line
-        .trim_start_matches("VmHWM:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kib.saturating_mul(1024))
+    crate::procfs::kib_field_bytes("/proc/self/status", "VmHWM")
 }
 
 /// Resets the peak resident set size to the current one (Linux 4.0 and later: writing `5` to

@@ -38,14 +38,5 @@ pub struct LoadProgress {
 
 /// `MemAvailable` from `/proc/meminfo`, bytes; `None` where unreadable.
 pub(super) fn mem_available_bytes() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line
-        .trim_start_matches("MemAvailable:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kib.saturating_mul(1024))
+    crate::procfs::kib_field_bytes("/proc/meminfo", "MemAvailable")
 }

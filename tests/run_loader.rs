@@ -789,14 +789,7 @@ fn too_large_is_refused_before_allocating() {
         ..opts()
     };
     let err = load_err(&path, &options);
-    let LoadError::TooLarge {
-        needed_bytes,
-        available_bytes,
-        ..
-    } = err
-    else {
-        panic!("{err}")
-    };
+    let (needed_bytes, available_bytes) = too_large(&err);
     assert_eq!(available_bytes, 100_000);
     // 2000 rows x 10 columns x 8 bytes, estimated from the first 4 KiB.
     assert!((150_000..250_000).contains(&needed_bytes), "{needed_bytes}");
@@ -830,14 +823,7 @@ fn too_large_gzip_is_refused_as_it_streams() {
         ControlFlow::Continue(())
     })
     .unwrap_err();
-    let LoadError::TooLarge {
-        needed_bytes,
-        available_bytes,
-        ..
-    } = err
-    else {
-        panic!("{err}")
-    };
+    let (needed_bytes, available_bytes) = too_large(&err);
     assert_eq!(available_bytes, 100_000);
     // Refused once the rows read so far exceed the limit (1250 rows of 10 columns), before the
     // 2000 rows were all decoded.
@@ -1007,4 +993,17 @@ fn random_damage_to_the_sidecar_never_panics() {
         }
     }
     assert!(outcomes.iter().all(|&n| n > 0), "{outcomes:?}");
+}
+
+/// The needed and available bytes of a [`LoadError::TooLarge`]; panics on any other error.
+fn too_large(err: &LoadError) -> (u64, u64) {
+    let LoadError::TooLarge {
+        needed_bytes,
+        available_bytes,
+        ..
+    } = err
+    else {
+        panic!("{err}")
+    };
+    (*needed_bytes, *available_bytes)
 }

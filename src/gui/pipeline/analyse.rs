@@ -152,35 +152,33 @@ impl Analysis<'_> {
         *stage = Stage::Factorisation;
         // The missing factorisations of all blocks at once: each block's two Wilson factorisations
         // take unequal times, together they keep both cores busy.
-        let known = |list: &[(Block, Arc<Factorisation>)], block: Block| {
-            list.iter().find(|(b, _)| *b == block).map(|(_, f)| f.clone())
-        };
-        let computed: Result<Vec<_>, String> = cores
-            .par_iter()
-            .filter(|(block, _)| known(&cache.factorisations, *block).is_none())
+        let factorised: Result<Vec<_>, String> = cores
+            .into_par_iter()
             .map(|(block, core)| {
-                let start = known(&cache.previous_factorisations, *block);
-                factorise_from(core, &FactorisationSettings::default(), start.as_deref())
-                    .map(|f| (*block, Arc::new(f)))
-                    .map_err(|e| format!("{}: {e}", block.name()))
+                let factorisation = if let Some(known) = of_block(&cache.factorisations, block) {
+                    known
+                } else {
+                    let start = of_block(&cache.previous_factorisations, block);
+                    factorise_from(&core, &FactorisationSettings::default(), start.as_deref())
+                        .map(Arc::new)
+                        .map_err(|e| format!("{}: {e}", block.name()))?
+                };
+                Ok((block, core, factorisation))
             })
             .collect();
-        match computed {
-            Ok(computed) => cache.factorisations.extend(computed),
+        let factorised = match factorised {
+            Ok(factorised) => factorised,
             Err(message) => return self.fail(Stage::Factorisation, message),
+        };
+        for (block, _, factorisation) in &factorised {
+            if of_block(&cache.factorisations, *block).is_none() {
+                cache.factorisations.push((*block, factorisation.clone()));
+            }
         }
-        let mut prepared = Vec::new();
-        for (block, core) in cores {
-            let Some(factorisation) = known(&cache.factorisations, block) else {
-                return self.fail(Stage::Factorisation, format!("{}: not factorised", block.name()));
-            };
-            let previous = cache
-                .fits
-                .iter()
-                .find(|(b, _)| *b == block)
-                .map(|(_, f)| f.clone());
-            prepared.push((block, core, factorisation, previous));
-        }
+        let prepared: Vec<_> = factorised
+            .into_iter()
+            .map(|(block, core, factorisation)| (block, core, factorisation, of_block(&cache.fits, block)))
+            .collect();
         *stage = Stage::Identify;
         // The blocks in parallel: a retune's wait is the slower block's, not the sum.
         let identified: Result<Vec<_>, String> = prepared
@@ -247,4 +245,9 @@ impl Analysis<'_> {
             identification,
         });
     }
+}
+
+/// The entry of `block` in a per-block list.
+fn of_block<T: Clone>(list: &[(Block, T)], block: Block) -> Option<T> {
+    list.iter().find(|(b, _)| *b == block).map(|(_, v)| v.clone())
 }

@@ -5,6 +5,8 @@ use faer::Par;
 use faer::Spec;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::no_pivoting::factor as qr;
+use std::hash::{Hash, Hasher};
+
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 
@@ -40,6 +42,9 @@ pub(super) struct Prepared {
     pub omega_flat: Vec<[f64; 54]>,
     /// `(Omega_i W_i^H)_j` at element `3 i + j`, per bin (the projection's right-hand side).
     pub g: Vec<[Complex64; ELEMENTS]>,
+    /// Hash of the bits of the frequencies, the response and the row weights: what tells a refit
+    /// on the same data from one on other data ([`super::refit_structure`]).
+    pub fingerprint: u64,
 }
 
 impl Prepared {
@@ -57,7 +62,7 @@ impl Prepared {
             .iter()
             .map(|r| std::array::from_fn(|e| r[e / 3].omega[(e % 3, e % 3)].re))
             .collect();
-        let h = input
+        let h: Vec<[Complex64; ELEMENTS]> = input
             .response
             .iter()
             .map(|r| std::array::from_fn(|e| r[(e / 3, e % 3)]))
@@ -81,6 +86,7 @@ impl Prepared {
                 })
             })
             .collect();
+        let fingerprint = fingerprint(&omega, &h, rows);
         Self {
             omega,
             x,
@@ -90,6 +96,7 @@ impl Prepared {
             h,
             omega_flat,
             g,
+            fingerprint,
         }
     }
 
@@ -102,6 +109,26 @@ impl Prepared {
     pub fn real_data(&self) -> usize {
         2 * ELEMENTS * self.bins()
     }
+}
+
+/// Hash of the bits of everything the fit reads from the data.
+fn fingerprint(omega: &[f64], h: &[[Complex64; ELEMENTS]], rows: &[[RowWeight; 3]]) -> u64 {
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    let mut put = |v: f64| v.to_bits().hash(&mut hasher);
+    for ((&o, hk), rk) in omega.iter().zip(h).zip(rows) {
+        put(o);
+        for z in hk {
+            put(z.re);
+            put(z.im);
+        }
+        for row in rk {
+            for z in &row.omega {
+                put(z.re);
+                put(z.im);
+            }
+        }
+    }
+    hasher.finish()
 }
 
 /// `N(sigma) / d(sigma) e^(-tau s)` with normalised coefficients: `num[m][e]` multiplies

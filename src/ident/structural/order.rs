@@ -50,12 +50,19 @@ pub(super) enum Starts<'a> {
 pub(super) struct Selection {
     /// Every order fitted (or kept), in increasing order: possibly beyond the candidates.
     pub models: Vec<Model>,
-    /// The model returned.
-    pub chosen: Model,
+    /// Index in `models` of the model returned.
+    pub pick: usize,
     /// Its chi2.
     pub chi2: f64,
     /// Every order fitted, in increasing order.
     pub candidates: Vec<OrderCandidate>,
+}
+
+impl Selection {
+    /// The model returned.
+    pub fn chosen(&self) -> &Model {
+        &self.models[self.pick]
+    }
 }
 
 /// Fits orders `0..=highest` (each from the previous one's best, or as `starts` says) and picks
@@ -135,7 +142,7 @@ pub(super) fn fit_orders(
             .map_or(0, |(i, _)| i),
     };
     Ok(Selection {
-        chosen: models[pick].clone(),
+        pick,
         models,
         chi2: chi2s[pick],
         candidates,

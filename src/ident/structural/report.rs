@@ -41,7 +41,7 @@ pub(super) fn assemble(
     selection: &Selection,
     criterion: InformationCriterion,
 ) -> StructuralFit {
-    let model = &selection.chosen;
+    let model = selection.chosen();
     let order = model.order();
     let n_num = model.num.len();
     let w_ref = data.omega_ref;

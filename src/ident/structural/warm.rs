@@ -19,8 +19,6 @@
 //! Units and contracts are those of the module: the same errors as `fit_structure`, for the same
 //! inputs, and no NaN in any output.
 
-use std::hash::{Hash, Hasher};
-
 use super::model::{Model, Prepared};
 use super::order::Starts;
 use super::{OrderChoice, ResponseEstimate, StructuralError, StructuralFit, StructuralSettings};
@@ -51,7 +49,7 @@ impl FittedOrders {
         Self {
             models,
             omega_ref: data.omega_ref,
-            fingerprint: fingerprint(data),
+            fingerprint: data.fingerprint,
             settings: Some(*settings),
             from_scratch,
         }
@@ -102,26 +100,6 @@ impl FittedOrders {
     }
 }
 
-/// Hash of the bits of everything the fit reads from the data.
-fn fingerprint(data: &Prepared) -> u64 {
-    let mut hasher = std::collections::hash_map::DefaultHasher::new();
-    let mut put = |v: f64| v.to_bits().hash(&mut hasher);
-    for k in 0..data.bins() {
-        put(data.omega[k]);
-        for z in &data.h[k] {
-            put(z.re);
-            put(z.im);
-        }
-        for row in &data.rows[k] {
-            for z in &row.omega {
-                put(z.re);
-                put(z.im);
-            }
-        }
-    }
-    hasher.finish()
-}
-
 /// [`fit_structure`](super::fit_structure), starting from `previous` (see the module docs):
 /// instant for a change of the order choice alone, a few refinement steps per order for nearby
 /// data. A `previous` without kept models (or with a different band size in the rational
@@ -142,7 +120,7 @@ pub fn refit_structure(
     }
     let same = kept.settings == Some(*settings)
         && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
-        && kept.fingerprint == fingerprint(&data);
+        && kept.fingerprint == data.fingerprint;
     if same {
         let starts = Starts::Same(&kept.models);
         return super::finish(&data, highest, order, settings, starts, kept.from_scratch);

@@ -50,10 +50,8 @@ pub(super) enum Starts<'a> {
 pub(super) struct Selection {
     /// Every order fitted (or kept), in increasing order: possibly beyond the candidates.
     pub models: Vec<Model>,
-    /// Index in `models` of the model returned.
+    /// Index in `models` (and in `candidates`) of the model returned.
     pub pick: usize,
-    /// Its chi2.
-    pub chi2: f64,
     /// Every order fitted, in increasing order.
     pub candidates: Vec<OrderCandidate>,
 }
@@ -62,6 +60,11 @@ impl Selection {
     /// The model returned.
     pub fn chosen(&self) -> &Model {
         &self.models[self.pick]
+    }
+
+    /// Its chi2.
+    pub fn chi2(&self) -> f64 {
+        self.candidates[self.pick].chi2
     }
 }
 
@@ -114,7 +117,6 @@ pub(super) fn fit_orders(
     // Kept models above `highest` stay in `models` (for a later change of order), out of the choice.
     let considered = &models[..models.len().min(highest + 1)];
     let mut candidates = Vec::with_capacity(considered.len());
-    let mut chi2s = Vec::with_capacity(considered.len());
     for model in considered {
         let chi2 = model.chi2(data);
         let p = parameter_count(model.order());
@@ -122,7 +124,6 @@ pub(super) fn fit_orders(
         if !value.is_finite() {
             return Err(StructuralError::NumericalFailure { order: model.order() });
         }
-        chi2s.push(chi2);
         candidates.push(OrderCandidate {
             order: model.order(),
             parameters: p,
@@ -142,9 +143,8 @@ pub(super) fn fit_orders(
             .map_or(0, |(i, _)| i),
     };
     Ok(Selection {
-        pick,
         models,
-        chi2: chi2s[pick],
+        pick,
         candidates,
     })
 }

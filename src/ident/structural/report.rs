@@ -46,7 +46,7 @@ pub(super) fn assemble(
     let n_num = model.num.len();
     let w_ref = data.omega_ref;
     let dof = data.real_data().saturating_sub(parameter_count(order)).max(1);
-    let inflation = (selection.chi2 / dof as f64).max(1.0).sqrt();
+    let inflation = (selection.chi2() / dof as f64).max(1.0).sqrt();
     let std: Vec<f64> = model
         .parameter_std(data)
         .into_iter()
@@ -79,7 +79,7 @@ pub(super) fn assemble(
         denominator_std,
         numerator,
         poles,
-        chi2: selection.chi2,
+        chi2: selection.chi2(),
         dof,
         stable: rational::is_stable(&model.den),
         criterion,

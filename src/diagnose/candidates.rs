@@ -7,6 +7,7 @@ use std::f64::consts::PI;
 
 use super::fit::{Fitted, cost_at, fit};
 use super::state::State;
+use super::structure::Structure;
 use super::tone::{Tone, strongest_line};
 use crate::block::Block;
 use crate::sim::effect::Effect;
@@ -33,6 +34,9 @@ pub struct Candidate {
     pub added_params: usize,
 }
 
+/// The flag of [`Structure`] that turns an effect on.
+type Switch = fn(&mut Structure) -> &mut bool;
+
 fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) -> Option<Candidate> {
     let fitted = fitted?;
     let current = &state.fitted;
@@ -50,45 +54,22 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
     let design = &state.design;
     let current = &state.fitted;
     let s0 = &current.structure;
-    let run_fit = |structure: &super::structure::Structure, theta: &super::structure::Theta| {
+    let run_fit = |structure: &Structure, theta: &super::structure::Theta| {
         fit(design, &state.grams, structure, theta, band_hz)
     };
     let mut out = Vec::new();
-    if design.block == Block::Gyro && !s0.g_sensitivity {
+    // The effects that are a switch of the structure, fitted from the current parameters.
+    let switches: [(Effect, bool, Switch); 4] = [
+        (Effect::GSensitivity, design.block == Block::Gyro, |s| &mut s.g_sensitivity),
+        (Effect::LeverArmError, design.block == Block::Accel, |s| &mut s.lever_arm),
+        (Effect::ScaleNonlinearity, true, |s| &mut s.k2),
+        (Effect::AxisTimeSkew, true, |s| &mut s.skew),
+    ];
+    for (effect, applies, switch) in switches {
         let mut s = s0.clone();
-        s.g_sensitivity = true;
-        out.extend(structural(
-            Effect::GSensitivity,
-            state,
-            run_fit(&s, &current.theta),
-        ));
-    }
-    if design.block == Block::Accel && !s0.lever_arm {
-        let mut s = s0.clone();
-        s.lever_arm = true;
-        out.extend(structural(
-            Effect::LeverArmError,
-            state,
-            run_fit(&s, &current.theta),
-        ));
-    }
-    if !s0.k2 {
-        let mut s = s0.clone();
-        s.k2 = true;
-        out.extend(structural(
-            Effect::ScaleNonlinearity,
-            state,
-            run_fit(&s, &current.theta),
-        ));
-    }
-    if !s0.skew {
-        let mut s = s0.clone();
-        s.skew = true;
-        out.extend(structural(
-            Effect::AxisTimeSkew,
-            state,
-            run_fit(&s, &current.theta),
-        ));
+        if applies && !std::mem::replace(switch(&mut s), true) {
+            out.extend(structural(effect, state, run_fit(&s, &current.theta)));
+        }
     }
     if !s0.lag {
         let mut s = s0.clone();
@@ -132,7 +113,7 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
 /// 1 Hz) and damping.
 fn resonance_start(
     state: &State,
-    structure: &super::structure::Structure,
+    structure: &Structure,
     band_hz: [f64; 2],
 ) -> Option<super::structure::Theta> {
     let (lo, hi) = (band_hz[0].max(1.0), band_hz[1] * 0.98);

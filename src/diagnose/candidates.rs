@@ -60,8 +60,12 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
     let mut out = Vec::new();
     // The effects that are a switch of the structure, fitted from the current parameters.
     let switches: [(Effect, bool, Switch); 4] = [
-        (Effect::GSensitivity, design.block == Block::Gyro, |s| &mut s.g_sensitivity),
-        (Effect::LeverArmError, design.block == Block::Accel, |s| &mut s.lever_arm),
+        (Effect::GSensitivity, design.block == Block::Gyro, |s| {
+            &mut s.g_sensitivity
+        }),
+        (Effect::LeverArmError, design.block == Block::Accel, |s| {
+            &mut s.lever_arm
+        }),
         (Effect::ScaleNonlinearity, true, |s| &mut s.k2),
         (Effect::AxisTimeSkew, true, |s| &mut s.skew),
     ];

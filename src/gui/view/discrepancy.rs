@@ -12,6 +12,8 @@ use crate::diagnose::Verdict;
 use crate::diagnose::map::DisagreementMap;
 use crate::diagnose::report::BlockReport;
 use crate::gui::app::{Command, RunEntry};
+use crate::ident::signals::channel_names;
+use crate::run::Block;
 
 const CELL_W: f32 = 36.0;
 const CELL_H: f32 = 20.0;
@@ -134,7 +136,7 @@ fn map(ui: &mut egui::Ui, name: &str, m: &DisagreementMap) {
         painter.text(
             pos2(rect.left() + 2.0, y + CELL_H * 0.5),
             Align2::LEFT_CENTER,
-            format!("{name}{i}"),
+            outputs(name)[i].to_owned(),
             font.clone(),
             text,
         );
@@ -153,8 +155,12 @@ fn map(ui: &mut egui::Ui, name: &str, m: &DisagreementMap) {
     }
     if let Some((i, k)) = hovered {
         response.on_hover_text(format!(
-            "channel {i}, {:.2}-{:.2} Hz: residual {:+.2} dB over expected, z = {:.1}",
-            m.bands_hz[k][0], m.bands_hz[k][1], m.ratio_db[i][k], m.z[i][k]
+            "{}, {:.2}-{:.2} Hz: residual {:+.2} dB over expected, z = {:.1}",
+            outputs(name)[i],
+            m.bands_hz[k][0],
+            m.bands_hz[k][1],
+            m.ratio_db[i][k],
+            m.z[i][k]
         ));
     }
 }
@@ -173,19 +179,28 @@ fn psd_plot(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
                     .map(|(f, v)| [f.log10(), v.max(1e-300).log10()])
                     .collect()
             };
-            for ch in 0..3 {
+            for (ch, channel) in outputs(name).iter().enumerate() {
                 p.line(Line::new(
-                    format!("{name}{ch} before"),
+                    format!("{channel} before"),
                     curve(&b.residual_psd[0], ch),
                 ));
                 p.line(Line::new(
-                    format!("{name}{ch} after"),
+                    format!("{channel} after"),
                     curve(&b.residual_psd[1], ch),
                 ));
                 p.line(
-                    Line::new(format!("{name}{ch} expected"), curve(&b.expected_psd, ch))
+                    Line::new(format!("{channel} expected"), curve(&b.expected_psd, ch))
                         .style(egui_plot::LineStyle::dashed_dense()),
                 );
             }
         });
+}
+
+/// The output channels of the block named `name` as the run format names them (`gx gy gz`,
+/// `ax ay az`); `?` for a name that is not a block.
+fn outputs(name: &str) -> [&'static str; 3] {
+    Block::BOTH
+        .into_iter()
+        .find(|b| b.name() == name)
+        .map_or(["?"; 3], |b| channel_names(b).1)
 }

@@ -63,7 +63,7 @@ fn model_file_has_the_contract_fields_and_round_trips() {
     assert_eq!(v["settings"]["welch"]["segment_len"], 2048);
     assert_eq!(v["settings"]["lambda"], "auto");
     assert_eq!(v["settings"]["order"], 0);
-    assert_eq!(v["settings"]["band_hz"], serde_json::json!([0.1, 40.0]));
+    assert_eq!(v["settings"]["band_hz"], "auto");
     assert_eq!(v["settings"]["blocks"], serde_json::json!(["gyro", "accel"]));
     for (block, inputs, outputs) in [
         ("gyro", ["wx", "wy", "wz"], ["gx", "gy", "gz"]),
@@ -95,6 +95,14 @@ fn model_file_has_the_contract_fields_and_round_trips() {
         assert_eq!(b["coherence"][0].as_array().unwrap().len(), 3);
         let f0 = b["frequency_hz"][0].as_f64().unwrap();
         assert!(f0 >= 0.1, "band starts at {f0}");
+        // The band used is in the file, and the bins lie inside it.
+        let band = [
+            b["band_hz"][0].as_f64().unwrap(),
+            b["band_hz"][1].as_f64().unwrap(),
+        ];
+        let last = b["frequency_hz"][n - 1].as_f64().unwrap();
+        assert!(band[0] >= 0.1 && band[1] <= 40.0 && band[0] < band[1], "{band:?}");
+        assert!(f0 >= band[0] && last <= band[1], "{band:?} vs {f0}..{last}");
         // K near identity, a few-ms delay: a sanity check, not the accuracy test.
         assert!((b["K"][0][0].as_f64().unwrap() - 1.0).abs() < 0.01);
         assert!(b["tau_s"].as_f64().unwrap() > 0.0 && b["tau_s"].as_f64().unwrap() < 0.01);

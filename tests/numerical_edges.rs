@@ -11,6 +11,7 @@ use std::process::{Command, Output};
 
 use imu_attest::block::Block;
 use imu_attest::ident::IdentError;
+use imu_attest::ident::band::AUTO_LIMITS_HZ;
 use imu_attest::ident::excitation::{MIN_EXCITATION, excitation};
 use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::Settings;
@@ -83,7 +84,7 @@ fn excitation_ratios(run: &Run) -> Vec<(Block, f64, &'static str)> {
         .map(|block| {
             let signals = block_signals(run, &motion.euler, block).unwrap();
             let spectra = block_spectra(&mut planner, &signals, run.sample_rate_hz, &settings.welch).unwrap();
-            let e = excitation(&spectra, settings.band_hz).unwrap();
+            let e = excitation(&spectra, AUTO_LIMITS_HZ).unwrap();
             let (inputs, _) = imu_attest::ident::signals::channel_names(block);
             (block, e.ratio, inputs[e.weakest_axis])
         })
@@ -138,7 +139,7 @@ fn an_axis_held_still_is_diagnosed_instead_of_identified() {
         assert_eq!(*input_axis, ["wx", "wy", "wz"][axis], "{err}");
         assert_eq!(
             [low_hz.to_bits(), high_hz.to_bits()],
-            Settings::default().band_hz.map(f64::to_bits)
+            AUTO_LIMITS_HZ.map(f64::to_bits)
         );
         // Measured 3e-5 to 5e-5: well below the criterion.
         assert!(*relative_power < MIN_EXCITATION / 10.0, "{relative_power:.2e}");

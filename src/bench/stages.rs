@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use super::{BenchError, Stage, bare};
 use crate::ident::IdentError;
 use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise, factorise_from};
-use crate::ident::identify::{identify_block_from, native_band, structural_fit};
+use crate::ident::identify::{identify_block_from, native_band, resolve_band, structural_fit};
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::ident::signals::{BlockSignals, block_signals, channel_names};
 use crate::ident::spectra::{BlockSpectra, block_spectra};
@@ -154,7 +154,7 @@ fn load_stage(state: &mut BenchState) -> Result<(), BenchError> {
     state
         .settings
         .validate(run.len(), run.sample_rate_hz, &run.blocks())
-        .map_err(|e| IdentError::Settings(e.to_string()))?;
+        .map_err(IdentError::from)?;
     state.run = Some(run);
     Ok(())
 }
@@ -170,7 +170,7 @@ fn observer_stage(state: &mut BenchState) -> Result<(), BenchError> {
         run.sample_rate_hz,
         &settings,
     )
-    .map_err(|e| IdentError::Observer(e.to_string()))?;
+    .map_err(IdentError::from)?;
     let signals = state
         .settings
         .blocks
@@ -211,11 +211,11 @@ fn factorisation_stage(state: &mut BenchState) -> Result<(), BenchError> {
 fn identify_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let facts = BenchState::need(&state.factorisations, "identify", "factorisation")?;
     let s = &state.settings;
-    state.wiener = state
-        .spectra
-        .iter()
-        .zip(facts)
-        .map(|(sp, f)| regularised_wiener(sp, f, &s.weight(), s.lambda, s.band_hz))
+    state.wiener = (state.spectra.iter().zip(facts).zip(&state.signals))
+        .map(|((sp, f), sig)| {
+            let band_hz = resolve_band(sp, sig.block, s.band_hz)?;
+            regularised_wiener(sp, f, &s.weight(), s.lambda, band_hz)
+        })
         .collect::<Result<_, _>>()?;
     Ok(())
 }
@@ -223,8 +223,10 @@ fn identify_stage(state: &mut BenchState) -> Result<(), BenchError> {
 fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let wiener = BenchState::need(&state.wiener, "structural_fit", "identify")?;
     let mut fits = Vec::new();
-    for ((sp, f), w) in state.spectra.iter().zip(&state.factorisations).zip(wiener) {
-        let band = native_band(sp, state.settings.band_hz);
+    for (((sp, f), w), sig) in
+        (state.spectra.iter().zip(&state.factorisations).zip(wiener)).zip(&state.signals)
+    {
+        let band = native_band(sp, resolve_band(sp, sig.block, state.settings.band_hz)?);
         fits.push(Arc::new(structural_fit(
             sp,
             f,

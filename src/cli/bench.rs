@@ -11,7 +11,6 @@ use std::path::Path;
 use super::{Args, CliError};
 use crate::bench::input::{BENCH_REGIME, TempRun};
 use crate::bench::{BenchError, run_bench};
-use crate::ident::IdentError;
 use crate::ident::settings::Settings;
 
 /// Default simulated duration, minutes.
@@ -143,9 +142,7 @@ fn simulate(minutes: f64, rate_hz: f64) -> Result<TempRun, CliError> {
 fn classify(path: &Path, e: BenchError) -> CliError {
     match e {
         BenchError::Load(_) | BenchError::Simulate(_) => CliError::Input(e.to_string()),
-        BenchError::Ident(
-            IdentError::Settings(_) | IdentError::MissingBlock(_) | IdentError::EmptyBand { .. },
-        ) => CliError::Input(format!("{}: {e}", path.display())),
+        BenchError::Ident(ref i) if i.is_input_error() => CliError::Input(format!("{}: {e}", path.display())),
         other => CliError::Internal(anyhow::anyhow!("{}: {other}", path.display())),
     }
 }

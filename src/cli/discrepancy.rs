@@ -11,7 +11,6 @@ use std::path::{Path, PathBuf};
 use super::identify::read_settings;
 use super::{Args, CliError};
 use crate::diagnose::{DiagnoseError, DiagnoseOptions, diagnose_run};
-use crate::ident::IdentError;
 use crate::model::{MODEL_SCHEMA, Model};
 use crate::output::{ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
@@ -70,14 +69,12 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         },
     )
     .map_err(|e| match e {
-        DiagnoseError::Ident(
-            IdentError::Settings(_)
-            | IdentError::MissingBlock(_)
-            | IdentError::EmptyBand { .. }
-            | IdentError::NotExcited { .. },
-        )
-        | DiagnoseError::TooShort { .. }
-        | DiagnoseError::Degenerate(_) => CliError::Input(format!("{}: {e}", run_path.display())),
+        DiagnoseError::Ident(ref i) if i.is_input_error() => {
+            CliError::Input(format!("{}: {e}", run_path.display()))
+        }
+        DiagnoseError::TooShort { .. } | DiagnoseError::Degenerate(_) => {
+            CliError::Input(format!("{}: {e}", run_path.display()))
+        }
         other @ DiagnoseError::Ident(_) => {
             CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display()))
         }

@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 
 use super::{Args, CliError};
-use crate::ident::IdentError;
 use crate::ident::identify::identify_run_with_progress;
 use crate::ident::settings::Settings;
 use crate::model::Model;
@@ -64,12 +63,12 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
         });
     });
     bar.finish_and_clear();
-    let id = id.map_err(|e| match e {
-        IdentError::Settings(_)
-        | IdentError::MissingBlock(_)
-        | IdentError::EmptyBand { .. }
-        | IdentError::NotExcited { .. } => CliError::Input(format!("{}: {e}", run_path.display())),
-        other => CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display())),
+    let id = id.map_err(|e| {
+        if e.is_input_error() {
+            CliError::Input(format!("{}: {e}", run_path.display()))
+        } else {
+            CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
+        }
     })?;
     for block in &id.blocks {
         for warning in &block.warnings {

@@ -47,7 +47,9 @@ pub const USAGE: &str = "\
 usage:
   imu-attest [gui] [RUN...]                       open the GUI (with these runs loaded)
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
-                      [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv
+                      [--effect ID[:block][@scale]]... [--blocks gyro,accel]
+                      [--stand real] [--angle-latency S] [--angle-band-hz HZ]
+                      [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ] --out RUN.csv
   imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
   imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json

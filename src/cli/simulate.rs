@@ -1,5 +1,6 @@
 //! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
-//! [--effect ID[:block][@scale]]... [--blocks gyro,accel] --out RUN.csv`
+//! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
+//! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ] --out RUN.csv`
 
 use std::path::Path;
 
@@ -7,6 +8,7 @@ use super::{Args, CliError};
 use crate::run::sidecar_path;
 use crate::sim::effect::{Block, EffectSpec};
 use crate::sim::regime::Regime;
+use crate::sim::stand::StandImperfections;
 use crate::sim::write::write_run_with_progress;
 use crate::sim::{SimConfig, simulate};
 
@@ -34,6 +36,44 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                 })
             })
             .collect::<Result<_, _>>()?;
+    }
+    if args.get("stand") == Some("real") {
+        config.stand = StandImperfections::real();
+    } else if let Some(other) = args.get("stand") {
+        return Err(CliError::Input(format!(
+            "--stand: unknown stand '{other}' (known: real; or give --angle-latency, --angle-band-hz, --coloured-angle-noise)"
+        )));
+    }
+    config.stand.latency_s = args.parsed_or("angle-latency", config.stand.latency_s)?;
+    if let Some(fb) = args.get("angle-band-hz") {
+        let fb: f64 = fb
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| {
+                CliError::Input(format!("--angle-band-hz: '{fb}' is not a positive number of Hz"))
+            })?;
+        config.stand.band_limit_hz = Some(fb);
+    }
+    config.stand.coloured_noise_rad =
+        args.parsed_or("coloured-angle-noise", config.stand.coloured_noise_rad)?;
+    if config.stand.coloured_corner_hz <= 0.0 {
+        config.stand.coloured_corner_hz = StandImperfections::real().coloured_corner_hz;
+    }
+    config.stand.coloured_corner_hz =
+        args.parsed_or("coloured-angle-corner-hz", config.stand.coloured_corner_hz)?;
+    let stand = config.stand;
+    if !(stand.latency_s.is_finite()
+        && stand.latency_s.abs() < 1.0
+        && stand.coloured_noise_rad.is_finite()
+        && stand.coloured_noise_rad >= 0.0
+        && stand.coloured_corner_hz.is_finite()
+        && stand.coloured_corner_hz > 0.0)
+    {
+        return Err(CliError::Input(
+            "stand imperfections: latency must be finite and below 1 s, coloured noise >= 0 rad, corner > 0 Hz"
+                .into(),
+        ));
     }
     let out = args.required("out")?;
     args.reject_unknown()?;

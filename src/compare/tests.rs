@@ -28,6 +28,7 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
         noise_psd: empty.clone(),
         shaping_filter: empty,
         coherence: Vec::new(),
+        band_hz: [0.1, 40.0],
         fit: Fit {
             k_std: [[k_std; 3]; 3],
             tau_std_s,
@@ -38,6 +39,8 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
             chi2: 0.0,
             dof: 1,
             stable: true,
+            chi2_per_dof: 0.0,
+            bin_correlation: 1.0,
             candidates: Vec::new(),
             lambda: [0.0; 3],
             lambda_auto: false,

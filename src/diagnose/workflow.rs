@@ -1,6 +1,7 @@
 //! The rounds of the search: identify, build each block's design, grow the model effect by
 //! effect while the criterion gains, and write the report.
 
+use crate::ident::band::{BandSetting, auto_limits};
 use std::collections::BTreeMap;
 
 use super::DiagnoseError;
@@ -46,17 +47,25 @@ pub fn diagnose_run(
     settings: &Settings,
     options: &DiagnoseOptions<'_>,
 ) -> Result<Report, DiagnoseError> {
+    // The diagnosis searches the whole band asked for (with "auto", the auto band's search
+    // limits): a missing effect lowers the coherence, so the usable band of the identification
+    // would hide the very misfit the diagnosis looks for.
+    let band_hz = match settings.band_hz {
+        BandSetting::Auto => BandSetting::Fixed(auto_limits(run.sample_rate_hz)),
+        fixed @ BandSetting::Fixed(_) => fixed,
+    };
     let settings = Settings {
         order: OrderSetting::Fixed(0),
         blocks: settings.blocks_for(&run.blocks()),
+        band_hz,
         ..settings.clone()
     };
     let id = identify_run(run, &settings)?;
-    let band = settings.band_hz;
     let mut findings = Vec::new();
     let mut blocks = BTreeMap::new();
     let mut penalty = 0.0;
     for b in &id.blocks {
+        let band = b.band_hz;
         let design = block_design(run, &id.motion.euler, b, band).ok_or(DiagnoseError::TooShort {
             block: b.block.name(),
             low: band[0],

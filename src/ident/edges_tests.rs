@@ -33,6 +33,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
         s_uu,
         n_averages: 40,
         equivalent_averages: 38.0,
+        bin_correlation: 1.0,
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,

@@ -12,8 +12,12 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::IdentError;
+use super::band::{
+    BandSetting, MIN_BAND_BINS, MIN_COHERENCE, auto_limits, best_coherence, untrusted_ranges, usable_band,
+};
 use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise};
+use super::selfcheck::self_check;
 use super::settings::{OrderSetting, Settings};
 use super::signals::block_signals;
 use super::spectra::{BlockSpectra, block_spectra};
@@ -21,7 +25,7 @@ use super::structural::{
     OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure, refit_structure,
 };
 use super::warnings::{IdentWarning, block_warnings};
-use super::wiener::{WienerEstimate, band_bins, regularised_wiener};
+use super::wiener::{WienerEstimate, regularised_wiener};
 use crate::block::Block;
 use crate::run::Run;
 use crate::spectral::WelchPlanner;
@@ -38,6 +42,9 @@ pub struct BlockIdentification {
     pub factorisation: Arc<Factorisation>,
     /// Regularised Wiener estimate (A, Lambda).
     pub wiener: Arc<WienerEstimate>,
+    /// The analysis band used, Hz: the usable band found from the data (`band_hz: "auto"`) or
+    /// the user's.
+    pub band_hz: [f64; 2],
     /// Indices of the analysis band's native (un-padded) Welch bins.
     pub band: Vec<usize>,
     /// Structural model (order).
@@ -91,9 +98,7 @@ pub fn identify_run_with_progress(
         blocks: settings.blocks_for(&run.blocks()),
         ..settings.clone()
     };
-    settings
-        .validate(run.len(), run.sample_rate_hz, &run.blocks())
-        .map_err(|e| IdentError::Settings(e.to_string()))?;
+    settings.validate(run.len(), run.sample_rate_hz, &run.blocks())?;
     let total = 1 + 3 * settings.blocks.len();
     let mut done = 0;
     let mut step = |stage, block| {
@@ -114,19 +119,19 @@ pub fn identify_run_with_progress(
         run.angles.each_ref().map(Vec::as_slice),
         run.sample_rate_hz,
         &observer_settings,
-    )
-    .map_err(|e| IdentError::Observer(e.to_string()))?;
+    )?;
     let mut planner = WelchPlanner::new();
     let mut blocks = Vec::new();
     for &block in &settings.blocks {
         let signals =
             block_signals(run, &motion.euler, block).ok_or(IdentError::MissingBlock(block.name()))?;
         step("spectra", Some(block));
-        let spectra = Arc::new(
-            block_spectra(&mut planner, &signals, run.sample_rate_hz, &settings.welch)
-                .map_err(|e| IdentError::Spectra(e.to_string()))?,
-        );
-        check_excitation(&spectra, block, settings.band_hz)?;
+        let spectra = Arc::new(block_spectra(
+            &mut planner,
+            &signals,
+            run.sample_rate_hz,
+            &settings.welch,
+        )?);
         step("factorisation", Some(block));
         let factorisation = Arc::new(factorise(&spectra, &FactorisationSettings::default())?);
         step("fit", Some(block));
@@ -151,8 +156,13 @@ pub fn identify_run_with_progress(
 /// ([`refit_structure`]): an order change alone reuses its fits exactly, other changes refine
 /// each order from it.
 ///
+/// The band is resolved here ([`resolve_band`]) and the block's excitation over it checked
+/// ([`check_excitation`]): every caller (the command line, the app, `bench`, the diagnosis) gets
+/// the same refusals.
+///
 /// # Errors
-/// An empty band, a singular A or auto-Lambda system, or a structural fit failure.
+/// No usable band, an input axis not excited in it, an empty band, a singular A or auto-Lambda
+/// system, or a structural fit failure.
 pub fn identify_block_from(
     block: Block,
     spectra: Arc<BlockSpectra>,
@@ -160,15 +170,24 @@ pub fn identify_block_from(
     settings: &Settings,
     previous: Option<&StructuralFit>,
 ) -> Result<BlockIdentification, IdentError> {
+    // Excitation first, over the band asked for (or the auto search limits): a stand axis held
+    // still is named as such, not as a band without coherence.
+    let asked = match settings.band_hz {
+        BandSetting::Fixed(given) => given,
+        BandSetting::Auto => auto_limits(spectra.sample_rate_hz),
+    };
+    check_excitation(&spectra, block, asked)?;
+    let band_hz = resolve_band(&spectra, block, settings.band_hz)?;
+    check_excitation(&spectra, block, band_hz)?;
     let wiener = Arc::new(regularised_wiener(
         &spectra,
         &factorisation,
         &settings.weight(),
         settings.lambda,
-        settings.band_hz,
+        band_hz,
     )?);
-    let band = native_band(&spectra, settings.band_hz);
-    let warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
+    let band = native_band(&spectra, band_hz);
+    let mut warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
     let structural = Arc::new(structural_fit(
         &spectra,
         &factorisation,
@@ -177,15 +196,52 @@ pub fn identify_block_from(
         settings.order,
         previous,
     )?);
+    if let BandSetting::Fixed(given) = settings.band_hz {
+        let ranges = untrusted_ranges(&spectra, given);
+        if !ranges.is_empty() {
+            warnings.push(IdentWarning::UntrustedBand { ranges_hz: ranges });
+        }
+    }
+    warnings.extend(self_check(
+        block,
+        &spectra,
+        &factorisation.noise_psd,
+        &wiener,
+        &band,
+        &structural,
+        settings,
+    ));
     Ok(BlockIdentification {
         block,
         spectra,
         factorisation,
         wiener,
+        band_hz,
         band,
         structural,
         warnings,
     })
+}
+
+/// The band to fit: the usable band inside the auto limits, or the user's band as given.
+///
+/// # Errors
+/// [`IdentError::NoUsableBand`] when `band` is auto and no stretch is usable.
+pub fn resolve_band(spectra: &BlockSpectra, block: Block, band: BandSetting) -> Result<[f64; 2], IdentError> {
+    match band {
+        BandSetting::Fixed(given) => Ok(given),
+        BandSetting::Auto => {
+            let limits = auto_limits(spectra.sample_rate_hz);
+            usable_band(spectra, limits).ok_or_else(|| IdentError::NoUsableBand {
+                block: block.name(),
+                low_hz: limits[0],
+                high_hz: limits[1],
+                best_coherence: best_coherence(spectra, limits),
+                min: MIN_COHERENCE,
+                bins: MIN_BAND_BINS,
+            })
+        }
+    }
 }
 
 /// Indices of the analysis band's native Welch bins. The structural fit and the model use these:
@@ -193,11 +249,7 @@ pub fn identify_block_from(
 /// neighbours are not independent, which would overstate the evidence by the padding factor.
 #[must_use]
 pub fn native_band(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
-    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
-    band_bins(&spectra.frequency_hz, band_hz)
-        .into_iter()
-        .filter(|k| k % step == 0)
-        .collect()
+    super::band::native_bins(spectra, band_hz)
 }
 
 /// Fits the structural model to `W_u` over the band by generalised least squares: the estimate of
@@ -239,10 +291,13 @@ pub fn structural_fit(
         response: &response,
         weights: Weights::RowWeight(&row_weight),
     };
-    let settings = StructuralSettings::default();
+    let settings = StructuralSettings {
+        bin_correlation: spectra.bin_correlation,
+        ..StructuralSettings::default()
+    };
     match previous {
         Some(previous) => refit_structure(&input, choice, &settings, previous),
         None => fit_structure(&input, choice, &settings),
     }
-    .map_err(|e| IdentError::Structural(e.to_string()))
+    .map_err(IdentError::from)
 }

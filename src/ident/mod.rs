@@ -5,9 +5,11 @@
 //! (Welch) -> factorisation (Wilson, causal projection) -> regularised Wiener (A, Lambda) ->
 //! structural fit (order).
 
+pub mod band;
 pub mod excitation;
 pub mod factorisation;
 pub mod identify;
+pub mod selfcheck;
 pub mod settings;
 pub mod signals;
 pub mod spectra;
@@ -31,19 +33,41 @@ pub enum IdentError {
     },
     /// Settings refused for this run.
     #[error("settings: {0}")]
-    Settings(String),
+    Settings(#[from] settings::SettingsError),
     /// The observer refused the angles.
     #[error("observer: {0}")]
-    Observer(String),
+    Observer(#[from] crate::stand::observer::ObserverError),
     /// The run lacks a block the settings name.
     #[error("the run has no {0} block")]
     MissingBlock(&'static str),
     /// The spectral estimate failed.
     #[error("spectra: {0}")]
-    Spectra(String),
+    Spectra(#[from] crate::spectral::SpectralError),
     /// The structural fit failed.
     #[error("structural fit: {0}")]
-    Structural(String),
+    Structural(#[from] structural::StructuralError),
+    /// No stretch of the band where the block's outputs are coherent with the inputs computed
+    /// from the angles: nothing in this run can be trusted for this block.
+    #[error(
+        "{block} block: no usable band between {low_hz} and {high_hz} Hz: the outputs are nowhere \
+         coherent with the inputs computed from the angles (best multiple coherence {best_coherence:.2}, \
+         at least {min:.2} needed over {bins} bins); check the angle columns and the block's outputs, \
+         or give band_hz"
+    )]
+    NoUsableBand {
+        /// The block.
+        block: &'static str,
+        /// Low search limit, Hz.
+        low_hz: f64,
+        /// High search limit, Hz.
+        high_hz: f64,
+        /// Best smoothed coherence found.
+        best_coherence: f64,
+        /// The coherence needed ([`band::MIN_COHERENCE`]).
+        min: f64,
+        /// Bins needed ([`band::MIN_BAND_BINS`]).
+        bins: usize,
+    },
     /// An input direction of a block carries (almost) no power in the band: a stand axis held
     /// still. Its response cannot be identified from this run.
     #[error(
@@ -66,6 +90,28 @@ pub enum IdentError {
     /// A matrix that must be inverted is singular.
     #[error("{0} is singular")]
     Singular(&'static str),
+}
+
+impl IdentError {
+    /// Whether the error is the user's input (the run, or settings that do not fit it): exit
+    /// status 2 and an error panel, where anything else is our fault (exit status 1).
+    #[must_use]
+    pub fn is_input_error(&self) -> bool {
+        use crate::spectral::SpectralError as S;
+        use structural::StructuralError as F;
+        match self {
+            IdentError::Settings(_)
+            | IdentError::MissingBlock(_)
+            | IdentError::EmptyBand { .. }
+            | IdentError::NotExcited { .. }
+            | IdentError::NoUsableBand { .. }
+            | IdentError::Observer(_) => true,
+            IdentError::Singular(what) => *what == "weight_A" || *what == "auto-lambda system",
+            IdentError::Spectra(e) => !matches!(e, S::Fft(_) | S::ShapeMismatch { .. }),
+            IdentError::Structural(e) => matches!(e, F::EmptyBand | F::TooFewBins { .. }),
+            IdentError::Factor(_) => false,
+        }
+    }
 }
 
 #[cfg(test)]

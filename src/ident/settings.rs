@@ -4,7 +4,7 @@
 //! `lambda` is three numbers or `"auto"`; `order` is an integer 0..=4 or `"auto"`. Validation
 //! against a run ([`Settings::validate`]) refuses: a band outside `(0, Nyquist]` or empty, a
 //! weight `A` that is not symmetric positive definite, a `lambda` that makes `I - A^-1 Lambda`
-//! singular, an order above 4, a segment longer than the run, a block the run does not have.
+//! singular, a negative `lambda` or one that shrinks the gain by more than [`MAX_SHRINK`], an order above 4, a segment longer than the run, a block the run does not have.
 
 use std::fmt;
 use std::path::Path;
@@ -13,6 +13,7 @@ use nalgebra::Matrix3;
 use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 
+use super::band::BandSetting;
 use crate::block::Block;
 use crate::spectral::WelchSettings;
 
@@ -43,8 +44,9 @@ pub enum OrderSetting {
 pub struct Settings {
     /// Welch estimation of the spectral matrices.
     pub welch: WelchSettings,
-    /// Analysis band `[low, high]`, Hz.
-    pub band_hz: [f64; 2],
+    /// Analysis band: `"auto"` (the usable band found from the data, [`crate::ident::band`]) or
+    /// `[low, high]`, Hz.
+    pub band_hz: BandSetting,
     /// Weight matrix A (symmetric positive definite).
     #[serde(rename = "weight_A")]
     pub weight_a: [[f64; 3]; 3],
@@ -54,19 +56,41 @@ pub struct Settings {
     pub order: OrderSetting,
     /// Blocks to identify; empty (the default) means every block the run has.
     pub blocks: Vec<Block>,
+    /// Whether the blocks are calibrated (K near identity): the self-check then warns about a
+    /// gain far from it ([`crate::ident::selfcheck`]). `false` for a raw, uncalibrated block.
+    pub calibrated: bool,
 }
 
 impl Default for Settings {
     fn default() -> Self {
         Self {
             welch: WelchSettings::default(),
-            band_hz: [0.1, 40.0],
+            band_hz: BandSetting::Auto,
             weight_a: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             lambda: LambdaSetting::Values([0.0; 3]),
             order: OrderSetting::Auto,
             blocks: Vec::new(),
+            calibrated: true,
         }
     }
+}
+
+/// Largest eigenvalue of `A^-1 Lambda` allowed: the regularised estimate `(I - A^-1 Lambda) W0`
+/// is shrunk by at most half. With `A` symmetric positive definite and `Lambda >= 0` diagonal,
+/// the eigenvalues of `A^-1 Lambda` are real and non-negative (it is similar to
+/// `A^-1/2 Lambda A^-1/2`); a negative `lambda` would amplify the estimate, which the constraint
+/// (that corrects the causal projection's leakage) never justifies.
+pub const MAX_SHRINK: f64 = 0.5;
+
+/// Largest eigenvalue of `A^-1 Lambda` (`+inf` when `A` is singular).
+#[must_use]
+pub fn max_shrink(a: &Matrix3<f64>, lambda: &[f64; 3]) -> f64 {
+    let Some(c) = (*a).cholesky() else {
+        return f64::INFINITY;
+    };
+    let l_inv = c.l().try_inverse().unwrap_or_else(Matrix3::zeros);
+    let m = l_inv * Matrix3::from_diagonal(&(*lambda).into()) * l_inv.transpose();
+    m.symmetric_eigen().eigenvalues.max()
 }
 
 /// Why settings were refused.
@@ -107,6 +131,14 @@ pub enum SettingsError {
         lambda: [f64; 3],
         /// `det(I - A^-1 Lambda)`.
         determinant: f64,
+    },
+    /// Lambda outside what the regularising constraint can justify.
+    #[error("lambda {lambda:?} is out of range: {reason}")]
+    LambdaOutOfRange {
+        /// The multipliers.
+        lambda: [f64; 3],
+        /// Which limit, in words.
+        reason: String,
     },
     /// Order above [`MAX_ORDER`].
     #[error("order {0} is above the highest structural order {MAX_ORDER}")]
@@ -180,8 +212,9 @@ impl Settings {
         blocks: &[Block],
     ) -> Result<(), SettingsError> {
         let nyquist = sample_rate_hz / 2.0;
-        let [low, high] = self.band_hz;
-        if !(low.is_finite() && high.is_finite() && low > 0.0 && low < high && high <= nyquist) {
+        if let BandSetting::Fixed([low, high]) = self.band_hz
+            && !(low.is_finite() && high.is_finite() && low > 0.0 && low < high && high <= nyquist)
+        {
             return Err(SettingsError::Band { low, high, nyquist });
         }
         self.validate_weight_and_lambda()?;
@@ -236,37 +269,77 @@ impl Settings {
                     determinant: det,
                 });
             }
+            if let Some(channel) = l.iter().position(|&v| v < 0.0) {
+                return Err(SettingsError::LambdaOutOfRange {
+                    lambda: l,
+                    reason: format!(
+                        "lambda[{channel}] = {} is negative: it would amplify the Wiener estimate \
+                         (the gain of output {channel} multiplied by more than 1); the constraint \
+                         can only shrink it, 0 <= lambda",
+                        l[channel]
+                    ),
+                });
+            }
+            let shrink = max_shrink(&a, &l);
+            if shrink.is_nan() || shrink > MAX_SHRINK {
+                return Err(SettingsError::LambdaOutOfRange {
+                    lambda: l,
+                    reason: format!(
+                        "A^-1 Lambda has an eigenvalue of {shrink:.3}: the gain would be shrunk by \
+                         more than {:.0} % (at most {MAX_SHRINK} is allowed, A - Lambda / {MAX_SHRINK} \
+                         positive definite)",
+                        MAX_SHRINK * 100.0
+                    ),
+                });
+            }
         }
         Ok(())
     }
 }
 
+/// `values` or the word `"auto"` (`None`); `what` names the accepted forms in the error.
+pub(crate) fn values_or_auto<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+    what: &str,
+) -> Result<Option<T>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Raw<T> {
+        Values(T),
+        Word(String),
+    }
+    match Raw::<T>::deserialize(d).map_err(|_| de::Error::custom(format!("{what} or \"auto\"")))? {
+        Raw::Values(v) => Ok(Some(v)),
+        Raw::Word(w) if w == "auto" => Ok(None),
+        Raw::Word(w) => Err(de::Error::custom(format!("{what} or \"auto\", not \"{w}\""))),
+    }
+}
+
+/// Serialises `values`, or the word `"auto"` for `None`.
+pub(crate) fn serialize_values_or_auto<S: Serializer, T: Serialize>(
+    values: Option<&T>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    match values {
+        Some(v) => v.serialize(s),
+        None => s.serialize_str("auto"),
+    }
+}
+
 impl Serialize for LambdaSetting {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            LambdaSetting::Values(v) => v.serialize(s),
-            LambdaSetting::Auto => s.serialize_str("auto"),
-        }
+        let values = match self {
+            LambdaSetting::Values(v) => Some(v),
+            LambdaSetting::Auto => None,
+        };
+        serialize_values_or_auto(values, s)
     }
 }
 
 impl<'de> Deserialize<'de> for LambdaSetting {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(untagged)]
-        enum Raw {
-            Values([f64; 3]),
-            Word(String),
-        }
-        match Raw::deserialize(d)
-            .map_err(|_| de::Error::custom("lambda must be three numbers or \"auto\""))?
-        {
-            Raw::Values(v) => Ok(LambdaSetting::Values(v)),
-            Raw::Word(w) if w == "auto" => Ok(LambdaSetting::Auto),
-            Raw::Word(w) => Err(de::Error::custom(format!(
-                "lambda must be three numbers or \"auto\", not \"{w}\""
-            ))),
-        }
+        Ok(values_or_auto(d, "lambda must be three numbers")?
+            .map_or(LambdaSetting::Auto, LambdaSetting::Values))
     }
 }
 

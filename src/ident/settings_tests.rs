@@ -58,7 +58,7 @@ fn validation_refuses_each_bad_setting() {
     assert!(ok.validate(100_000, 500.0, &blocks).is_ok());
     for band in [[0.0, 40.0], [50.0, 40.0], [0.1, 300.0], [f64::NAN, 1.0]] {
         let s = Settings {
-            band_hz: band,
+            band_hz: crate::ident::band::BandSetting::Fixed(band),
             ..ok.clone()
         };
         assert!(

@@ -59,6 +59,44 @@ pub enum IdentWarning {
         /// Relative reconstruction error of its spectral factor.
         factor_error: f64,
     },
+    /// Stretches of a user's band where the input estimate cannot be trusted (multiple coherence
+    /// below [`super::band::MIN_COHERENCE`]).
+    UntrustedBand {
+        /// `[low, high]` stretches, Hz.
+        ranges_hz: Vec<[f64; 2]>,
+    },
+    /// The model does not explain the data to the stated noise: uncertainties widened.
+    PoorFit {
+        /// chi2 per degree of freedom of the chosen model.
+        chi2_per_dof: f64,
+        /// The octave band of the largest misfit, Hz.
+        worst_band_hz: [f64; 2],
+        /// chi2 per degree of freedom there.
+        worst_chi2_per_dof: f64,
+    },
+    /// A gain element far from a calibrated block's (diagonal near 1, cross-couplings small).
+    ImplausibleGain {
+        /// Output channel name.
+        output: String,
+        /// Input axis name.
+        input: String,
+        /// `K[output][input]`.
+        value: f64,
+    },
+    /// A delay that is negative beyond its uncertainty: the block answers before the stand moves.
+    NegativeDelay {
+        /// The delay, s.
+        tau_s: f64,
+        /// Its standard deviation, s.
+        tau_std_s: f64,
+    },
+    /// The fixed order asked for breaks an admissibility rule.
+    InadmissibleOrder {
+        /// The order.
+        order: usize,
+        /// Why.
+        reason: crate::ident::structural::admissible::Rejection,
+    },
     /// A spectral factor is inexact or did not converge.
     FactorInexact {
         /// Which spectrum.
@@ -84,6 +122,46 @@ impl fmt::Display for IdentWarning {
                  (factor reconstruction error {factor_error:.1e})",
                 spectrum.name()
             ),
+            IdentWarning::UntrustedBand { ranges_hz } => {
+                write!(f, "the input estimate cannot be trusted in ")?;
+                for (i, [lo, hi]) in ranges_hz.iter().enumerate() {
+                    let sep = if i == 0 { "" } else { ", " };
+                    write!(f, "{sep}{lo:.2}-{hi:.2} Hz")?;
+                }
+                write!(
+                    f,
+                    " of the given band (outputs not coherent with the inputs from the angles): \
+                     results there are biased; use band_hz \"auto\" or narrow the band"
+                )
+            }
+            IdentWarning::PoorFit {
+                chi2_per_dof,
+                worst_band_hz,
+                worst_chi2_per_dof,
+            } => write!(
+                f,
+                "the model does not explain the data: chi2/dof {chi2_per_dof:.2} (worst \
+                 {worst_chi2_per_dof:.1} at {:.2}-{:.2} Hz); uncertainties widened by {:.2}x, \
+                 and the model may miss an effect (run the diagnosis)",
+                worst_band_hz[0],
+                worst_band_hz[1],
+                chi2_per_dof.max(1.0).sqrt()
+            ),
+            IdentWarning::ImplausibleGain { output, input, value } => write!(
+                f,
+                "K[{output}][{input}] = {value:.4} is implausible for a calibrated block (diagonal \
+                 near 1, cross-couplings below 0.1): check units, axis order and signs, or the band"
+            ),
+            IdentWarning::NegativeDelay { tau_s, tau_std_s } => write!(
+                f,
+                "negative delay {:.3} ms (+- {:.3} ms): the block cannot answer before the stand \
+                 moves; check the time columns, the angles' own latency, or the band",
+                tau_s * 1e3,
+                tau_std_s * 1e3
+            ),
+            IdentWarning::InadmissibleOrder { order, reason } => {
+                write!(f, "order {order} as asked is not supported by the data: {reason}")
+            }
             IdentWarning::FactorInexact {
                 spectrum,
                 factor_error,

@@ -7,7 +7,9 @@
 //! A-weighted residual `sum_f tr[(E - A^-1 Lambda F)^H A (E - A^-1 Lambda F)]` is quadratic in the
 //! diagonal Lambda; its minimum solves the 3x3 system
 //! `M lambda = v`, `M_ik = (A^-1)_ik sum_f Re(F_k F_i^H)`, `v_i = sum_f Re(E_i F_i^H)`
-//! (rows `E_i`, `F_i`). With `Lambda = 0` the weight A drops out entirely (the multichannel Wiener
+//! (rows `E_i`, `F_i`), solved with `lambda >= 0` (the constraint corrects the causal
+//! projection's leakage by shrinking; it never justifies amplifying the estimate) and scaled back
+//! so that `A^-1 Lambda` shrinks the gain by at most [`MAX_SHRINK`]. With `Lambda = 0` the weight A drops out entirely (the multichannel Wiener
 //! filter is optimal for every positive-definite weight): A shapes the result only through
 //! `A^-1 Lambda` and this fit.
 //!
@@ -23,7 +25,7 @@ use serde::Serialize;
 
 use super::IdentError;
 use super::factorisation::Factorisation;
-use super::settings::LambdaSetting;
+use super::settings::{LambdaSetting, MAX_SHRINK, max_shrink};
 use super::spectra::BlockSpectra;
 
 /// The identified frequency response and its quality figures, one-sided grid.
@@ -150,9 +152,34 @@ fn solve_lambda(
         }
     }
     let m = a_inv.component_mul(&ff);
-    let sol = m
-        .try_inverse()
-        .ok_or(IdentError::Singular("auto-lambda system"))?
-        * v;
-    Ok([sol[0], sol[1], sol[2]])
+    if m.try_inverse().is_none() {
+        return Err(IdentError::Singular("auto-lambda system"));
+    }
+    // Non-negative least squares over the 8 active sets (lambda_j = 0 outside the set): the
+    // feasible stationary point of least objective `l^T M l - 2 v^T l`.
+    let objective = |l: &Vector3<f64>| (l.transpose() * m * l)[(0, 0)] - 2.0 * v.dot(l);
+    let mut best = (Vector3::zeros(), 0.0);
+    for set in 1_u8..8 {
+        let idx: Vec<usize> = (0..3).filter(|j| set & (1 << j) != 0).collect();
+        let sub = nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| m[(idx[r], idx[c])]);
+        let rhs = nalgebra::DVector::from_fn(idx.len(), |r, _| v[idx[r]]);
+        let Some(sol) = sub.lu().solve(&rhs) else {
+            continue;
+        };
+        let mut l = Vector3::zeros();
+        for (r, &j) in idx.iter().enumerate() {
+            l[j] = sol[r];
+        }
+        if l.iter().all(|x| *x >= 0.0 && x.is_finite()) && objective(&l) < best.1 {
+            best = (l, objective(&l));
+        }
+    }
+    let mut lambda = [best.0[0], best.0[1], best.0[2]];
+    // At most MAX_SHRINK of the gain: scale back along the same direction.
+    let a = a_inv.try_inverse().unwrap_or_else(Matrix3::identity);
+    let shrink = max_shrink(&a, &lambda);
+    if shrink > MAX_SHRINK {
+        lambda = lambda.map(|l| l * MAX_SHRINK / shrink);
+    }
+    Ok(lambda)
 }

@@ -129,6 +129,10 @@ pub struct BlockModel {
     pub shaping_filter: ComplexArray,
     /// `coherence[frequency][output]`: multiple coherence with the three inputs.
     pub coherence: Vec<[f64; 3]>,
+    /// The analysis band used, Hz: the usable band found from the data (`band_hz: "auto"`),
+    /// or the user's.
+    #[serde(default)]
+    pub band_hz: [f64; 2],
     /// Quality figures.
     pub fit: Fit,
 }
@@ -154,6 +158,13 @@ pub struct Fit {
     pub dof: usize,
     /// Whether the chosen model is stable.
     pub stable: bool,
+    /// chi2 per degree of freedom (near 1 when the model explains the data to its noise).
+    #[serde(default)]
+    pub chi2_per_dof: f64,
+    /// Variance inflation from the correlation of neighbouring Welch bins, applied to every
+    /// standard deviation (`ident::spectra::bin_correlation`).
+    #[serde(default)]
+    pub bin_correlation: f64,
     /// Every order tried: `{order, parameters, chi2, criterion, tau_s, stable}`.
     pub candidates: Vec<OrderCandidate>,
     /// Lagrange multipliers used.
@@ -202,6 +213,7 @@ impl BlockModel {
             noise_psd: ComplexArray::from_bins(band.iter().map(|&k| f.noise_psd[k])),
             shaping_filter: ComplexArray::from_bins(band.iter().map(|&k| f.shaping_filter[k])),
             coherence: band.iter().map(|&k| w.coherence[k]).collect(),
+            band_hz: b.band_hz,
             fit: Fit {
                 k_std: s.k_std.map(|r| r.map(finite)),
                 tau_std_s: finite(s.tau_std_s),
@@ -212,6 +224,8 @@ impl BlockModel {
                 chi2: s.chi2,
                 dof: s.dof,
                 stable: s.stable,
+                chi2_per_dof: s.chi2 / s.dof.max(1) as f64,
+                bin_correlation: b.spectra.bin_correlation,
                 candidates: s.candidates.clone(),
                 lambda: w.lambda,
                 lambda_auto: w.lambda_auto,
@@ -327,7 +341,7 @@ mod tests {
             let err = model.write_file(&path).expect_err("refused");
             assert!(err.to_string().contains("source.sample_rate_hz"), "{err}");
             let mut model = empty_model();
-            model.settings.band_hz = [0.1, bad];
+            model.settings.band_hz = crate::ident::band::BandSetting::Fixed([0.1, bad]);
             let err = model.write_file(&path).expect_err("refused");
             assert!(err.to_string().contains("settings.band_hz[1]"), "{err}");
             assert_eq!(

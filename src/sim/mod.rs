@@ -11,6 +11,7 @@
 pub mod block;
 pub mod effect;
 pub mod regime;
+pub mod stand;
 pub mod synth;
 pub mod truth;
 pub mod write;
@@ -21,6 +22,7 @@ use serde::Serialize;
 use self::block::{BlockDrive, block_outputs, draw_block, draw_effect};
 use self::effect::{Block, EffectSpec};
 use self::regime::Regime;
+use self::stand::StandImperfections;
 use self::synth::{Grid, resonant_lowpass};
 use self::truth::{EffectTruth, ServoTruth, Truth};
 use crate::fourier::fast_len;
@@ -51,6 +53,8 @@ pub struct SimConfig {
     pub effects: Vec<EffectSpec>,
     /// Blocks mounted (at least one).
     pub blocks: Vec<Block>,
+    /// Imperfections of the stand's angle measurement (none by default).
+    pub stand: StandImperfections,
 }
 
 impl SimConfig {
@@ -64,6 +68,7 @@ impl SimConfig {
             seed: 1,
             effects: Vec::new(),
             blocks: Block::BOTH.to_vec(),
+            stand: StandImperfections::default(),
         }
     }
 }
@@ -260,7 +265,11 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
 
     let quantum = 2.0 * std::f64::consts::PI / f64::from(1u32 << 22);
     let mut noise_rng = root.fork(2);
-    let angles = motion.angle.each_ref().map(|a| {
+    let mut stand_rng = root.fork(3);
+    let measured: [Vec<f64>; 3] = std::array::from_fn(|axis| {
+        stand::measured_angle(&mut grid, &motion.angle[axis], &config.stand, &mut stand_rng)
+    });
+    let angles = measured.each_ref().map(|a| {
         window(a)
             .iter()
             .map(|v| ((v + ANGLE_WHITE_NOISE_RAD * noise_rng.normal()) / quantum).round() * quantum)
@@ -280,6 +289,7 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
         accel_lever_arm_true_m: accel_lever_arm,
         gyro: gyro_truth,
         accel: accel_truth,
+        stand: config.stand,
     };
     let sidecar = SimSidecar {
         format: "stand-run/1",

@@ -415,3 +415,65 @@ fn bad_configurations_are_refused() {
     c.blocks.clear();
     assert!(matches!(simulate(&c), Err(SimError::NoBlock)));
 }
+
+#[test]
+fn stand_imperfections_do_what_they_say_and_default_to_none() {
+    let base = config(Regime::Cruise, 21, 20.0, &[]);
+    let clean = simulate(&base).unwrap();
+    // Latency alone: the measured angle is the true angle `latency` late (an independent
+    // interpolation of the true angle), up to the white noise and quantum (1e-5 rad).
+    let latency = 0.004;
+    let mut late = base.clone();
+    late.stand.latency_s = latency;
+    let run = simulate(&late).unwrap();
+    let rate = base.rate_hz;
+    let mut worst: f64 = 0.0;
+    for i in 100..run.time_s.len() - 100 {
+        let expected = lagrange(&clean.true_motion.angle[1], rate, run.time_s[i] - latency);
+        worst = worst.max((run.angles[1][i] - expected).abs());
+    }
+    assert!(worst < 8e-5, "latency: worst deviation {worst:.2e} rad");
+    assert!((run.sidecar.truth.stand.latency_s - latency).abs() < 1e-15);
+    // The blocks are the same draws: the imperfections only touch the angles.
+    assert_eq!(run.gyro, clean.gyro);
+    // Band limit at 20 Hz: above 30 Hz the measured angles' second difference (a high-pass that
+    // keeps the low-frequency motion from leaking) holds a small fraction of the clean run's.
+    let mut limited = base.clone();
+    limited.stand.band_limit_hz = Some(20.0);
+    let band = simulate(&limited).unwrap();
+    let power_above = |x: &[f64]| {
+        let d2: Vec<f64> = x.windows(3).map(|w| w[2] - 2.0 * w[1] + w[0]).collect();
+        let mut fft = crate::fourier::RecordFft::new(d2.len(), rate);
+        let spec = fft.forward(&d2);
+        (0..spec.len())
+            .filter(|&k| fft.frequency_hz(k) > 30.0)
+            .map(|k| spec[k].norm_sqr())
+            .sum::<f64>()
+    };
+    // The band-limited minus the clean measurement (same noise draws) is the motion removed:
+    // above 30 Hz all of the true motion there.
+    let removed: Vec<f64> = band.angles[0]
+        .iter()
+        .zip(&clean.angles[0])
+        .map(|(b, c)| b - c)
+        .collect();
+    let (removed_power, motion_power) = (power_above(&removed), power_above(&clean.true_motion.angle[0]));
+    assert!(
+        (0.7..1.3).contains(&(removed_power / motion_power)),
+        "{removed_power:.3e} vs {motion_power:.3e}"
+    );
+    // Coloured noise: the angle error has the rms asked for, most of it below the corner.
+    let mut coloured = base.clone();
+    coloured.stand.coloured_noise_rad = 1e-4;
+    coloured.stand.coloured_corner_hz = 2.0;
+    let col = simulate(&coloured).unwrap();
+    let err: Vec<f64> = (0..col.angles[2].len())
+        .map(|i| col.angles[2][i] - clean.angles[2][i])
+        .collect();
+    let rms = (err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64).sqrt();
+    assert!((0.6e-4..1.4e-4).contains(&rms), "coloured rms {rms:.2e}");
+    // Default: none, and the sidecar says nothing of a stand.
+    assert!(!base.stand.any());
+    let text = serde_json::to_string(&clean.sidecar).unwrap();
+    assert!(!text.contains("\"stand\""), "{text}");
+}

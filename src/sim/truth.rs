@@ -25,6 +25,13 @@ pub struct Truth {
     pub gyro: Option<BlockTruth>,
     /// The accelerometer block, when present.
     pub accel: Option<BlockTruth>,
+    /// The stand's angle-measurement imperfections (absent: a perfect stand).
+    #[serde(default, skip_serializing_if = "is_perfect")]
+    pub stand: super::stand::StandImperfections,
+}
+
+fn is_perfect(s: &super::stand::StandImperfections) -> bool {
+    !s.any()
 }
 
 /// The closed-loop servo: platform angle = `w^2/(s^2 + 2 zeta w s + w^2)` program + jitter.

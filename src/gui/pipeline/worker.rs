@@ -459,7 +459,7 @@ mod tests {
         assert!(!sent[0].1.provisional());
 
         let retuned = Settings {
-            lambda: LambdaSetting::Values([0.05, -0.05, 0.02]),
+            lambda: LambdaSetting::Values([0.05, 0.03, 0.02]),
             ..first
         };
         worker.submit(job(3, analyse(&retuned)));

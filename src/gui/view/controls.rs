@@ -1,6 +1,7 @@
 //! The identifier settings panel: edits a copy of [`Settings`] and sends it as a command when
 //! anything changed; shows why settings are refused (A not SPD, Lambda singular, band, segment).
 
+use crate::ident::band::{AUTO_LIMITS_HZ, BandSetting};
 use eframe::egui::{self, ComboBox, DragValue, Slider};
 
 use crate::block::Block;
@@ -27,23 +28,42 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
     welch(ui, &mut s);
     ui.separator();
     ui.horizontal(|ui| {
-        let low = ui.label("band from");
-        ui.add(
-            DragValue::new(&mut s.band_hz[0])
-                .speed(0.01)
-                .range(0.0..=f64::MAX)
-                .suffix(" Hz"),
-        )
-        .labelled_by(low.id);
-        let high = ui.label("to");
-        ui.add(
-            DragValue::new(&mut s.band_hz[1])
-                .speed(0.1)
-                .range(0.0..=f64::MAX)
-                .suffix(" Hz"),
-        )
-        .labelled_by(high.id);
+        let mut auto = s.band_hz == BandSetting::Auto;
+        if ui
+            .checkbox(&mut auto, "auto band")
+            .on_hover_text(
+                "Fit only where the outputs are coherent with the inputs computed from the angles \
+                 (multiple coherence at least 0.9), found per block from the data.",
+            )
+            .changed()
+        {
+            s.band_hz = if auto {
+                BandSetting::Auto
+            } else {
+                BandSetting::Fixed(AUTO_LIMITS_HZ)
+            };
+        }
     });
+    if let BandSetting::Fixed(band) = &mut s.band_hz {
+        ui.horizontal(|ui| {
+            let low = ui.label("band from");
+            ui.add(
+                DragValue::new(&mut band[0])
+                    .speed(0.01)
+                    .range(0.0..=f64::MAX)
+                    .suffix(" Hz"),
+            )
+            .labelled_by(low.id);
+            let high = ui.label("to");
+            ui.add(
+                DragValue::new(&mut band[1])
+                    .speed(0.1)
+                    .range(0.0..=f64::MAX)
+                    .suffix(" Hz"),
+            )
+            .labelled_by(high.id);
+        });
+    }
     weight(ui, &mut s);
     lambda(ui, &mut s);
     ui.separator();

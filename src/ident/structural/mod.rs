@@ -52,6 +52,7 @@
 //! (and row); nothing reachable from the input panics, and no output
 //! holds NaN (an undetermined standard deviation is `+inf`).
 
+pub mod admissible;
 mod gain_delay;
 mod model;
 mod order;
@@ -152,6 +153,10 @@ pub struct StructuralSettings {
     pub max_iterations: usize,
     /// The criterion of [`OrderChoice::Auto`].
     pub criterion: InformationCriterion,
+    /// Variance inflation from the correlation of neighbouring bins
+    /// ([`crate::ident::spectra::bin_correlation`]; 1 for independent bins): the parameter
+    /// covariance is multiplied by it, and the criterion's chi2 and number of data divided by it.
+    pub bin_correlation: f64,
 }
 
 impl Default for StructuralSettings {
@@ -161,6 +166,7 @@ impl Default for StructuralSettings {
             tau_max_s: 0.050,
             max_iterations: 100,
             criterion: InformationCriterion::Bic,
+            bin_correlation: 1.0,
         }
     }
 }
@@ -180,6 +186,9 @@ pub struct OrderCandidate {
     pub tau_s: f64,
     /// Whether every pole has a negative real part (order 0: always).
     pub stable: bool,
+    /// Why the order may not be chosen (absent: admissible; order 0 always is).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rejected: Option<admissible::Rejection>,
 }
 
 /// The result of a structural fit. All coefficients use `s` in rad/s.
@@ -459,7 +468,7 @@ fn finish(
     from_scratch: bool,
 ) -> Result<StructuralFit, StructuralError> {
     let selection = order::fit_orders(data, highest, order, settings, starts)?;
-    let mut fit = report::assemble(data, &selection, settings.criterion);
+    let mut fit = report::assemble(data, &selection, settings.criterion, settings.bin_correlation);
     if report::has_nan(&fit) {
         return Err(StructuralError::NumericalFailure { order: fit.order });
     }

@@ -4,8 +4,8 @@ use rayon::prelude::*;
 
 use super::model::{Model, Prepared, parameter_count};
 use super::{
-    InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings, gain_delay,
-    rational,
+    InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings, admissible,
+    gain_delay, rational,
 };
 
 /// Relative excess of chi2 over the order below that a refined order may keep (rounding: a
@@ -69,7 +69,10 @@ impl Selection {
 }
 
 /// Fits orders `0..=highest` (each from the previous one's best, or as `starts` says) and picks
-/// the answer: the highest for `Fixed`, the stable candidate of smallest criterion for `Auto`.
+/// the answer: the highest for `Fixed`, the admissible candidate ([`admissible`]) of smallest
+/// criterion for `Auto`. The criterion's chi2 is divided by the overdispersion
+/// `max(1, min_n chi2_n / dof_n)` (quasi-likelihood): when no candidate explains the data to its
+/// stated noise, the noise is larger than stated and so is the evidence's uncertainty.
 pub(super) fn fit_orders(
     data: &Prepared,
     highest: usize,
@@ -116,11 +119,32 @@ pub(super) fn fit_orders(
     }
     // Kept models above `highest` stay in `models` (for a later change of order), out of the choice.
     let considered = &models[..models.len().min(highest + 1)];
+    let chi2: Vec<f64> = considered.iter().map(|m| m.chi2(data)).collect();
+    // Overdispersion: where even the richest fit leaves chi2/dof above 1 the weights understate
+    // the noise, and the evidence of every candidate is discounted by it (quasi-likelihood BIC).
+    let per_dof = |i: usize| {
+        let dof = data
+            .real_data()
+            .saturating_sub(parameter_count(considered[i].order()))
+            .max(1);
+        chi2[i] / dof as f64
+    };
+    let overdispersion = (0..considered.len())
+        .map(per_dof)
+        .fold(f64::INFINITY, f64::min)
+        .max(1.0);
+    let correlation = settings.bin_correlation.max(1.0);
+    let effective_data = ((data.real_data() as f64 / correlation) as usize).max(1);
     let mut candidates = Vec::with_capacity(considered.len());
-    for model in considered {
-        let chi2 = model.chi2(data);
+    for (i, model) in considered.iter().enumerate() {
+        let chi2 = chi2[i];
         let p = parameter_count(model.order());
-        let value = criterion_value(settings.criterion, chi2, p, data.real_data());
+        let value = criterion_value(
+            settings.criterion,
+            chi2 / (overdispersion * correlation),
+            p,
+            effective_data,
+        );
         if !value.is_finite() {
             return Err(StructuralError::NumericalFailure { order: model.order() });
         }
@@ -131,6 +155,7 @@ pub(super) fn fit_orders(
             criterion: value,
             tau_s: model.tau,
             stable: rational::is_stable(&model.den),
+            rejected: admissible::rejection(data, model, (per_dof(i).max(1.0) * correlation).sqrt()),
         });
     }
     let pick = match choice {
@@ -138,7 +163,7 @@ pub(super) fn fit_orders(
         OrderChoice::Auto => candidates
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.stable)
+            .filter(|(_, c)| c.rejected.is_none())
             .min_by(|a, b| a.1.criterion.total_cmp(&b.1.criterion))
             .map_or(0, |(i, _)| i),
     };

@@ -35,18 +35,19 @@ pub(super) fn ieee_units(k: &[[f64; 3]; 3], k_std: &[[f64; 3]; 3]) -> IeeeUnits 
 }
 
 /// Builds the output. The covariance is that of the Gauss–Newton approximation, scaled by
-/// `max(1, chi2 / dof)`.
+/// `max(1, chi2 / dof)` and by the bins' correlation (`bin_correlation`, at least 1).
 pub(super) fn assemble(
     data: &Prepared,
     selection: &Selection,
     criterion: InformationCriterion,
+    bin_correlation: f64,
 ) -> StructuralFit {
     let model = selection.chosen();
     let order = model.order();
     let n_num = model.num.len();
     let w_ref = data.omega_ref;
     let dof = data.real_data().saturating_sub(parameter_count(order)).max(1);
-    let inflation = (selection.chi2() / dof as f64).max(1.0).sqrt();
+    let inflation = ((selection.chi2() / dof as f64).max(1.0) * bin_correlation.max(1.0)).sqrt();
     let std: Vec<f64> = model
         .parameter_std(data)
         .into_iter()

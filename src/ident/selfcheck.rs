@@ -1,0 +1,130 @@
+//! The self-check of every identified block: problems a reader must know before using the model,
+//! in plain words ([`IdentWarning`]), printed by the command line, kept in the model file's
+//! `fit.warnings` and shown in red in the app.
+//!
+//! - **Poor fit**: chi2/dof of the chosen model above [`POOR_FIT`] (the weights understate the
+//!   misfit: the standard deviations are widened by `sqrt(chi2/dof)`, and an effect may be
+//!   missing); the octave of the largest misfit is named, from the per-bin chi2 (residual
+//!   structure across frequency rather than one number).
+//! - **Implausible gain**: with `calibrated` (the default), a diagonal element of `K` more than
+//!   [`GAIN_TOLERANCE`] from 1 or a cross-coupling above it: wrong units, axis order or signs, or a
+//!   band where the inputs are noise.
+//! - **Negative delay**: `tau + 3 sigma < 0`.
+//! - **Inadmissible order**: a fixed order that breaks a rule of [`super::structural::admissible`].
+//!
+//! Units: `K` dimensionless (block units over input units), delays in s, frequencies in Hz.
+
+use std::sync::Arc;
+
+use num_complex::Complex64;
+
+use super::settings::{OrderSetting, Settings};
+use super::signals::channel_names;
+use super::spectra::BlockSpectra;
+use super::structural::StructuralFit;
+use super::warnings::IdentWarning;
+use super::wiener::WienerEstimate;
+use crate::block::Block;
+
+/// chi2/dof above which the fit is reported as not explaining the data.
+pub const POOR_FIT: f64 = 2.0;
+
+/// Largest `|K_ii - 1|` and `|K_ij|` (i != j) of a calibrated block.
+pub const GAIN_TOLERANCE: f64 = 0.1;
+
+/// Per-bin chi2 of `fit` against the Wiener estimate over the native `band` bins, with the
+/// structural fit's weights `Omega_i = (n_eq - 3) S_uu / S_psi,ii`; `noise` is `S_psi` per bin.
+#[must_use]
+pub fn chi2_per_bin(
+    spectra: &BlockSpectra,
+    noise: &[nalgebra::Matrix3<Complex64>],
+    wiener: &WienerEstimate,
+    band: &[usize],
+    fit: &StructuralFit,
+) -> Vec<f64> {
+    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
+    band.iter()
+        .map(|&k| {
+            let model = fit.response(spectra.frequency_hz[k]);
+            let r = wiener.w_u[k] - model;
+            let s_uu = (spectra.s_uu[k] + spectra.s_uu[k].adjoint()) * Complex64::from(0.5);
+            (0..3)
+                .map(|i| {
+                    let row = r.row(i);
+                    let q = (row * s_uu * row.adjoint())[(0, 0)].re;
+                    2.0 * q * dof / noise[k][(i, i)].re.max(f64::MIN_POSITIVE)
+                })
+                .sum::<f64>()
+        })
+        .collect()
+}
+
+/// The self-check's warnings of one block (see the module docs).
+#[must_use]
+pub fn self_check(
+    block: Block,
+    spectra: &BlockSpectra,
+    noise: &[nalgebra::Matrix3<Complex64>],
+    wiener: &Arc<WienerEstimate>,
+    band: &[usize],
+    fit: &StructuralFit,
+    settings: &Settings,
+) -> Vec<IdentWarning> {
+    let mut out = Vec::new();
+    let per_dof = fit.chi2 / fit.dof.max(1) as f64;
+    if per_dof > POOR_FIT {
+        let chi2 = chi2_per_bin(spectra, noise, wiener, band, fit);
+        let mut worst = ([0.0, 0.0], 0.0);
+        let mut start = 0;
+        while start < band.len() {
+            let f0 = spectra.frequency_hz[band[start]];
+            let end = band[start..]
+                .iter()
+                .position(|&k| spectra.frequency_hz[k] >= 2.0 * f0)
+                .map_or(band.len(), |p| start + p.max(1));
+            let n = (end - start) as f64;
+            let value = chi2[start..end].iter().sum::<f64>() / (18.0 * n);
+            if value > worst.1 {
+                worst = ([f0, spectra.frequency_hz[band[end - 1]]], value);
+            }
+            start = end;
+        }
+        out.push(IdentWarning::PoorFit {
+            chi2_per_dof: per_dof,
+            worst_band_hz: worst.0,
+            worst_chi2_per_dof: worst.1,
+        });
+    }
+    if settings.calibrated {
+        let (inputs, outputs) = channel_names(block);
+        for i in 0..3 {
+            for j in 0..3 {
+                let v = fit.k[i][j];
+                let off = if i == j { (v - 1.0).abs() } else { v.abs() };
+                if off.is_nan() || off > GAIN_TOLERANCE {
+                    out.push(IdentWarning::ImplausibleGain {
+                        output: outputs[i].to_owned(),
+                        input: inputs[j].to_owned(),
+                        value: v,
+                    });
+                }
+            }
+        }
+    }
+    if fit.tau_s + 3.0 * fit.tau_std_s < 0.0 {
+        out.push(IdentWarning::NegativeDelay {
+            tau_s: fit.tau_s,
+            tau_std_s: fit.tau_std_s,
+        });
+    }
+    if let OrderSetting::Fixed(n) = settings.order
+        && let Some(reason) = fit
+            .candidates
+            .iter()
+            .find(|c| c.order == n)
+            .and_then(|c| c.rejected.clone())
+    {
+        out.push(IdentWarning::InadmissibleOrder { order: n, reason });
+    }
+    out
+}

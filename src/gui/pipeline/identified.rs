@@ -15,6 +15,7 @@ use num_complex::Complex64;
 
 use super::RunSummary;
 use crate::block::Block;
+use crate::ident::band::{AUTO_LIMITS_HZ, multiple_coherence, native_bins};
 use crate::ident::identify::BlockIdentification;
 use crate::ident::settings::Settings;
 use crate::model::{BlockModel, MODEL_SCHEMA, Model, Source};
@@ -59,6 +60,8 @@ pub struct BlockBode {
     pub coherence: [Vec<PlotPoint>; 3],
     /// `10 log10 |S_psi,ij|` per element, row-major, dB re 1 unit^2/Hz.
     pub noise_psd_db: Vec<Vec<PlotPoint>>,
+    /// The analysis band used, Hz (marked on the plots).
+    pub band_hz: [f64; 2],
 }
 
 /// A run's identification under one set of settings.
@@ -180,13 +183,19 @@ fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeE
 fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
     let log_f: Vec<f64> = m.frequency_hz.iter().map(|f| f.log10()).collect();
     let elements = (0..9).map(|e| element(m, b, e / 3, e % 3)).collect();
-    let coherence = std::array::from_fn(|i| {
-        log_f
-            .iter()
-            .zip(&m.coherence)
-            .map(|(&x, c)| PlotPoint::new(x, c[i]))
-            .collect()
-    });
+    // Coherence over the whole usable range, not only the band, so the band's edges can be
+    // judged against it.
+    let nyquist = b.spectra.sample_rate_hz / 2.0;
+    let wide: Vec<(f64, [f64; 3])> = native_bins(&b.spectra, [AUTO_LIMITS_HZ[0], 0.9 * nyquist])
+        .into_iter()
+        .map(|k| {
+            (
+                b.spectra.frequency_hz[k].log10(),
+                multiple_coherence(&b.spectra, k),
+            )
+        })
+        .collect();
+    let coherence = std::array::from_fn(|i| wide.iter().map(|(x, c)| PlotPoint::new(*x, c[i])).collect());
     let noise_psd_db = (0..9)
         .map(|e| {
             let (i, j) = (e / 3, e % 3);
@@ -205,6 +214,7 @@ fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
         elements,
         coherence,
         noise_psd_db,
+        band_hz: m.band_hz,
     }
 }
 

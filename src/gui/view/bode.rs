@@ -3,7 +3,9 @@
 //! disturbance PSD matrix. The same grid overlays several runs on the Compare tab.
 
 use eframe::egui::{self, Color32, Id};
-use egui_plot::{FilledArea, GridMark, Legend, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi};
+use egui_plot::{
+    FilledArea, GridMark, HLine, Legend, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi, VLine,
+};
 
 use super::palette;
 use crate::gui::app::{RunEntry, ViewState};
@@ -91,6 +93,19 @@ fn draw<'a>(p: &mut PlotUi<'a>, entry: &BodeEntry<'_>, log_f: &'a [f64], c: Curv
     );
 }
 
+/// Dashed vertical lines at the band's edges (log10 frequency axis).
+fn mark_band(p: &mut PlotUi<'_>, band_hz: [f64; 2]) {
+    for edge in band_hz {
+        if edge > 0.0 {
+            p.vline(
+                VLine::new("band", edge.log10())
+                    .color(Color32::from_gray(150))
+                    .style(LineStyle::dashed_loose()),
+            );
+        }
+    }
+}
+
 fn cell(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], e: usize, width: f32, height: f32, group: &str) {
     let mag = plot((group, "mag", e), width, height, group).y_axis_label("dB");
     let mag = if e == 0 {
@@ -99,6 +114,9 @@ fn cell(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], e: usize, width: f32, heig
         mag
     };
     mag.show(ui, |p| {
+        if let Some(first) = entries.first() {
+            mark_band(p, first.bode.band_hz);
+        }
         for entry in entries {
             let el = &entry.bode.elements[e];
             let curves = Curves {
@@ -127,12 +145,21 @@ fn cell(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], e: usize, width: f32, heig
 /// Multiple coherence of each output, and the disturbance PSD matrix `|S_psi,ij|` in dB.
 pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
     let width = ((ui.available_width() - 24.0) / 3.0).max(120.0);
-    ui.strong("multiple coherence of each output with the three inputs");
+    ui.strong(format!(
+        "multiple coherence of each output with the three inputs; band used {:.2}-{:.2} Hz (dashed), 0.9 dotted",
+        bode.band_hz[0], bode.band_hz[1]
+    ));
     plot("coherence", 3.0 * width, 150.0, "bode")
         .legend(Legend::default())
         .include_y(0.0)
         .include_y(1.0)
         .show(ui, |p| {
+            mark_band(p, bode.band_hz);
+            p.hline(
+                HLine::new("usable (0.9)", crate::ident::band::MIN_COHERENCE)
+                    .color(Color32::GRAY)
+                    .style(LineStyle::dotted_dense()),
+            );
             for (i, points) in bode.coherence.iter().enumerate() {
                 p.line(
                     Line::new(bode.outputs[i].clone(), PlotPoints::Borrowed(points))

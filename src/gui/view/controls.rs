@@ -2,6 +2,7 @@
 //! anything changed; shows why settings are refused (A not SPD, Lambda singular, band, segment).
 
 use crate::ident::band::{AUTO_LIMITS_HZ, BandSetting};
+use crate::ident::settings::MAX_SHRINK;
 use eframe::egui::{self, ComboBox, DragValue, Slider};
 
 use crate::block::Block;
@@ -177,12 +178,20 @@ fn lambda(ui: &mut egui::Ui, s: &mut Settings) {
                 let label = ui.label(format!("λ{}", k + 1));
                 ui.add(DragValue::new(v).speed(0.001).max_decimals(5))
                     .labelled_by(label.id);
+                // The slider spans what validation accepts for A = I: 0 (no shrinking) to
+                // MAX_SHRINK (the gain of that output halved); other values are refused with
+                // the reason below.
                 ui.add(
-                    Slider::new(v, -1.0..=1.0)
+                    Slider::new(v, 0.0..=MAX_SHRINK)
                         .show_value(false)
                         .clamping(egui::SliderClamping::Never),
                 )
-                .labelled_by(label.id);
+                .labelled_by(label.id)
+                .on_hover_text(
+                    "Λ shrinks the Wiener estimate: W_u = (I - A^-1 Λ) W0. With A = I, output k's gain is \
+                     multiplied by 1 - λk (λ = 0.01 lowers that scale factor by 10 000 ppm). Allowed: \
+                     λ ≥ 0 and A^-1 Λ at most 0.5.",
+                );
             });
         }
     }

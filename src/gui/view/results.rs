@@ -1,10 +1,11 @@
-//! The results panel: per block, K with scale-factor errors (ppm) and misalignments (mrad), tau in
+//! The results panel: per block, the self-check's warnings in red, the band used, K with scale-factor errors (ppm) and misalignments (mrad), tau in
 //! ms, the chosen order with every candidate's criterion (BIC), and the fit's figures, each with
 //! its standard deviation where the data determine it.
 
 use eframe::egui;
 
 use crate::gui::app::{Command, RunEntry};
+use crate::ident::band::BandSetting;
 use crate::ident::settings::{LambdaSetting, OrderSetting};
 use crate::model::BlockModel;
 
@@ -21,6 +22,22 @@ pub fn tau_label(block: &str, m: &BlockModel) -> String {
     format!(
         "{block} τ = {} ms",
         pm(m.tau_s * 1e3, m.fit.tau_std_s.map(|s| s * 1e3), 3)
+    )
+}
+
+/// The band line, e.g. `gyro band 0.14-14.58 Hz (auto: where the outputs are coherent with the
+/// inputs)`.
+#[must_use]
+pub fn band_label(block: &str, m: &BlockModel, auto: bool) -> String {
+    format!(
+        "{block} band {:.2}-{:.2} Hz ({})",
+        m.band_hz[0],
+        m.band_hz[1],
+        if auto {
+            "auto: where the outputs are coherent with the inputs from the angles"
+        } else {
+            "as set"
+        }
     )
 }
 
@@ -77,11 +94,19 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             m.inputs.join(" "),
             m.outputs.join(" ")
         ));
+        for w in &m.fit.warnings {
+            ui.colored_label(ui.visuals().error_fg_color, format!("warning: {w}"));
+        }
+        ui.label(band_label(name, m, id.settings.band_hz == BandSetting::Auto));
         ui.label(tau_label(name, m));
         ui.label(format!(
             "order {} ({}), {}",
             m.order,
-            if auto_order { "auto, lowest BIC" } else { "fixed" },
+            if auto_order {
+                "auto: lowest BIC among the admissible orders"
+            } else {
+                "fixed"
+            },
             if m.fit.stable { "stable" } else { "UNSTABLE" }
         ));
         ui.label("K (rows: outputs; columns: inputs)");
@@ -127,7 +152,7 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     egui::Grid::new(("candidates", name))
         .striped(true)
         .show(ui, |ui| {
-            for h in ["order", "params", "χ²", "BIC", "τ, ms", "stable"] {
+            for h in ["order", "params", "χ²", "BIC", "τ, ms", "admissible"] {
                 ui.strong(h);
             }
             ui.end_row();
@@ -138,7 +163,14 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 ui.monospace(format!("{:.1}", c.chi2));
                 ui.monospace(format!("{:.1}", c.criterion));
                 ui.monospace(format!("{:.3}", c.tau_s * 1e3));
-                ui.monospace(if c.stable { "yes" } else { "no" });
+                match &c.rejected {
+                    None => {
+                        ui.monospace("yes");
+                    }
+                    Some(reason) => {
+                        ui.monospace(format!("no: {reason}"));
+                    }
+                }
                 ui.end_row();
             }
         });
@@ -146,7 +178,13 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
 
 fn fit(ui: &mut egui::Ui, m: &BlockModel, lambda_auto: bool) {
     let f = &m.fit;
-    ui.label(format!("χ² = {:.1} on {} degrees of freedom", f.chi2, f.dof));
+    ui.label(format!(
+        "χ² = {:.1} on {} degrees of freedom (χ²/dof {:.2}); σ widened by the bins' correlation ×{:.2}",
+        f.chi2,
+        f.dof,
+        f.chi2_per_dof,
+        f.bin_correlation.max(1.0).sqrt()
+    ));
     ui.label(format!(
         "Λ = [{:.4}, {:.4}, {:.4}]{}",
         f.lambda[0],

@@ -1,0 +1,97 @@
+//! The app shows what the identifier can and cannot vouch for (issue 13): the self-check's
+//! warnings in Results, the band used, why each order candidate was rejected, and the same
+//! refusal as `identify` for a run whose stand axis was held still. AccessKit (`egui_kittest`),
+//! no GPU; the worker runs synchronously.
+
+use std::path::{Path, PathBuf};
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use imu_attest::gui::view::results::band_label;
+use imu_attest::gui::{App, AppOptions, WorkerMode};
+use imu_attest::ident::identify::identify_run;
+use imu_attest::ident::settings::Settings;
+use imu_attest::rng::Rng;
+use imu_attest::run::{LoadOptions, load};
+use imu_attest::sim::regime::Regime;
+use imu_attest::sim::write::write_run;
+use imu_attest::sim::{SimConfig, simulate};
+
+fn app(paths: Vec<PathBuf>) -> Harness<'static, App> {
+    let options = AppOptions {
+        mode: WorkerMode::Synchronous,
+        persist: false,
+        ..AppOptions::new(paths)
+    };
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::vec2(1500.0, 950.0))
+        .build_eframe(|cc| App::new(cc, options));
+    harness.run_steps(4);
+    harness
+}
+
+fn real(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/real")
+        .join(format!("{name}.csv.gz"))
+}
+
+#[test]
+fn results_show_the_band_the_warnings_and_the_rejected_orders_of_a_real_run() {
+    let harness = app(vec![real("broad07_fast_rotation")]);
+    let run = &harness.state().runs()[0];
+    let id = run.identification.as_ref().expect("identified");
+    let m = id.model.blocks.get("gyro").expect("gyro");
+    // The band found from the data, shown as such.
+    assert!(m.band_hz[1] < 20.0, "{:?}", m.band_hz);
+    harness.get_by_label(&band_label("gyro", m, true));
+    // This run's fit is worse than its noise (chi2/dof about 3.7): the warning is on screen.
+    let warning = m
+        .fit
+        .warnings
+        .iter()
+        .find(|w| w.to_string().contains("does not explain the data"))
+        .expect("a poor-fit warning");
+    harness.get_by_label(&format!("warning: {warning}"));
+    // Each rejected candidate says why.
+    let rejected = m
+        .fit
+        .candidates
+        .iter()
+        .find_map(|c| c.rejected.clone())
+        .expect("a rejected candidate");
+    assert!(harness.get_all_by_label(&format!("no: {rejected}")).count() >= 1);
+    harness.get_by_label_contains("auto: lowest BIC among the admissible orders");
+}
+
+#[test]
+fn a_run_with_a_still_stand_axis_is_refused_with_the_message_of_identify() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.duration_s = 60.0;
+    config.seed = 31;
+    let mut sim = simulate(&config).expect("simulated");
+    // Yaw held still: only the angle sensor's noise remains.
+    let mean = sim.angles[1].iter().sum::<f64>() / sim.angles[1].len() as f64;
+    let sigma = sim.sidecar.angle_noise_rad;
+    let mut rng = Rng::new(5);
+    for v in &mut sim.angles[1] {
+        *v = mean + sigma * rng.normal();
+    }
+    let path = dir.path().join("still_yaw.csv");
+    write_run(&sim, &path).expect("written");
+    let expected = identify_run(
+        &load(&path, &LoadOptions::default()).expect("loads"),
+        &Settings::default(),
+    )
+    .expect_err("identify refuses it")
+    .to_string();
+    assert!(expected.contains("not excited"), "{expected}");
+
+    let harness = app(vec![path]);
+    let run = &harness.state().runs()[0];
+    assert!(run.identification.is_none(), "no model is shown for a still axis");
+    let shown = run.analysis_error.clone().expect("an error");
+    assert!(shown.contains(&expected), "app: {shown}\nidentify: {expected}");
+    assert!(harness.get_all_by_label_contains("not excited").count() >= 1);
+}

@@ -307,3 +307,33 @@ fn a_byte_order_mark_is_accepted_with_a_notice() {
     assert!(err.contains("bom.csv: 40 samples"), "{err}");
     assert!(err.contains("byte-order mark"), "{err}");
 }
+
+/// A run the loader accepts (16 rows) but a later stage refuses (the observer needs 64 samples;
+/// a settings file makes the Welch segment fit) is the user's input: exit 2 and one line, never
+/// the internal error's 1.
+#[test]
+fn a_run_refused_after_loading_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = write(
+        dir.path(),
+        "short.csv",
+        format!("{HEADER}\n{}", good_rows(16)).as_bytes(),
+    );
+    let settings = write(dir.path(), "s.json", br#"{"welch": {"segment_len": 8}}"#);
+    for args in [vec![], vec!["--settings", settings.to_str().unwrap()]] {
+        let out = dir.path().join("m.json");
+        let o = Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+            .arg("identify")
+            .arg(&run)
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("short.csv"), "{stderr}");
+        assert!(!out.exists());
+    }
+}

@@ -95,3 +95,38 @@ fn a_run_with_a_still_stand_axis_is_refused_with_the_message_of_identify() {
     assert!(shown.contains(&expected), "app: {shown}\nidentify: {expected}");
     assert!(harness.get_all_by_label_contains("not excited").count() >= 1);
 }
+
+/// A diagnosis that finishes after a newer one was requested (threaded mode: the older was
+/// already running) never replaces the newer one: the app drops it and waits.
+#[test]
+fn a_stale_diagnosis_never_replaces_a_newer_one() {
+    use imu_attest::gui::{Command, sample_run_path};
+    let options = AppOptions {
+        mode: WorkerMode::Manual,
+        persist: false,
+        ..AppOptions::new(vec![sample_run_path().expect("sample run")])
+    };
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::vec2(1500.0, 950.0))
+        .build_eframe(|cc| App::new(cc, options));
+    harness.run_steps(2);
+    while harness.state_mut().run_worker_jobs() > 0 {
+        harness.run_steps(2);
+    }
+    let id = harness.state().runs()[0].id;
+    // The first diagnosis runs; its result waits in the channel while a second is requested.
+    harness.state_mut().push_command(Command::Diagnose(id));
+    harness.step();
+    assert_eq!(harness.state_mut().run_worker_jobs(), 1);
+    harness.state_mut().push_command(Command::Diagnose(id));
+    harness.run_steps(2);
+    let run = &harness.state().runs()[0];
+    assert!(run.diagnosis.is_none(), "the first (stale) report was dropped");
+    assert!(run.diagnosing, "the newer one is still awaited");
+    let newest = run.diagnosis_generation;
+    assert_eq!(harness.state_mut().run_worker_jobs(), 1);
+    harness.run_steps(2);
+    let run = &harness.state().runs()[0];
+    assert!(run.diagnosis.is_some() && !run.diagnosing);
+    assert_eq!(run.diagnosis_generation, newest);
+}

@@ -29,6 +29,7 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
         shaping_filter: empty,
         coherence: Vec::new(),
         band_hz: [0.1, 40.0],
+        stationarity: None,
         fit: Fit {
             k_std: [[k_std; 3]; 3],
             tau_std_s,

@@ -28,6 +28,8 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
         n_averages: 40,
         equivalent_averages: 38.0,
         bin_correlation: 1.0,
+        stretches: Vec::new(),
+        stationarity_cache: crate::ident::stretches::StationarityCache::default(),
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,

@@ -34,6 +34,8 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
         n_averages: 40,
         equivalent_averages: 38.0,
         bin_correlation: 1.0,
+        stretches: Vec::new(),
+        stationarity_cache: crate::ident::stretches::StationarityCache::default(),
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,

@@ -21,6 +21,7 @@ use super::selfcheck::self_check;
 use super::settings::{OrderSetting, Settings};
 use super::signals::block_signals;
 use super::spectra::{BlockSpectra, block_spectra};
+use super::stretches::{Stationarity, cached_stationarity, widen};
 use super::structural::{
     OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure, refit_structure,
 };
@@ -49,6 +50,8 @@ pub struct BlockIdentification {
     pub band: Vec<usize>,
     /// Structural model (order).
     pub structural: Arc<StructuralFit>,
+    /// The stretches' fits (the stationarity check; `None` for a record too short to cut).
+    pub stationarity: Option<Arc<Stationarity>>,
     /// What was regularised or is inexact (empty when all is well).
     pub warnings: Vec<IdentWarning>,
 }
@@ -196,6 +199,23 @@ pub fn identify_block_from(
         settings.order,
         previous,
     )?);
+    let stationarity = cached_stationarity(&spectra, band_hz);
+    let structural = match &stationarity {
+        Some(st) => {
+            let mut widened = (*structural).clone();
+            widen(&mut widened, st);
+            Arc::new(widened)
+        }
+        None => structural,
+    };
+    if let Some(st) = stationarity.as_deref().filter(|st| st.drifts()) {
+        let duration = st.stretches.last().map_or(0.0, |l| l.span_s[1]) - st.stretches[0].span_s[0];
+        warnings.push(IdentWarning::DelayDrift {
+            trend: st.tau_trend,
+            trend_std: st.tau_trend_std,
+            change_s: st.tau_trend * duration,
+        });
+    }
     if let BandSetting::Fixed(given) = settings.band_hz {
         let ranges = untrusted_ranges(&spectra, given);
         if !ranges.is_empty() {
@@ -219,6 +239,7 @@ pub fn identify_block_from(
         band_hz,
         band,
         structural,
+        stationarity,
         warnings,
     })
 }

@@ -13,6 +13,7 @@ pub mod selfcheck;
 pub mod settings;
 pub mod signals;
 pub mod spectra;
+pub mod stretches;
 pub mod structural;
 pub mod warnings;
 pub mod wiener;

@@ -7,6 +7,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::signals::BlockSignals;
+use super::stretches::{StationarityCache, StretchSpectra, stretch_count};
 use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
 
 /// One block's spectral matrices on the one-sided Welch grid.
@@ -24,6 +25,11 @@ pub struct BlockSpectra {
     pub n_averages: usize,
     /// Equivalent number of independent averages (overlap-corrected).
     pub equivalent_averages: f64,
+    /// Each stretch's spectral matrices (the stationarity check, [`super::stretches`]); empty
+    /// for a record too short to cut.
+    pub stretches: Vec<StretchSpectra>,
+    /// The stretches' fits for the last band asked ([`super::stretches::cached_stationarity`]).
+    pub stationarity_cache: StationarityCache,
     /// Variance inflation from the correlation of neighbouring native bins ([`bin_correlation`]).
     pub bin_correlation: f64,
     /// Sample rate, Hz.
@@ -66,7 +72,10 @@ pub fn block_spectra(
     let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
     let bins = m.n_bins();
     let window = planner.window(settings.window, settings.segment_len);
+    let stretches = stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?;
     Ok(BlockSpectra {
+        stretches,
+        stationarity_cache: StationarityCache::default(),
         frequency_hz: m.frequency_hz.clone(),
         s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
         s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
@@ -78,6 +87,40 @@ pub fn block_spectra(
         fft_len: settings.nfft(),
         segment_len: settings.segment_len,
     })
+}
+
+/// The spectral matrices of each stretch ([`super::stretches`]) on the segment's native grid.
+fn stretch_spectra(
+    planner: &mut WelchPlanner,
+    channels: &[&[f64]],
+    sample_rate_hz: f64,
+    settings: &WelchSettings,
+    window: &[f64],
+) -> Result<Vec<StretchSpectra>, SpectralError> {
+    let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
+    let m = stretch_count(n_segments);
+    let native = WelchSettings {
+        fft_len: None,
+        ..*settings
+    };
+    let step = settings.step();
+    (0..m)
+        .map(|i| {
+            let (first, last) = (i * n_segments / m, (i + 1) * n_segments / m);
+            let (start, end) = (first * step, (last - 1) * step + settings.segment_len);
+            let slices: Vec<&[f64]> = channels.iter().map(|c| &c[start..end]).collect();
+            let sm = planner.welch_matrix(&slices, sample_rate_hz, &native)?;
+            let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|a, b| sm[(f, r0 + a, c0 + b)]);
+            let bins = sm.n_bins();
+            Ok(StretchSpectra {
+                span_s: [start as f64 / sample_rate_hz, end as f64 / sample_rate_hz],
+                s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
+                s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
+                s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
+                equivalent_averages: equivalent_averages(window, step, sm.n_averages),
+            })
+        })
+        .collect()
 }
 
 /// Variance inflation of a quantity that varies slowly across native bins, from the correlation

@@ -90,6 +90,16 @@ pub enum IdentWarning {
         /// Its standard deviation, s.
         tau_std_s: f64,
     },
+    /// The delay drifts through the record (the stretches' delays have a significant trend): the
+    /// block and the stand may log on separate clocks.
+    DelayDrift {
+        /// Slope of the delay against time, s per s (1e-6 = 1 ppm).
+        trend: f64,
+        /// Its standard deviation.
+        trend_std: f64,
+        /// Change of the delay over the record, s.
+        change_s: f64,
+    },
     /// The fixed order asked for breaks an admissibility rule.
     InadmissibleOrder {
         /// The order.
@@ -158,6 +168,19 @@ impl fmt::Display for IdentWarning {
                  moves; check the time columns, the angles' own latency, or the band",
                 tau_s * 1e3,
                 tau_std_s * 1e3
+            ),
+            IdentWarning::DelayDrift {
+                trend,
+                trend_std,
+                change_s,
+            } => write!(
+                f,
+                "the delay drifts through the record: {:.3} ms over the run ({:.1} +- {:.1} ppm); \
+                 the block and the stand may log on separate clocks, and one delay does not \
+                 describe the run (see the stretches in the model file)",
+                change_s * 1e3,
+                trend * 1e6,
+                trend_std * 1e6
             ),
             IdentWarning::InadmissibleOrder { order, reason } => {
                 write!(f, "order {order} as asked is not supported by the data: {reason}")

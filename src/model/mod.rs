@@ -133,6 +133,10 @@ pub struct BlockModel {
     /// or the user's.
     #[serde(default)]
     pub band_hz: [f64; 2],
+    /// The block identified on consecutive stretches of the record (order 0): per-stretch `K`
+    /// and delay, their spread and the delay's trend. Absent for a record too short to cut.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stationarity: Option<crate::ident::stretches::Stationarity>,
     /// Quality figures.
     pub fit: Fit,
 }
@@ -214,6 +218,7 @@ impl BlockModel {
             shaping_filter: ComplexArray::from_bins(band.iter().map(|&k| f.shaping_filter[k])),
             coherence: band.iter().map(|&k| w.coherence[k]).collect(),
             band_hz: b.band_hz,
+            stationarity: b.stationarity.as_deref().cloned(),
             fit: Fit {
                 k_std: s.k_std.map(|r| r.map(finite)),
                 tau_std_s: finite(s.tau_std_s),

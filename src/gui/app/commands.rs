@@ -181,6 +181,7 @@ impl App {
         }
         run.diagnosing = true;
         run.diagnosis_error = None;
+        run.diagnosis_generation = generation;
         let rejected = run.rejected.clone();
         self.worker.submit(Job {
             run: id,

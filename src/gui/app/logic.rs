@@ -147,19 +147,33 @@ impl App {
                     }
                 }
             }
-            Event::Diagnosed { run, report, .. } => {
+            Event::Diagnosed {
+                run,
+                generation,
+                report,
+            } => {
                 let Some(entry) = self.run_mut(run) else { return };
+                // A stale report (an older request finishing after a newer one) never replaces
+                // the newer one.
+                if generation < entry.diagnosis_generation {
+                    return;
+                }
                 entry.diagnosis = Some(report);
+                entry.diagnosis_generation = generation;
                 entry.diagnosing = false;
                 entry.diagnosis_error = None;
             }
             Event::Failed {
                 stage: Stage::Diagnose,
                 run,
+                generation,
                 message,
                 ..
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
+                if generation < entry.diagnosis_generation {
+                    return;
+                }
                 entry.diagnosing = false;
                 entry.diagnosis_error = Some(message.clone());
                 let name = entry.name();

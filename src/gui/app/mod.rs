@@ -171,6 +171,8 @@ pub struct RunEntry {
     pub analysis_error: Option<String>,
     /// The missing-effect report (the last good one).
     pub diagnosis: Option<Arc<Report>>,
+    /// Generation of the newest diagnosis requested (results of older ones are dropped).
+    pub diagnosis_generation: u64,
     /// A diagnosis is under way.
     pub diagnosing: bool,
     /// Why the newest diagnosis failed, if it did.
@@ -201,6 +203,7 @@ impl RunEntry {
             identification_generation: 0,
             analysis_error: None,
             diagnosis: None,
+            diagnosis_generation: 0,
             diagnosing: false,
             diagnosis_error: None,
             accepted: Vec::new(),

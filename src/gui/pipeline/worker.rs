@@ -95,9 +95,11 @@ impl Worker {
         }
     }
 
-    /// Runs the jobs queued in [`WorkerMode::Manual`]; returns how many ran.
+    /// Runs the jobs queued in [`WorkerMode::Manual`], merged as the worker thread merges them
+    /// (only the newest analysis and diagnosis per run), then refits what is provisional; returns
+    /// how many jobs ran.
     pub fn run_queued(&mut self) -> usize {
-        let jobs = self.queued.as_mut().map(std::mem::take).unwrap_or_default();
+        let jobs = newest_only(self.queued.as_mut().map(std::mem::take).unwrap_or_default());
         let n = jobs.len();
         if let Some(pipeline) = self.inline.as_mut() {
             for job in jobs {
@@ -116,8 +118,9 @@ struct Pipeline {
     events: Sender<Event>,
     waker: Waker,
     load: LoadOptions,
-    /// The latest analysis whose identification is provisional: refitted from scratch when idle.
-    unpolished: Option<(RunId, u64)>,
+    /// Per run, the generation of its latest analysis whose identification is provisional: each
+    /// is refitted from scratch when the worker is idle.
+    unpolished: HashMap<RunId, u64>,
 }
 
 /// How long the worker waits without a job before it refits a provisional identification from
@@ -132,7 +135,7 @@ impl Pipeline {
             events,
             waker,
             load,
-            unpolished: None,
+            unpolished: HashMap::new(),
         }
     }
 }
@@ -140,7 +143,12 @@ impl Pipeline {
 impl Pipeline {
     fn serve(mut self, jobs: &Receiver<Job>) {
         loop {
-            let first = if self.unpolished.is_some() {
+            let first = if self.unpolished.is_empty() {
+                match jobs.recv() {
+                    Ok(job) => job,
+                    Err(_) => return,
+                }
+            } else {
                 match jobs.recv_timeout(POLISH_AFTER) {
                     Ok(job) => job,
                     Err(RecvTimeoutError::Timeout) => {
@@ -148,11 +156,6 @@ impl Pipeline {
                         continue;
                     }
                     Err(RecvTimeoutError::Disconnected) => return,
-                }
-            } else {
-                match jobs.recv() {
-                    Ok(job) => job,
-                    Err(_) => return,
                 }
             };
             let mut batch = vec![first];
@@ -163,12 +166,17 @@ impl Pipeline {
         }
     }
 
-    /// Refits the provisional identification from scratch, if there is one (a panic is reported
-    /// like a job's).
+    /// Refits every provisional identification from scratch (a panic is reported like a job's).
     fn polish_caught(&mut self) {
-        let Some((run, generation)) = self.unpolished.take() else {
-            return;
-        };
+        let mut pending: Vec<(RunId, u64)> = self.unpolished.drain().collect();
+        pending.sort_by_key(|&(_, g)| g);
+        for (run, generation) in pending {
+            self.polish_one(run, generation);
+        }
+    }
+
+    /// Refits one run's provisional identification from scratch.
+    fn polish_one(&mut self, run: RunId, generation: u64) {
         let Pipeline {
             runs, events, waker, ..
         } = self;
@@ -239,9 +247,9 @@ impl Pipeline {
                             }
                     });
                 if current.is_some_and(|i| i.provisional()) {
-                    self.unpolished = Some((run, generation));
-                } else if self.unpolished.is_some_and(|(r, _)| r == run) {
-                    self.unpolished = None;
+                    self.unpolished.insert(run, generation);
+                } else {
+                    self.unpolished.remove(&run);
                 }
             }
             JobKind::Diagnose { settings, rejected } => {
@@ -265,6 +273,7 @@ impl Pipeline {
             }
             JobKind::Forget => {
                 self.runs.remove(&run);
+                self.unpolished.remove(&run);
             }
             JobKind::InjectPanic { stage: at } => {
                 *stage = at;
@@ -331,22 +340,31 @@ impl Pipeline {
     }
 }
 
-/// Keeps every load and forget job in order, and of the analysis jobs only the newest per run.
+/// Keeps every load and forget job in order, and of the analysis jobs and of the diagnosis jobs
+/// only the newest of each kind per run (a diagnosis takes seconds: one queued behind another is
+/// stale before it starts).
 fn newest_only(batch: Vec<Job>) -> Vec<Job> {
-    let mut newest: HashMap<RunId, u64> = HashMap::new();
+    let merged = |job: &Job| match job.kind {
+        JobKind::Analyse { .. } => Some(0_u8),
+        JobKind::Diagnose { .. } => Some(1),
+        _ => None,
+    };
+    let mut newest: HashMap<(RunId, u8), u64> = HashMap::new();
     for job in &batch {
-        if matches!(job.kind, JobKind::Analyse { .. }) {
-            let g = newest.entry(job.run).or_insert(job.generation);
+        if let Some(kind) = merged(job) {
+            let g = newest.entry((job.run, kind)).or_insert(job.generation);
             *g = (*g).max(job.generation);
         }
     }
     batch
         .into_iter()
-        .filter(|job| {
-            !matches!(job.kind, JobKind::Analyse { .. }) || newest.get(&job.run) == Some(&job.generation)
-        })
+        .filter(|job| merged(job).is_none_or(|kind| newest.get(&(job.run, kind)) == Some(&job.generation)))
         .collect()
 }
+
+#[cfg(test)]
+#[path = "worker_queue_tests.rs"]
+mod queue_tests;
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,250 @@
+//! Stationarity: the block identified on consecutive stretches of the record.
+//!
+//! The record is cut into `M` stretches of whole Welch segments ([`stretch_count`]: at least
+//! [`MIN_SEGMENTS`] segments each, at most [`MAX_STRETCHES`] stretches, none when fewer than
+//! [`MIN_STRETCHES`] fit). Each stretch gets its own spectral matrices on the segment's native grid
+//! (no zero-padding: they only feed an order-0 fit) and its own `K e^(-tau s)`, fitted to the H1
+//! estimate `S_xu S_uu^-1` over the block's band with the stretch's own residual weights.
+//!
+//! What they are for:
+//! - **Honest uncertainty**: the spread of the stretches' `K` and `tau` is a measurement of the
+//!   estimate's variance that does not rest on the noise model (coloured reference noise, bins
+//!   that are not independent, a misfit the weights do not know): the standard deviation of the
+//!   whole record's estimate is at least `sd(stretches) / sqrt(M)`.
+//! - **A stationarity check**: a delay that drifts through the record (the block and the stand
+//!   logging on separate clocks) shows as a trend of the stretches' delays; a gain that changes
+//!   (temperature, a loose mount) as a spread well beyond the stretches' own uncertainties.
+//!
+//! Units: s, Hz, `K` in block units over input units. A stretch whose fit fails is left out; fewer
+//! than [`MIN_STRETCHES`] fitted stretches give no summary.
+
+use serde::{Deserialize, Serialize};
+
+use super::band::native_bins;
+use super::spectra::BlockSpectra;
+use super::structural::{OrderChoice, ResponseEstimate, StructuralSettings, Weights, fit_structure};
+use nalgebra::Matrix3;
+use num_complex::Complex64;
+
+/// Fewest Welch segments per stretch.
+pub const MIN_SEGMENTS: usize = 6;
+/// Most stretches.
+pub const MAX_STRETCHES: usize = 24;
+/// Fewest stretches for a summary.
+pub const MIN_STRETCHES: usize = 4;
+
+/// One stretch's spectral matrices on the segment's native grid.
+#[derive(Clone, Debug)]
+pub struct StretchSpectra {
+    /// Start and end of the stretch, s from the first sample.
+    pub span_s: [f64; 2],
+    /// Input spectral matrix per native bin.
+    pub s_uu: Vec<Matrix3<Complex64>>,
+    /// Output-input cross-spectral matrix per native bin.
+    pub s_xu: Vec<Matrix3<Complex64>>,
+    /// Output spectral matrix per native bin.
+    pub s_xx: Vec<Matrix3<Complex64>>,
+    /// Equivalent number of averages.
+    pub equivalent_averages: f64,
+}
+
+/// How many stretches a record of `n_segments` Welch segments (`step` apart) is cut into.
+#[must_use]
+pub fn stretch_count(n_segments: usize) -> usize {
+    let m = (n_segments / MIN_SEGMENTS).min(MAX_STRETCHES);
+    if m >= MIN_STRETCHES { m } else { 0 }
+}
+
+/// One stretch's order-0 fit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StretchFit {
+    /// Start and end, s from the first sample.
+    pub span_s: [f64; 2],
+    /// Static gain.
+    #[serde(rename = "K")]
+    pub k: [[f64; 3]; 3],
+    /// Delay, s.
+    pub tau_s: f64,
+    /// Its standard deviation (from the stretch's own fit), s.
+    pub tau_std_s: f64,
+}
+
+/// The stretches' fits and what they say about the whole record.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stationarity {
+    /// Every fitted stretch, in time order.
+    pub stretches: Vec<StretchFit>,
+    /// `sd(K_m) / sqrt(M)` per element: the standard deviation of the whole record's `K` that
+    /// the stretches' spread implies.
+    #[serde(rename = "K_spread_std")]
+    pub k_spread_std: [[f64; 3]; 3],
+    /// `sd(tau_m) / sqrt(M)`, s.
+    pub tau_spread_std_s: f64,
+    /// Least-squares slope of the stretches' delays against time, s per s (the delay grows by
+    /// this much each second; 1e-6 is 1 ppm of clock rate).
+    pub tau_trend: f64,
+    /// Its standard deviation (from the residuals about the line).
+    pub tau_trend_std: f64,
+}
+
+impl Stationarity {
+    /// Whether the delay's trend is significant (beyond 4 of its standard deviations) and
+    /// material (over the record it moves the delay by more than 3 standard deviations of a
+    /// stretch's delay).
+    #[must_use]
+    pub fn drifts(&self) -> bool {
+        let (Some(first), Some(last)) = (self.stretches.first(), self.stretches.last()) else {
+            return false;
+        };
+        let duration = last.span_s[1] - first.span_s[0];
+        let median_std = {
+            let mut s: Vec<f64> = self.stretches.iter().map(|s| s.tau_std_s).collect();
+            s.sort_by(f64::total_cmp);
+            s[s.len() / 2]
+        };
+        self.tau_trend.abs() > 4.0 * self.tau_trend_std
+            && (self.tau_trend * duration).abs() > 3.0 * median_std
+    }
+}
+
+/// Fits every stretch of `spectra` over `band_hz` and summarises them; `None` without stretches
+/// or with fewer than [`MIN_STRETCHES`] fitted.
+#[must_use]
+pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Stationarity> {
+    let native = native_bins(spectra, band_hz);
+    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
+    let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
+    let stretches: Vec<StretchFit> = spectra
+        .stretches
+        .iter()
+        .filter_map(|s| fit_stretch(s, &native, step, &frequency_hz))
+        .collect();
+    let m = stretches.len();
+    if m < MIN_STRETCHES {
+        return None;
+    }
+    let spread = |values: &dyn Fn(&StretchFit) -> f64| {
+        let mean = stretches.iter().map(values).sum::<f64>() / m as f64;
+        let var = stretches.iter().map(|s| (values(s) - mean).powi(2)).sum::<f64>() / (m - 1) as f64;
+        (var / m as f64).sqrt()
+    };
+    let k_spread_std = std::array::from_fn(|i| std::array::from_fn(|j| spread(&|s: &StretchFit| s.k[i][j])));
+    let tau_spread_std_s = spread(&|s: &StretchFit| s.tau_s);
+    let t: Vec<f64> = stretches
+        .iter()
+        .map(|s| 0.5 * (s.span_s[0] + s.span_s[1]))
+        .collect();
+    let y: Vec<f64> = stretches.iter().map(|s| s.tau_s).collect();
+    let (tau_trend, tau_trend_std) = line_slope(&t, &y);
+    Some(Stationarity {
+        stretches,
+        k_spread_std,
+        tau_spread_std_s,
+        tau_trend,
+        tau_trend_std,
+    })
+}
+
+/// Ordinary least-squares slope of `y` on `t` and its standard deviation from the residuals.
+fn line_slope(t: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = t.len() as f64;
+    let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let stt: f64 = t.iter().map(|v| (v - tm).powi(2)).sum();
+    if stt <= 0.0 || n < 3.0 {
+        return (0.0, f64::INFINITY);
+    }
+    let slope = t.iter().zip(y).map(|(a, b)| (a - tm) * (b - ym)).sum::<f64>() / stt;
+    let rss: f64 = t
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (b - ym - slope * (a - tm)).powi(2))
+        .sum();
+    (slope, (rss / (n - 2.0) / stt).sqrt())
+}
+
+/// The order-0 fit of one stretch over the native band bins (`native` indexes the padded grid,
+/// `step` apart; the stretch holds every native bin).
+fn fit_stretch(
+    s: &StretchSpectra,
+    native: &[usize],
+    step: usize,
+    frequency_hz: &[f64],
+) -> Option<StretchFit> {
+    let dof = (s.equivalent_averages - 3.0).max(1.0);
+    let mut response = Vec::with_capacity(native.len());
+    let mut weights = Vec::with_capacity(native.len());
+    for &k in native {
+        let b = k / step;
+        let s_uu = (s.s_uu.get(b)? + s.s_uu.get(b)?.adjoint()) * Complex64::from(0.5);
+        let inv = s_uu.try_inverse()?;
+        let w = s.s_xu[b] * inv;
+        let residual = s.s_xx[b] - w * s.s_xu[b].adjoint();
+        response.push(w);
+        weights.push(std::array::from_fn(|i| {
+            s_uu * Complex64::from(dof / residual[(i, i)].re.max(f64::MIN_POSITIVE))
+        }));
+    }
+    let input = ResponseEstimate {
+        frequency_hz,
+        response: &response,
+        weights: Weights::RowWeight(&weights),
+    };
+    let fit = fit_structure(&input, OrderChoice::Fixed(0), &StructuralSettings::default()).ok()?;
+    Some(StretchFit {
+        span_s: s.span_s,
+        k: fit.k,
+        tau_s: fit.tau_s,
+        tau_std_s: fit.tau_std_s,
+    })
+}
+
+/// Widens `fit`'s standard deviations of `K` and `tau` (and their ppm and mrad) to at least what
+/// the stretches' spread implies.
+pub fn widen(fit: &mut super::structural::StructuralFit, st: &Stationarity) {
+    for i in 0..3 {
+        for j in 0..3 {
+            let s = fit.k_std[i][j].max(st.k_spread_std[i][j]);
+            fit.k_std[i][j] = s;
+            if i == j {
+                fit.scale_factor_error_std_ppm[i] = s * 1e6;
+            } else {
+                fit.misalignment_std_mrad[i][j] = s * 1e3;
+            }
+        }
+    }
+    fit.tau_std_s = fit.tau_std_s.max(st.tau_spread_std_s);
+}
+
+/// The stationarity of a block's spectra for the last band asked, kept with the spectra: it does
+/// not depend on A, Lambda or the order, so a retune reuses it.
+#[derive(Debug, Default)]
+pub struct StationarityCache(std::sync::Mutex<Option<CachedStationarity>>);
+
+/// The band's bits and the stationarity found for it.
+type CachedStationarity = ([u64; 2], Option<std::sync::Arc<Stationarity>>);
+
+impl Clone for StationarityCache {
+    fn clone(&self) -> Self {
+        Self(std::sync::Mutex::new(self.0.lock().ok().and_then(|g| g.clone())))
+    }
+}
+
+/// [`stationarity`], cached in `spectra` per band.
+#[must_use]
+pub fn cached_stationarity(
+    spectra: &BlockSpectra,
+    band_hz: [f64; 2],
+) -> Option<std::sync::Arc<Stationarity>> {
+    let key = band_hz.map(f64::to_bits);
+    if let Ok(guard) = spectra.stationarity_cache.0.lock()
+        && let Some((k, value)) = guard.as_ref()
+        && *k == key
+    {
+        return value.clone();
+    }
+    let value = stationarity(spectra, band_hz).map(std::sync::Arc::new);
+    if let Ok(mut guard) = spectra.stationarity_cache.0.lock() {
+        *guard = Some((key, value.clone()));
+    }
+    value
+}

@@ -1,0 +1,108 @@
+//! The stationarity check: the block identified on stretches of the record. A delay that drifts
+//! (the block's clock running at `1 + d` against the stand's) is reported with its rate; a clean
+//! run is not flagged, and its stretches agree with the whole record.
+
+use imu_attest::ident::identify::identify_run;
+use imu_attest::ident::settings::Settings;
+use imu_attest::ident::warnings::IdentWarning;
+use imu_attest::run::{LoadOptions, load};
+use imu_attest::sim::regime::Regime;
+use imu_attest::sim::write::write_run;
+use imu_attest::sim::{SimConfig, SimulatedRun, simulate};
+
+/// 8-point Lagrange interpolation of `x` (sampled at `rate`) at time `t`, clamped at the ends.
+fn lagrange(x: &[f64], rate: f64, t: f64) -> f64 {
+    let pos = t * rate;
+    let base = pos.floor() as isize - 3;
+    let mut sum = 0.0;
+    for m in 0..8 {
+        let i = (base + m).clamp(0, x.len() as isize - 1) as usize;
+        let mut w = 1.0;
+        for q in 0..8 {
+            if q != m {
+                w *= (pos - (base + q) as f64) / (m - q) as f64;
+            }
+        }
+        sum += w * x[i];
+    }
+    sum
+}
+
+fn simulated(regime: Regime, seed: u64) -> SimulatedRun {
+    let mut config = SimConfig::new(regime);
+    config.seed = seed;
+    config.duration_s = 300.0;
+    simulate(&config).expect("simulated")
+}
+
+/// The gyro's samples taken on a clock running at `1 + drift`: sample `i` holds the output at
+/// `i / (fs (1 + drift))` of the stand's time, so the delay grows by `drift` per second.
+fn drifted(mut sim: SimulatedRun, drift: f64) -> SimulatedRun {
+    let rate = 1.0 / (sim.time_s[1] - sim.time_s[0]);
+    if let Some(g) = sim.gyro.as_mut() {
+        for c in g.iter_mut() {
+            let original = c.clone();
+            for (i, v) in c.iter_mut().enumerate() {
+                *v = lagrange(&original, rate, i as f64 / rate * (1.0 - drift));
+            }
+        }
+    }
+    sim
+}
+
+fn gyro_drift(sim: &SimulatedRun) -> (Option<f64>, imu_attest::ident::stretches::Stationarity) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("run.csv");
+    write_run(sim, &path).expect("written");
+    let run = load(&path, &LoadOptions::default()).expect("loads");
+    let id = identify_run(&run, &Settings::default()).expect("identified");
+    let gyro = id.blocks.into_iter().next().expect("gyro first");
+    let drift = gyro.warnings.iter().find_map(|w| match w {
+        IdentWarning::DelayDrift { trend, .. } => Some(*trend),
+        _ => None,
+    });
+    (
+        drift,
+        (*gyro.stationarity.expect("300 s is long enough to cut")).clone(),
+    )
+}
+
+#[test]
+fn a_drifting_delay_is_reported_with_its_rate() {
+    for (regime, seed, ppm) in [
+        (Regime::Cruise, 41, 20.0),
+        (Regime::Approach, 42, 50.0),
+        (Regime::TurbulentCruise, 43, 200.0),
+    ] {
+        let (drift, st) = gyro_drift(&drifted(simulated(regime, seed), ppm * 1e-6));
+        let found = drift.unwrap_or_else(|| panic!("{regime}, {ppm} ppm: no drift warning ({st:?})"));
+        eprintln!("{regime}: {ppm} ppm -> {:.1} ppm", found * 1e6);
+        assert!(
+            (found * 1e6 / ppm - 1.0).abs() < 0.2,
+            "{regime}: {ppm} ppm found as {}",
+            found * 1e6
+        );
+    }
+}
+
+#[test]
+fn clean_runs_do_not_drift_and_their_stretches_agree() {
+    for (k, regime) in Regime::ALL.into_iter().enumerate() {
+        let sim = simulated(regime, 51 + k as u64);
+        let tau = sim.sidecar.truth.gyro.as_ref().expect("gyro").tau_s;
+        let (drift, st) = gyro_drift(&sim);
+        assert!(drift.is_none(), "{regime}: false drift {drift:?}");
+        assert!(
+            st.stretches.len() >= 4,
+            "{regime}: {} stretches",
+            st.stretches.len()
+        );
+        // Every stretch's delay within 5 of its own standard deviations of the truth.
+        for s in &st.stretches {
+            assert!(
+                (s.tau_s - tau).abs() < 5.0 * s.tau_std_s,
+                "{regime}: {s:?} vs {tau}"
+            );
+        }
+    }
+}

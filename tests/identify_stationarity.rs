@@ -6,27 +6,10 @@ use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::Settings;
 use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::run::{LoadOptions, load};
+use imu_attest::sim::interp::lagrange;
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, SimulatedRun, simulate};
-
-/// 8-point Lagrange interpolation of `x` (sampled at `rate`) at time `t`, clamped at the ends.
-fn lagrange(x: &[f64], rate: f64, t: f64) -> f64 {
-    let pos = t * rate;
-    let base = pos.floor() as isize - 3;
-    let mut sum = 0.0;
-    for m in 0..8 {
-        let i = (base + m).clamp(0, x.len() as isize - 1) as usize;
-        let mut w = 1.0;
-        for q in 0..8 {
-            if q != m {
-                w *= (pos - (base + q) as f64) / (m - q) as f64;
-            }
-        }
-        sum += w * x[i];
-    }
-    sum
-}
 
 fn simulated(regime: Regime, seed: u64) -> SimulatedRun {
     let mut config = SimConfig::new(regime);

@@ -10,6 +10,7 @@
 
 pub mod block;
 pub mod effect;
+pub mod interp;
 pub mod regime;
 pub mod stand;
 pub mod synth;

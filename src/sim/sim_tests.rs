@@ -12,24 +12,7 @@ fn config(regime: Regime, seed: u64, duration_s: f64, effects: &[&str]) -> SimCo
     c
 }
 
-/// 8-point Lagrange interpolation of `x` (sampled at `rate`) at time `t`: an independent way to
-/// delay a smooth, oversampled signal.
-fn lagrange(x: &[f64], rate: f64, t: f64) -> f64 {
-    let pos = t * rate;
-    let base = pos.floor() as isize - 3;
-    let mut sum = 0.0;
-    for m in 0..8 {
-        let i = (base + m).clamp(0, x.len() as isize - 1) as usize;
-        let mut w = 1.0;
-        for q in 0..8 {
-            if q != m {
-                w *= (pos - (base + q) as f64) / (m - q) as f64;
-            }
-        }
-        sum += w * x[i];
-    }
-    sum
-}
+use super::interp::lagrange;
 
 fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len() as f64

@@ -11,6 +11,7 @@ pub mod cli;
 pub mod compare;
 pub mod diagnose;
 pub mod fourier;
+#[cfg(feature = "gui")]
 pub mod gui;
 pub mod ident;
 pub mod model;

@@ -115,6 +115,11 @@ fn gui(paths: &[String]) -> Result<(), CliError> {
     if let Some(flag) = paths.iter().find(|p| p.starts_with('-')) {
         return Err(CliError::Input(format!("gui: unknown option '{flag}'")));
     }
-    crate::gui::run_app(paths.iter().map(std::path::PathBuf::from).collect())
-        .map_err(|e| CliError::Internal(anyhow::Error::new(e)))
+    #[cfg(feature = "gui")]
+    return crate::gui::run_app(paths.iter().map(std::path::PathBuf::from).collect())
+        .map_err(|e| CliError::Internal(anyhow::Error::new(e)));
+    #[cfg(not(feature = "gui"))]
+    Err(CliError::Input(
+        "this build has no app (built without the `gui` feature); use the commands".into(),
+    ))
 }

@@ -130,3 +130,40 @@ fn a_stale_diagnosis_never_replaces_a_newer_one() {
     assert!(run.diagnosis.is_some() && !run.diagnosing);
     assert_eq!(run.diagnosis_generation, newest);
 }
+
+/// The app and `identify` give the same model file, byte for byte, for the same run and
+/// settings: one pipeline behind both (issue 12). A real run and the bundled sample.
+#[test]
+fn the_app_exports_the_model_file_identify_writes() {
+    use imu_attest::gui::{Command, sample_run_path};
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (k, path) in [sample_run_path().expect("sample"), real("broad25_tapping")]
+        .into_iter()
+        .enumerate()
+    {
+        let mut harness = app(vec![path.clone()]);
+        let exported = dir.path().join(format!("app{k}.json"));
+        harness
+            .state_mut()
+            .push_command(Command::ExportModel(Some(exported.clone())));
+        harness.run_steps(2);
+        let written = dir.path().join(format!("cli{k}.json"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+            .arg("identify")
+            .arg(&path)
+            .arg("--out")
+            .arg(&written)
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        let (a, b) = (
+            std::fs::read(&exported).expect("exported"),
+            std::fs::read(&written).expect("written"),
+        );
+        assert!(
+            a == b,
+            "{}: the app's export differs from identify's file",
+            path.display()
+        );
+    }
+}

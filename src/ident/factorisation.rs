@@ -99,8 +99,8 @@ pub struct Factorisation {
     pub converged: bool,
 }
 
-fn factor_error(e: impl std::fmt::Display) -> IdentError {
-    IdentError::Factor(e.to_string())
+fn factor_error(e: impl Into<super::FactorStageError>) -> IdentError {
+    IdentError::Factor(e.into())
 }
 
 /// Runs the factorisation stage on a block's spectra.

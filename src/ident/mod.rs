@@ -23,7 +23,7 @@ pub mod wiener;
 pub enum IdentError {
     /// A spectral factorisation was refused or could not be inverted.
     #[error("spectral factorisation failed: {0}")]
-    Factor(String),
+    Factor(#[from] FactorStageError),
     /// No Welch bin inside the analysis band.
     #[error("no frequency bin between {low} and {high} Hz: widen the band or lengthen the segment")]
     EmptyBand {
@@ -91,6 +91,20 @@ pub enum IdentError {
     /// A matrix that must be inverted is singular.
     #[error("{0} is singular")]
     Singular(&'static str),
+}
+
+/// What failed inside the factorisation stage (the leaf error, kept as it is).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum FactorStageError {
+    /// Wilson's factorisation or the factor's inverse.
+    #[error(transparent)]
+    Wilson(#[from] crate::spectral::factor::FactorError),
+    /// The one-sided to two-sided grid.
+    #[error(transparent)]
+    Grid(#[from] crate::spectral::grid::GridError),
+    /// The causal projection.
+    #[error(transparent)]
+    Causal(#[from] crate::spectral::causal::CausalError),
 }
 
 impl IdentError {

@@ -216,3 +216,44 @@ fn simulate_records_the_fault_in_the_sidecar_only_when_asked() {
         assert!(err.contains(needle), "{bad}: {err}");
     }
 }
+
+#[test]
+fn identify_writes_the_faults_into_the_model_and_warns() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let model = |fault: Option<&str>, name: &str| {
+        let run = dir.path().join(format!("{name}.csv"));
+        let run_s = run.to_string_lossy().into_owned();
+        let mut argv = vec![
+            "simulate",
+            "--regime",
+            "cruise",
+            "--duration",
+            "60",
+            "--out",
+            &run_s,
+        ];
+        if let Some(f) = fault {
+            argv.extend(["--fault", f]);
+        }
+        assert_eq!(imu_attest(&argv).status.code(), Some(0));
+        let out = dir.path().join(format!("{name}.model.json"));
+        let o = imu_attest(&["identify", &run_s, "--out", &out.to_string_lossy()]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(0), "{err}");
+        let text = std::fs::read_to_string(&out).expect("a model");
+        let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        (json, err)
+    };
+    let (clean, err) = model(None, "clean");
+    assert!(clean.get("recording_faults").is_none(), "{err}");
+    assert!(!err.contains("glitch"), "{err}");
+    let (glitched, err) = model(Some("glitch"), "glitched");
+    let faults = glitched["recording_faults"].as_array().expect("recording_faults");
+    assert_eq!(faults.len(), 1, "{faults:?}");
+    assert_eq!(faults[0]["kind"], "glitch");
+    assert_eq!(faults[0]["channel"], "gx");
+    assert!(err.contains("imu-attest: warning: glitch in gx at t = "), "{err}");
+    // The contract's fields are still there.
+    assert_eq!(glitched["schema"], clean["schema"]);
+    assert!(glitched["blocks"]["gyro"]["K"].is_array());
+}

@@ -26,14 +26,24 @@ pub mod robust;
 
 use std::fmt;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use channel::Channel;
 
 use crate::run::Run;
 
+/// Which extreme of a channel is clipped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    /// The maximum.
+    Max,
+    /// The minimum.
+    Min,
+}
+
 /// A fault of the recording itself, found in one channel.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum RecordingFault {
     /// An isolated outlier of 1-3 samples.
@@ -68,8 +78,8 @@ pub enum RecordingFault {
     Clipping {
         /// The channel.
         channel: Channel,
-        /// `"max"` or `"min"`.
-        side: &'static str,
+        /// Which extreme.
+        side: Side,
         /// The extreme value, channel units.
         level: f64,
         /// Runs of 3 or more samples at the level.
@@ -135,9 +145,10 @@ impl fmt::Display for RecordingFault {
                 first_time_s,
             } => write!(
                 f,
-                "clipping in {}: {flat_tops} flat tops at its {side}imum {level:.6e} {} ({samples} \
+                "clipping in {}: {flat_tops} flat tops at its {} {level:.6e} {} ({samples} \
                  samples), from t = {first_time_s:.4} s; results using {} are unreliable",
                 channel.name(),
+                if *side == Side::Max { "maximum" } else { "minimum" },
                 channel.unit(),
                 channel.name()
             ),
@@ -181,7 +192,7 @@ pub fn detect_channel(channel: Channel, time_s: &[f64], x: &[f64]) -> Vec<Record
     }));
     faults.extend(clips.into_iter().map(|c| RecordingFault::Clipping {
         channel,
-        side: if c.at_max { "max" } else { "min" },
+        side: if c.at_max { Side::Max } else { Side::Min },
         level: c.level,
         flat_tops: c.flat_tops,
         samples: c.samples,

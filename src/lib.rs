@@ -10,6 +10,7 @@ pub mod block;
 pub mod cli;
 pub mod compare;
 pub mod diagnose;
+pub mod faults;
 pub mod fourier;
 #[cfg(feature = "gui")]
 pub mod gui;

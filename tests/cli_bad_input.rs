@@ -239,6 +239,11 @@ fn more_bad_inputs_name_file_line_and_column() {
             &[":2:", "has 8 fields, header has 7"],
         ),
         (
+            "angle_jump.csv",
+            format!("{HEADER}\n{}0.4,0.01,1.52,0.03,0.1,0.2,0.3\n", good_rows(40)).into_bytes(),
+            &[":42:3 (column 'yaw')", "angle jumps by 1.500 rad", "not a wrap"],
+        ),
+        (
             "time_span.csv",
             std::fs::read(
                 Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -336,4 +341,29 @@ fn a_run_refused_after_loading_exits_2() {
         assert!(stderr.contains("short.csv"), "{stderr}");
         assert!(!out.exists());
     }
+}
+
+/// Angles wrapped into (-pi, pi] load unwrapped, with a notice naming the column and the first
+/// wrap's line.
+#[test]
+fn wrapped_angles_are_unwrapped_with_a_notice() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows: String = (0..40)
+        .map(|i| {
+            let yaw = 3.0 + 0.02 * f64::from(i);
+            let wrapped = if yaw > std::f64::consts::PI {
+                yaw - std::f64::consts::TAU
+            } else {
+                yaw
+            };
+            format!("{},0.01,{wrapped},0.03,0.1,0.2,0.3\n", f64::from(i) * 0.01)
+        })
+        .collect();
+    let p = write(dir.path(), "wrapped.csv", format!("{HEADER}\n{rows}").as_bytes());
+    let (code, err) = inspect(&p);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        err.contains("column 'yaw' wraps around a full turn 1 time (the first at line 10 of wrapped.csv)"),
+        "{err}"
+    );
 }

@@ -246,12 +246,21 @@ fn varied_number_forms_load_as_str_parse_reads_them() {
     let expected = reference_columns(&text, ALL.len());
     assert_eq!(expected[0].len(), 3000);
     let path = write(dir.path(), "varied.csv", &text);
+    // Angles of random sizes jump: kept as read, not unwrapped or refused.
+    let as_read = |chunk_bytes| LoadOptions {
+        max_angle_step_rad: None,
+        ..chunked(chunk_bytes)
+    };
     for chunk_bytes in [8 << 20, 4096, 333, 61] {
-        let run = load(&path, &chunked(chunk_bytes)).unwrap();
+        let run = load(&path, &as_read(chunk_bytes)).unwrap();
         assert_columns(&run, &ALL, &expected);
     }
     let gz = write(dir.path(), "varied.csv.gz", gzip(text.as_bytes()));
-    assert_columns(&load(&gz, &chunked(777)).unwrap(), &ALL, &expected);
+    assert_columns(&load(&gz, &as_read(777)).unwrap(), &ALL, &expected);
+    assert!(matches!(
+        load(&path, &chunked(4096)),
+        Err(LoadError::AngleJump { line, .. }) if line > 2
+    ));
 }
 
 #[test]

@@ -76,6 +76,9 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
         }
     }
     let model = Model::from_identification(&run, &settings, &id);
+    for fault in &model.recording_faults {
+        eprintln!("imu-attest: warning: {fault}");
+    }
     model
         .check_finite()
         .map_err(|e| CliError::Internal(anyhow::anyhow!("model not written: {e}")))?;

@@ -49,7 +49,8 @@ usage:
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel]
                       [--stand real] [--angle-latency S] [--angle-band-hz HZ]
-                      [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ] --out RUN.csv
+                      [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
+                      [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv
   imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
   imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json

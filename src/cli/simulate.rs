@@ -1,12 +1,14 @@
 //! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
-//! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ] --out RUN.csv`
+//! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
+//! [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv`
 
 use std::path::Path;
 
 use super::{Args, CliError};
 use crate::run::sidecar_path;
 use crate::sim::effect::{Block, EffectSpec};
+use crate::sim::fault::FaultSpec;
 use crate::sim::regime::Regime;
 use crate::sim::stand::StandImperfections;
 use crate::sim::write::write_run_with_progress;
@@ -25,6 +27,12 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         config.effects.push(
             spec.parse::<EffectSpec>()
                 .map_err(|e| CliError::Input(format!("--effect {spec}: {e}")))?,
+        );
+    }
+    for spec in args.all("fault") {
+        config.faults.push(
+            spec.parse::<FaultSpec>()
+                .map_err(|e| CliError::Input(format!("--fault {spec}: {e}")))?,
         );
     }
     if let Some(list) = args.get("blocks") {

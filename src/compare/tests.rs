@@ -67,6 +67,7 @@ fn model(regime: &str, blocks: Vec<(&str, BlockModel)>) -> Model {
             .into_iter()
             .map(|(n, b)| (n.to_owned(), b))
             .collect::<BTreeMap<_, _>>(),
+        recording_faults: Vec::new(),
     }
 }
 

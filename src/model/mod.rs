@@ -17,6 +17,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use crate::faults::RecordingFault;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
@@ -39,6 +40,9 @@ pub struct Model {
     pub settings: Settings,
     /// One entry per block, keyed `"gyro"` / `"accel"`.
     pub blocks: BTreeMap<String, BlockModel>,
+    /// Faults of the recording itself (`faults::detect`), absent when none was found.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recording_faults: Vec<RecordingFault>,
 }
 
 /// Where the model came from.
@@ -256,6 +260,7 @@ impl Model {
                 .iter()
                 .map(|b| (b.block.name().to_owned(), BlockModel::from_identification(b)))
                 .collect(),
+            recording_faults: crate::faults::detect(run),
         }
     }
 
@@ -329,6 +334,7 @@ mod tests {
             },
             settings: Settings::default(),
             blocks: BTreeMap::new(),
+            recording_faults: Vec::new(),
         }
     }
 

@@ -187,6 +187,24 @@ pub enum LoadError {
         /// Last time, s.
         last: f64,
     },
+    /// An angle steps further between two samples than any stand moves, after removing whole
+    /// turns (wraps): a recording fault.
+    #[error("{}:{line}:{column} (column '{name}'): angle jumps by {step_rad:.3} rad in one sample \
+        (more than {limit_rad} rad, and not a wrap of 2 pi): a recording fault?", path.display())]
+    AngleJump {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the sample after the jump.
+        line: usize,
+        /// 1-based column number of the angle.
+        column: usize,
+        /// The angle's header name (`roll`, `yaw` or `pitch`).
+        name: &'static str,
+        /// The step with whole turns removed, rad.
+        step_rad: f64,
+        /// The largest step accepted, rad.
+        limit_rad: f64,
+    },
     /// Fewer data rows than the minimum.
     #[error("{}: {n} samples, at least {min} needed", path.display())]
     TooFewSamples {

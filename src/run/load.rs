@@ -10,7 +10,7 @@ use super::csv::Rows;
 use super::header::Layout;
 use super::options::{LoadOptions, LoadProgress, MIN_SAMPLES, mem_available_bytes};
 use super::stream::{self, Chunk, Pipe, RawSource, SourceError, TextChunk};
-use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing};
+use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing, wrap};
 
 /// Capacity reserved per estimated row: the estimate from the first block is rough for gzip
 /// (read-ahead) and for files whose numbers grow longer.
@@ -129,7 +129,10 @@ fn load_stored(
     let sample_rate_hz = timing::check_time(path, &cols[layout.t], layout.t, options.sampling_tolerance)?;
     let mut take = |i: usize| std::mem::take(&mut cols[i]);
     let time_s = take(layout.t);
-    let angles = layout.angles.map(&mut take);
+    let mut angles = layout.angles.map(&mut take);
+    if let Some(max_step_rad) = options.max_angle_step_rad {
+        wrap::unwrap_angles(path, &mut angles, layout.angles, max_step_rad, &mut notices)?;
+    }
     let gyro = layout.gyro.map(|c| c.map(&mut take));
     let accel = layout.accel.map(|c| c.map(&mut take));
     let extra = layout

@@ -10,6 +10,9 @@
 //!   [`MIN_SAMPLES`] rows is [`LoadError::TooFewSamples`]. A loaded run is never empty.
 //! - **Time**: strictly increasing and uniform within [`LoadOptions::sampling_tolerance`] (1 %) of
 //!   the nominal step (median of the first steps).
+//! - **Angles**: wrapped columns ((-π, π] or [0, 2π)) are unwrapped with a notice; a step over
+//!   [`LoadOptions::max_angle_step_rad`] (1 rad) that is not a wrap is [`LoadError::AngleJump`]
+//!   (`wrap`).
 //! - **Errors**: the first problem in file order, as one [`LoadError`] naming file, line and column
 //!   where they apply. Bad input never panics.
 //!
@@ -34,6 +37,7 @@ mod piece;
 mod sidecar;
 mod stream;
 mod timing;
+mod wrap;
 
 use std::path::PathBuf;
 

@@ -15,6 +15,10 @@ pub struct LoadOptions {
     /// Memory the decoded columns may take, bytes; `None`: `MemAvailable` of `/proc/meminfo`
     /// where readable, otherwise no limit.
     pub memory_limit_bytes: Option<u64>,
+    /// Largest step of an angle between two samples once whole turns are removed, rad (default
+    /// 1: no stand moves a radian in one sample); a larger one is refused (`run::wrap`). `None`:
+    /// the angles are kept exactly as read, neither unwrapped nor checked (parser tests).
+    pub max_angle_step_rad: Option<f64>,
 }
 
 impl Default for LoadOptions {
@@ -23,6 +27,7 @@ impl Default for LoadOptions {
             chunk_bytes: 2 << 20,
             sampling_tolerance: 0.01,
             memory_limit_bytes: None,
+            max_angle_step_rad: Some(1.0),
         }
     }
 }

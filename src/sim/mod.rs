@@ -10,6 +10,7 @@
 
 pub mod block;
 pub mod effect;
+pub mod fault;
 pub mod interp;
 pub mod regime;
 pub mod stand;
@@ -22,6 +23,7 @@ use serde::Serialize;
 
 use self::block::{BlockDrive, block_outputs, draw_block, draw_effect};
 use self::effect::{Block, EffectSpec};
+use self::fault::FaultSpec;
 use self::regime::Regime;
 use self::stand::StandImperfections;
 use self::synth::{Grid, resonant_lowpass};
@@ -56,6 +58,8 @@ pub struct SimConfig {
     pub blocks: Vec<Block>,
     /// Imperfections of the stand's angle measurement (none by default).
     pub stand: StandImperfections,
+    /// Recording faults to inject into the finished recording, in order (none by default).
+    pub faults: Vec<FaultSpec>,
 }
 
 impl SimConfig {
@@ -70,6 +74,7 @@ impl SimConfig {
             effects: Vec::new(),
             blocks: Block::BOTH.to_vec(),
             stand: StandImperfections::default(),
+            faults: Vec::new(),
         }
     }
 }
@@ -106,6 +111,14 @@ pub enum SimError {
         effect: &'static str,
         /// Block name.
         block: &'static str,
+    },
+    /// A fault asks for a channel it cannot go to.
+    #[error("fault in channel '{channel}': {why}")]
+    FaultChannel {
+        /// The channel's name.
+        channel: &'static str,
+        /// Why not.
+        why: &'static str,
     },
 }
 
@@ -291,6 +304,7 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
         gyro: gyro_truth,
         accel: accel_truth,
         stand: config.stand,
+        faults: Vec::new(),
     };
     let sidecar = SimSidecar {
         format: "stand-run/1",
@@ -302,14 +316,19 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
         notes: notes(config),
         truth,
     };
-    Ok(SimulatedRun {
+    let mut run = SimulatedRun {
         time_s: (0..n).map(|i| i as f64 / fs).collect(),
         angles,
         gyro,
         accel,
         sidecar,
         true_motion,
-    })
+    };
+    for (k, &spec) in config.faults.iter().enumerate() {
+        let truth = fault::inject(&mut run, spec, &mut root.fork(40 + k as u64))?;
+        run.sidecar.truth.faults.push(truth);
+    }
+    Ok(run)
 }
 
 fn notes(config: &SimConfig) -> String {
@@ -325,8 +344,16 @@ fn notes(config: &SimConfig) -> String {
             )
         })
         .collect();
+    let faults = if config.faults.is_empty() {
+        String::new()
+    } else {
+        format!(
+            ", {} recording fault(s) injected (see truth.faults)",
+            config.faults.len()
+        )
+    };
     format!(
-        "simulated by imu-attest {}: regime {}, {} s at {} Hz, seed {}, effects [{}]",
+        "simulated by imu-attest {}: regime {}, {} s at {} Hz, seed {}, effects [{}]{faults}",
         env!("CARGO_PKG_VERSION"),
         config.regime.name(),
         config.duration_s,

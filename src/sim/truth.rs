@@ -28,6 +28,9 @@ pub struct Truth {
     /// The stand's angle-measurement imperfections (absent: a perfect stand).
     #[serde(default, skip_serializing_if = "is_perfect")]
     pub stand: super::stand::StandImperfections,
+    /// Recording faults injected (`simulate --fault`), in order (absent: none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<super::fault::FaultTruth>,
 }
 
 fn is_perfect(s: &super::stand::StandImperfections) -> bool {

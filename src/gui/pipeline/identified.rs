@@ -97,6 +97,8 @@ impl Identification {
                 .zip(models)
                 .map(|(b, m)| (b.block.name().to_owned(), m))
                 .collect::<BTreeMap<_, _>>(),
+            // The app's snapshot holds no columns; recording faults are not shown there yet.
+            recording_faults: Vec::new(),
         };
         Self {
             settings,

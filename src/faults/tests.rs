@@ -1,0 +1,130 @@
+use super::glitch::{Glitch, find_glitches};
+use super::hold::{find_clipping, find_held};
+use super::*;
+use crate::rng::Rng;
+
+/// A smooth motion plus white noise of 1e-3, seeded.
+fn signal(seed: u64, n: usize) -> Vec<f64> {
+    let mut rng = Rng::new(seed);
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / 500.0;
+            0.3 * (2.0 * t).sin() + 0.1 * (7.3 * t + 1.0).sin() + 1e-3 * rng.normal()
+        })
+        .collect()
+}
+
+#[test]
+fn clean_signals_have_no_fault() {
+    for seed in 0..5 {
+        let x = signal(seed, 20_000);
+        assert_eq!(find_glitches(&x), Vec::new(), "seed {seed}");
+        assert_eq!(find_held(&x, &[]), None);
+        assert!(find_clipping(&x).is_empty());
+    }
+}
+
+#[test]
+fn glitches_of_one_to_three_samples_are_found_where_they_are() {
+    for k in 1..=3 {
+        for (start, size) in [(5000, 0.05), (12_345, -0.5), (3, 0.2)] {
+            let mut x = signal(k as u64, 20_000);
+            x[start..start + k].iter_mut().for_each(|v| *v += size);
+            let found = find_glitches(&x);
+            if start < 2 {
+                continue;
+            }
+            assert_eq!(found.len(), 1, "k {k} at {start}: {found:?}");
+            let Glitch {
+                start: s,
+                samples,
+                size: got,
+            } = found[0];
+            assert_eq!((s, samples), (start, k), "{found:?}");
+            assert!((got - size).abs() < 0.01 * size.abs() + 5e-3, "{got} vs {size}");
+        }
+    }
+}
+
+#[test]
+fn steps_ringing_bursts_and_small_outliers_are_not_glitches() {
+    let mut step = signal(7, 20_000);
+    step[8000..].iter_mut().for_each(|v| *v += 0.05);
+    assert_eq!(find_glitches(&step), Vec::new());
+    // A tap: a spike followed by a decaying ringing over 20 samples.
+    let mut tap = signal(8, 20_000);
+    for j in 0..20 {
+        tap[9000 + j] += 0.4 * (-(j as f64) / 6.0).exp() * (1.9 * j as f64).cos();
+    }
+    assert_eq!(find_glitches(&tap), Vec::new());
+    // 8 noise deviations: within what the threshold tolerates.
+    let mut small = signal(9, 20_000);
+    small[4000] += 8e-3;
+    assert_eq!(find_glitches(&small), Vec::new());
+}
+
+#[test]
+fn quantised_slow_channels_repeat_by_chance_but_held_samples_are_found() {
+    // A slow angle quantised at 1e-4 with noise of 6 quanta: repeats by chance, nothing held.
+    let q = 1e-4;
+    let mut rng = Rng::new(3);
+    let slow: Vec<f64> = (0..30_000)
+        .map(|i| ((0.02 * (f64::from(i) / 500.0).sin() + 6e-4 * rng.normal()) / q).round() * q)
+        .collect();
+    assert!(
+        slow.windows(2)
+            .filter(|w| w[0].to_bits() == w[1].to_bits())
+            .count()
+            > 500
+    );
+    assert_eq!(find_held(&slow, &[]), None);
+    // Every 100th sample held: 1 %.
+    let mut held = signal(4, 30_000);
+    for i in (50..held.len()).step_by(100) {
+        held[i] = held[i - 1];
+    }
+    let h = find_held(&held, &[]).expect("held samples found");
+    assert_eq!((h.held, h.runs, h.longest, h.first), (300, 300, 1, 50));
+    // One run of 5 repeats on its own.
+    let mut run = signal(5, 30_000);
+    for i in 7001..7006 {
+        run[i] = run[7000];
+    }
+    let h = find_held(&run, &[]).expect("a run of 5");
+    assert_eq!((h.longest, h.first), (5, 7001));
+}
+
+#[test]
+fn flat_tops_at_an_extreme_are_clipping() {
+    let x = signal(6, 20_000);
+    let level = 0.37;
+    let clipped: Vec<f64> = x.iter().map(|v| v.min(level)).collect();
+    let first = x
+        .iter()
+        .position(|v| *v >= level)
+        .expect("the signal exceeds the level");
+    let clips = find_clipping(&clipped);
+    assert_eq!(clips.len(), 1, "{clips:?}");
+    assert!(clips[0].at_max && clips[0].flat_tops >= 2 && clips[0].first == first);
+    // A channel toggling between three levels sits at its extremes legitimately.
+    let toggling: Vec<f64> = (0..5000).map(|i| f64::from((i / 7 % 3) as u8) * 1e-3).collect();
+    assert!(find_clipping(&toggling).is_empty());
+}
+
+#[test]
+fn faults_serialise_with_a_kind_and_read_as_a_sentence() {
+    let fault = RecordingFault::Glitch {
+        channel: Channel::Gx,
+        time_s: 12.5,
+        sample: 6250,
+        samples: 1,
+        size: 50.0,
+    };
+    let json = serde_json::to_value(&fault).expect("serialisable");
+    assert_eq!(json["kind"], "glitch");
+    assert_eq!(json["channel"], "gx");
+    assert_eq!(
+        fault.to_string(),
+        "glitch in gx at t = 12.5000 s (line 6252, 1 sample): +5.0000e1 rad/s off its neighbours"
+    );
+}

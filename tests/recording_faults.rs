@@ -1,0 +1,259 @@
+//! Recording faults (issue 14): each fault `simulate` injects is found in the right channel at the
+//! right time in runs of every regime, written and loaded as a lab would; clean simulated runs and
+//! the three real BROAD runs give no fault at all.
+
+use std::path::{Path, PathBuf};
+
+use imu_attest::faults::{Channel, RecordingFault, detect};
+use imu_attest::run::{LoadOptions, Run, load};
+use imu_attest::sim::fault::{FaultKind, FaultSpec, FaultTruth};
+use imu_attest::sim::regime::Regime;
+use imu_attest::sim::write::write_run;
+use imu_attest::sim::{SimConfig, simulate};
+
+mod binary;
+use binary::imu_attest;
+
+const REGIMES: [Regime; 3] = [Regime::Cruise, Regime::TurbulentCruise, Regime::Approach];
+
+/// Simulates 60 s of `regime` with `faults`, writes it to `dir` and loads it back.
+fn recorded(dir: &Path, regime: Regime, seed: u64, faults: &[FaultSpec]) -> (Run, Vec<FaultTruth>) {
+    let mut config = SimConfig::new(regime);
+    config.duration_s = 60.0;
+    config.seed = seed;
+    config.faults = faults.to_vec();
+    let sim = simulate(&config).expect("simulated");
+    let path = dir.join(format!("{}_{seed}_{}.csv", regime.name(), faults.len()));
+    write_run(&sim, &path).expect("written");
+    let run = load(&path, &LoadOptions::default()).expect("loaded");
+    (run, sim.sidecar.truth.faults)
+}
+
+/// The channel and first sample of an injected fault.
+fn where_injected(truth: &FaultTruth) -> (Channel, usize) {
+    match truth {
+        FaultTruth::Glitch { channel, sample, .. } => (*channel, *sample),
+        FaultTruth::Hold {
+            channel,
+            first_sample,
+            ..
+        }
+        | FaultTruth::Clip {
+            channel,
+            first_sample,
+            ..
+        }
+        | FaultTruth::Wrap {
+            channel,
+            first_sample,
+            ..
+        } => (*channel, *first_sample),
+    }
+}
+
+/// The time a detected fault gives, s.
+fn time_of(fault: &RecordingFault) -> f64 {
+    match fault {
+        RecordingFault::Glitch { time_s, .. } => *time_s,
+        RecordingFault::HeldSamples { first_time_s, .. } | RecordingFault::Clipping { first_time_s, .. } => {
+            *first_time_s
+        }
+    }
+}
+
+#[test]
+fn each_injected_fault_is_found_in_every_regime() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let specs = [
+        (FaultKind::Glitch, None),
+        (FaultKind::Hold, None),
+        (FaultKind::Clip, None),
+        (FaultKind::Glitch, Some(Channel::Roll)),
+        (FaultKind::Glitch, Some(Channel::Az)),
+        (FaultKind::Hold, Some(Channel::Ay)),
+        (FaultKind::Clip, Some(Channel::Pitch)),
+    ];
+    for (r, regime) in REGIMES.into_iter().enumerate() {
+        for (k, &(kind, channel)) in specs.iter().enumerate() {
+            let seed = 1000 + 10 * r as u64 + k as u64;
+            let (run, truth) = recorded(dir.path(), regime, seed, &[FaultSpec { kind, channel }]);
+            let (channel, sample) = where_injected(&truth[0]);
+            let found = detect(&run);
+            let what = format!(
+                "{} seed {seed}: injected {:?}, found {found:?}",
+                regime.name(),
+                truth[0]
+            );
+            assert_eq!(found.len(), 1, "{what}");
+            assert_eq!(found[0].channel(), channel, "{what}");
+            let kind_ok = matches!(
+                (kind, &found[0]),
+                (FaultKind::Glitch, RecordingFault::Glitch { .. })
+                    | (FaultKind::Hold, RecordingFault::HeldSamples { .. })
+                    | (FaultKind::Clip, RecordingFault::Clipping { .. })
+            );
+            assert!(kind_ok, "{what}");
+            let off = (time_of(&found[0]) - run.time_s[sample]).abs() * run.sample_rate_hz;
+            assert!(off <= 2.0 + 1e-6, "{what}: {off} samples off");
+            eprintln!("{}: {}", regime.name(), found[0]);
+        }
+    }
+}
+
+#[test]
+fn clean_simulated_runs_have_no_fault() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    for seed in 101..=110 {
+        let regime = REGIMES[seed as usize % 3];
+        let (run, _) = recorded(dir.path(), regime, seed, &[]);
+        let found = detect(&run);
+        assert!(found.is_empty(), "{} seed {seed}: {found:?}", regime.name());
+    }
+}
+
+#[test]
+fn the_real_runs_have_no_fault() {
+    for name in [
+        "broad07_fast_rotation",
+        "broad11_slow_translation",
+        "broad25_tapping",
+    ] {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/real")
+            .join(format!("{name}.csv.gz"));
+        let run = load(&path, &LoadOptions::default()).expect("the real run loads");
+        let found = detect(&run);
+        assert!(found.is_empty(), "{name}: {found:?}");
+    }
+}
+
+#[test]
+fn an_injected_wrap_is_unwrapped_by_the_loader_at_its_line() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    for (regime, channel) in [
+        (Regime::Cruise, Channel::Roll),
+        (Regime::Approach, Channel::Pitch),
+    ] {
+        let spec = FaultSpec {
+            kind: FaultKind::Wrap,
+            channel: Some(channel),
+        };
+        let (run, truth) = recorded(dir.path(), regime, 7, &[spec]);
+        let FaultTruth::Wrap {
+            wraps, first_sample, ..
+        } = truth[0]
+        else {
+            panic!("a wrap was injected: {truth:?}");
+        };
+        let expected = format!(
+            "column '{}' wraps around a full turn {wraps} times (the first at line {} of",
+            channel.name(),
+            first_sample + 2
+        );
+        assert!(
+            run.notices.iter().any(|n| n.starts_with(&expected)),
+            "{expected}: {:?}",
+            run.notices
+        );
+        let (clean, _) = recorded(dir.path(), regime, 7, &[]);
+        let axis = channel as usize;
+        let d = run.angles[axis]
+            .iter()
+            .zip(&clean.angles[axis])
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        // The wrapped copy is written with 7 significant digits of values up to 2 pi.
+        assert!(d < 1e-5, "{d}");
+        let found = detect(&run);
+        assert!(found.is_empty(), "{found:?}");
+    }
+}
+
+#[test]
+fn simulate_records_the_fault_in_the_sidecar_only_when_asked() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let sidecar = |args: &[&str], name: &str| {
+        let out = dir.path().join(format!("{name}.csv"));
+        let out_s = out.to_string_lossy().into_owned();
+        let mut argv = vec![
+            "simulate",
+            "--regime",
+            "cruise",
+            "--duration",
+            "2",
+            "--out",
+            &out_s,
+        ];
+        argv.extend_from_slice(args);
+        let o = imu_attest(&argv);
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(dir.path().join(format!("{name}.json"))).expect("a sidecar");
+        serde_json::from_str::<serde_json::Value>(&text).expect("JSON")
+    };
+    let clean = sidecar(&[], "clean");
+    assert!(clean["truth"].get("faults").is_none(), "{clean}");
+    let held = sidecar(&["--fault", "hold:gy"], "held");
+    assert_eq!(held["truth"]["faults"][0]["kind"], "hold", "{held}");
+    assert_eq!(held["truth"]["faults"][0]["channel"], "gy", "{held}");
+    for (bad, needle) in [
+        ("wrap:gx", "only an angle wraps"),
+        ("smear", "unknown fault 'smear'"),
+    ] {
+        let out = dir.path().join("bad.csv");
+        let o = imu_attest(&[
+            "simulate",
+            "--regime",
+            "cruise",
+            "--duration",
+            "2",
+            "--fault",
+            bad,
+            "--out",
+            &out.to_string_lossy(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "{bad}: {err}");
+    }
+}
+
+#[test]
+fn identify_writes_the_faults_into_the_model_and_warns() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let model = |fault: Option<&str>, name: &str| {
+        let run = dir.path().join(format!("{name}.csv"));
+        let run_s = run.to_string_lossy().into_owned();
+        let mut argv = vec![
+            "simulate",
+            "--regime",
+            "cruise",
+            "--duration",
+            "60",
+            "--out",
+            &run_s,
+        ];
+        if let Some(f) = fault {
+            argv.extend(["--fault", f]);
+        }
+        assert_eq!(imu_attest(&argv).status.code(), Some(0));
+        let out = dir.path().join(format!("{name}.model.json"));
+        let o = imu_attest(&["identify", &run_s, "--out", &out.to_string_lossy()]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(0), "{err}");
+        let text = std::fs::read_to_string(&out).expect("a model");
+        let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        (json, err)
+    };
+    let (clean, err) = model(None, "clean");
+    assert!(clean.get("recording_faults").is_none(), "{err}");
+    assert!(!err.contains("glitch"), "{err}");
+    let (glitched, err) = model(Some("glitch"), "glitched");
+    let faults = glitched["recording_faults"].as_array().expect("recording_faults");
+    assert_eq!(faults.len(), 1, "{faults:?}");
+    assert_eq!(faults[0]["kind"], "glitch");
+    assert_eq!(faults[0]["channel"], "gx");
+    assert!(err.contains("imu-attest: warning: glitch in gx at t = "), "{err}");
+    // The contract's fields are still there.
+    assert_eq!(glitched["schema"], clean["schema"]);
+    assert!(glitched["blocks"]["gyro"]["K"].is_array());
+}

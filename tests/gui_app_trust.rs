@@ -167,3 +167,35 @@ fn the_app_exports_the_model_file_identify_writes() {
         );
     }
 }
+
+/// A glitch in the recording is shown with the run, in plain words, and the exported model holds
+/// it as `identify`'s does.
+#[test]
+fn a_recording_fault_is_shown_and_exported() {
+    use imu_attest::gui::Command;
+    use imu_attest::sim::fault::FaultSpec;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut config = SimConfig::new(Regime::Approach);
+    config.duration_s = 60.0;
+    config.seed = 33;
+    config.faults = vec!["glitch:gy".parse::<FaultSpec>().expect("a fault spec")];
+    let path = dir.path().join("glitched.csv");
+    write_run(&simulate(&config).expect("simulated"), &path).expect("written");
+    let mut harness = app(vec![path.clone()]);
+    let summary = harness.state().runs()[0].summary.clone().expect("loaded");
+    assert!(!summary.recording_faults.is_empty(), "the glitch is found");
+    let sentence = summary.recording_faults[0].to_string();
+    assert!(sentence.contains("gy"), "{sentence}");
+    harness.get_by_label(&format!("recording fault: {sentence}"));
+    let exported = dir.path().join("m.json");
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(exported.clone())));
+    harness.run_steps(2);
+    let text = std::fs::read_to_string(&exported).expect("exported");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    assert_eq!(
+        v["recording_faults"].as_array().map(Vec::len),
+        Some(summary.recording_faults.len())
+    );
+}

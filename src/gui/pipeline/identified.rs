@@ -98,7 +98,7 @@ impl Identification {
                 .map(|(b, m)| (b.block.name().to_owned(), m))
                 .collect::<BTreeMap<_, _>>(),
             // The app's snapshot holds no columns; recording faults are not shown there yet.
-            recording_faults: Vec::new(),
+            recording_faults: summary.recording_faults.clone(),
         };
         Self {
             settings,

@@ -144,6 +144,9 @@ pub struct RunSummary {
     pub sha256: String,
     /// Loader notices (missing sidecar, unknown columns, ...).
     pub notices: Vec<String>,
+    /// Faults of the recording itself (glitches, held samples, clipping), as `identify` finds
+    /// them: shown with the run and written into the exported model.
+    pub recording_faults: Vec<crate::faults::RecordingFault>,
 }
 
 /// A message from the worker.

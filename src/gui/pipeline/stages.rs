@@ -77,6 +77,7 @@ pub fn split_run(run: Run) -> (RunSummary, Measured, Sidecar) {
         blocks: run.blocks(),
         sha256: run.source.sha256.clone(),
         notices: run.notices.clone(),
+        recording_faults: crate::faults::detect(&run),
     };
     let triple = |names: [&str; 3], cols: [Vec<f64>; 3]| {
         let [a, b, c] = cols;

@@ -61,6 +61,9 @@ pub fn show(ui: &mut egui::Ui, runs: &[RunEntry], selected: Option<RunId>, comma
                 for notice in &s.notices {
                     ui.colored_label(ui.visuals().warn_fg_color, format!("notice: {notice}"));
                 }
+                for fault in &s.recording_faults {
+                    ui.colored_label(ui.visuals().error_fg_color, format!("recording fault: {fault}"));
+                }
                 if let Some(e) = &run.analysis_error {
                     ui.colored_label(ui.visuals().error_fg_color, e);
                 }

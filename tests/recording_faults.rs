@@ -257,3 +257,58 @@ fn identify_writes_the_faults_into_the_model_and_warns() {
     assert_eq!(glitched["schema"], clean["schema"]);
     assert!(glitched["blocks"]["gyro"]["K"].is_array());
 }
+
+#[test]
+fn one_large_gyro_glitch_leaves_k_and_tau_within_their_uncertainty() {
+    use imu_attest::ident::identify::identify_run;
+    use imu_attest::ident::settings::Settings;
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.seed = 5;
+    let mut sim = simulate(&config).expect("simulated");
+    let clean_path = dir.path().join("clean.csv");
+    write_run(&sim, &clean_path).expect("written");
+    let sample = sim.time_s.len() / 3;
+    sim.gyro.as_mut().expect("gyro")[0][sample] += 50.0;
+    let glitched_path = dir.path().join("glitched.csv");
+    write_run(&sim, &glitched_path).expect("written");
+    let clean = load(&clean_path, &LoadOptions::default()).expect("loaded");
+    let glitched = load(&glitched_path, &LoadOptions::default()).expect("loaded");
+    let found = detect(&glitched);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(
+        matches!(found[0], RecordingFault::Glitch { channel: Channel::Gx, sample: s, .. } if s == sample),
+        "{found:?}"
+    );
+    let gyro = |run: &Run| {
+        identify_run(run, &Settings::default())
+            .expect("identified")
+            .blocks
+            .into_iter()
+            .find(|b| b.block.name() == "gyro")
+            .expect("the gyro block")
+            .structural
+    };
+    let (a, b) = (gyro(&clean), gyro(&glitched));
+    for i in 0..3 {
+        for j in 0..3 {
+            let d = (b.k[i][j] - a.k[i][j]).abs();
+            eprintln!(
+                "K[{i}][{j}]: {:.6} vs {:.6} (std {:.2e})",
+                a.k[i][j], b.k[i][j], a.k_std[i][j]
+            );
+            assert!(
+                d <= a.k_std[i][j],
+                "K[{i}][{j}] moved {d:e}, std {:e}",
+                a.k_std[i][j]
+            );
+        }
+    }
+    eprintln!(
+        "tau {:.6} vs {:.6} ms (std {:.2e})",
+        a.tau_s * 1e3,
+        b.tau_s * 1e3,
+        a.tau_std_s * 1e3
+    );
+    assert!((b.tau_s - a.tau_s).abs() <= a.tau_std_s);
+}

@@ -111,3 +111,19 @@ fn bridge(x: &[f64], a: usize, k: usize, sigma: &impl Fn(usize) -> f64) -> Optio
         worst,
     ))
 }
+
+/// Replaces each glitch's samples by the straight line between its neighbours (the identifier's
+/// copy of a channel; the run itself is never changed). Glitches must come from
+/// [`find_glitches`] on the same `x`.
+pub fn bridge_glitches(x: &mut [f64], glitches: &[Glitch]) {
+    for g in glitches {
+        let (a, k) = (g.start, g.samples);
+        if a == 0 || a + k >= x.len() {
+            continue;
+        }
+        let (left, right) = (x[a - 1], x[a + k]);
+        for j in a..a + k {
+            x[j] = left + (right - left) * (j + 1 - a) as f64 / (k + 1) as f64;
+        }
+    }
+}

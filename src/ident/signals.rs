@@ -3,9 +3,11 @@
 //!
 //! Gyro block: `u` = body rate (rad/s), `x` = `gx, gy, gz`. Accelerometer block: `u` = specific
 //! force at the sidecar's declared lever arm with the vertical channel g-compensated (m/s^2),
-//! `x` = `ax, ay, az`.
+//! `x` = `ax, ay, az`. Isolated glitches in the outputs (`faults::glitch`) are bridged by a
+//! straight line in the identifier's copy; glitches in the angles are reported, not bridged.
 
 use crate::block::Block;
+use crate::faults::glitch::{bridge_glitches, find_glitches};
 use crate::run::Run;
 use crate::stand::inputs::{ACCEL_INPUTS, GYRO_INPUTS, accel_input, gyro_input};
 use crate::stand::kinematics::EulerSeries;
@@ -38,7 +40,13 @@ pub struct BlockSignals {
 /// The block's signals, or `None` when the run has no such block.
 #[must_use]
 pub fn block_signals(run: &Run, motion: &EulerSeries, block: Block) -> Option<BlockSignals> {
-    let output = run.outputs(block)?.clone();
+    let mut output = run.outputs(block)?.clone();
+    // Isolated glitches would leak broadband power into every Welch segment they touch: they are
+    // bridged in this copy (and reported by `faults::detect` from the run itself).
+    for x in &mut output {
+        let glitches = find_glitches(x);
+        bridge_glitches(x, &glitches);
+    }
     let input = match block {
         Block::Gyro => gyro_input(motion),
         Block::Accel => accel_input(motion, run.sidecar.accel_lever_arm_m, run.sidecar.g_mps2),

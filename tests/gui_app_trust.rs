@@ -198,4 +198,18 @@ fn a_recording_fault_is_shown_and_exported() {
         v["recording_faults"].as_array().map(Vec::len),
         Some(summary.recording_faults.len())
     );
+    // With the glitch bridged on both paths, the app's file is identify's, byte for byte.
+    let written = dir.path().join("cli.json");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+        .arg("identify")
+        .arg(&path)
+        .arg("--out")
+        .arg(&written)
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        std::fs::read(&written).expect("written") == text.as_bytes(),
+        "app and identify differ"
+    );
 }

@@ -37,16 +37,22 @@ pub struct BlockSignals {
     pub output: [Vec<f64>; 3],
 }
 
-/// The block's signals, or `None` when the run has no such block.
+/// `output` with its isolated glitches bridged by a straight line: they would leak broadband
+/// power into every Welch segment they touch (they are reported by `faults::detect` from the run
+/// itself). Every path to the identifier (the command line, the app) uses this.
 #[must_use]
-pub fn block_signals(run: &Run, motion: &EulerSeries, block: Block) -> Option<BlockSignals> {
-    let mut output = run.outputs(block)?.clone();
-    // Isolated glitches would leak broadband power into every Welch segment they touch: they are
-    // bridged in this copy (and reported by `faults::detect` from the run itself).
+pub fn bridged(mut output: [Vec<f64>; 3]) -> [Vec<f64>; 3] {
     for x in &mut output {
         let glitches = find_glitches(x);
         bridge_glitches(x, &glitches);
     }
+    output
+}
+
+/// The block's signals, or `None` when the run has no such block.
+#[must_use]
+pub fn block_signals(run: &Run, motion: &EulerSeries, block: Block) -> Option<BlockSignals> {
+    let output = bridged(run.outputs(block)?.clone());
     let input = match block {
         Block::Gyro => gyro_input(motion),
         Block::Accel => accel_input(motion, run.sidecar.accel_lever_arm_m, run.sidecar.g_mps2),

@@ -155,7 +155,7 @@ pub fn spectra(
         let signals = BlockSignals {
             block,
             input: motion.inputs(block).each_ref().map(column),
-            output: outputs.each_ref().map(column),
+            output: ident::signals::bridged(outputs.each_ref().map(column)),
         };
         let core = ident::spectra::block_spectra(planner, &signals, sample_rate_hz, welch)?;
         let (inputs, outputs) = channel_names(block);

@@ -36,6 +36,19 @@ fn real(name: &str) -> PathBuf {
         .join(format!("{name}.csv.gz"))
 }
 
+/// The bytes `imu-attest identify RUN --out OUT` writes (exit 0 asserted).
+fn identify_file(run: &Path, out: &Path) -> Vec<u8> {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+        .arg("identify")
+        .arg(run)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::read(out).expect("written")
+}
+
 #[test]
 fn results_show_the_band_the_warnings_and_the_rejected_orders_of_a_real_run() {
     let harness = app(vec![real("broad07_fast_rotation")]);
@@ -147,18 +160,9 @@ fn the_app_exports_the_model_file_identify_writes() {
             .state_mut()
             .push_command(Command::ExportModel(Some(exported.clone())));
         harness.run_steps(2);
-        let written = dir.path().join(format!("cli{k}.json"));
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_imu-attest"))
-            .arg("identify")
-            .arg(&path)
-            .arg("--out")
-            .arg(&written)
-            .output()
-            .expect("runs");
-        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
         let (a, b) = (
             std::fs::read(&exported).expect("exported"),
-            std::fs::read(&written).expect("written"),
+            identify_file(&path, &dir.path().join(format!("cli{k}.json"))),
         );
         assert!(
             a == b,
@@ -199,17 +203,6 @@ fn a_recording_fault_is_shown_and_exported() {
         Some(summary.recording_faults.len())
     );
     // With the glitch bridged on both paths, the app's file is identify's, byte for byte.
-    let written = dir.path().join("cli.json");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_imu-attest"))
-        .arg("identify")
-        .arg(&path)
-        .arg("--out")
-        .arg(&written)
-        .output()
-        .expect("runs");
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(
-        std::fs::read(&written).expect("written") == text.as_bytes(),
-        "app and identify differ"
-    );
+    let written = identify_file(&path, &dir.path().join("cli.json"));
+    assert!(written == text.as_bytes(), "app and identify differ");
 }

@@ -6,22 +6,16 @@ use std::path::PathBuf;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
-use imu_attest::gui::{App, AppOptions, WorkerMode, sample_run_path};
+use imu_attest::gui::{App, WorkerMode, sample_run_path};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, simulate};
 
+#[path = "common/gui.rs"]
+mod gui_common;
+
 fn app(paths: Vec<PathBuf>) -> Harness<'static, App> {
-    let options = AppOptions {
-        mode: WorkerMode::Synchronous,
-        persist: false,
-        ..AppOptions::new(paths)
-    };
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::vec2(1500.0, 950.0))
-        .build_eframe(|cc| App::new(cc, options));
-    harness.run_steps(3);
-    harness
+    gui_common::app(gui_common::options(paths, WorkerMode::Synchronous), 3)
 }
 
 fn diagnose(harness: &mut Harness<'static, App>) {

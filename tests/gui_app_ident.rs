@@ -16,20 +16,12 @@ use imu_attest::ident::settings::{LambdaSetting, OrderSetting};
 use imu_attest::model::{MODEL_SCHEMA, Model};
 use imu_attest::run::LoadOptions;
 
-fn app(options: AppOptions) -> Harness<'static, App> {
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::vec2(1500.0, 950.0))
-        .build_eframe(|cc| App::new(cc, options));
-    harness.run_steps(3);
-    harness
-}
+#[path = "common/gui.rs"]
+mod gui_common;
+use gui_common::options;
 
-fn options(paths: Vec<PathBuf>, mode: WorkerMode) -> AppOptions {
-    AppOptions {
-        mode,
-        persist: false,
-        ..AppOptions::new(paths)
-    }
+fn app(options: AppOptions) -> Harness<'static, App> {
+    gui_common::app(options, 3)
 }
 
 fn sample_app() -> Harness<'static, App> {

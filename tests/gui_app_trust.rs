@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use imu_attest::gui::view::results::band_label;
-use imu_attest::gui::{App, AppOptions, WorkerMode};
+use imu_attest::gui::{App, WorkerMode};
 use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::Settings;
 use imu_attest::rng::Rng;
@@ -17,17 +17,11 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, simulate};
 
+#[path = "common/gui.rs"]
+mod gui_common;
+
 fn app(paths: Vec<PathBuf>) -> Harness<'static, App> {
-    let options = AppOptions {
-        mode: WorkerMode::Synchronous,
-        persist: false,
-        ..AppOptions::new(paths)
-    };
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::vec2(1500.0, 950.0))
-        .build_eframe(|cc| App::new(cc, options));
-    harness.run_steps(4);
-    harness
+    gui_common::app(gui_common::options(paths, WorkerMode::Synchronous), 4)
 }
 
 fn real(name: &str) -> PathBuf {
@@ -114,15 +108,8 @@ fn a_run_with_a_still_stand_axis_is_refused_with_the_message_of_identify() {
 #[test]
 fn a_stale_diagnosis_never_replaces_a_newer_one() {
     use imu_attest::gui::{Command, sample_run_path};
-    let options = AppOptions {
-        mode: WorkerMode::Manual,
-        persist: false,
-        ..AppOptions::new(vec![sample_run_path().expect("sample run")])
-    };
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::vec2(1500.0, 950.0))
-        .build_eframe(|cc| App::new(cc, options));
-    harness.run_steps(2);
+    let options = gui_common::options(vec![sample_run_path().expect("sample run")], WorkerMode::Manual);
+    let mut harness = gui_common::app(options, 2);
     while harness.state_mut().run_worker_jobs() > 0 {
         harness.run_steps(2);
     }

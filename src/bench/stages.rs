@@ -23,8 +23,9 @@ use rayon::prelude::*;
 
 use super::{BenchError, Stage, bare};
 use crate::ident::IdentError;
+use crate::ident::band::native_bins;
 use crate::ident::factorisation::{Factorisation, FactorisationSettings, factorise, factorise_from};
-use crate::ident::identify::{identify_block_from, native_band, resolve_band, structural_fit};
+use crate::ident::identify::{identify_block_from, resolve_band, structural_fit};
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::ident::signals::{BlockSignals, block_signals, channel_names};
 use crate::ident::spectra::{BlockSpectra, block_spectra};
@@ -226,7 +227,7 @@ fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
     for (((sp, f), w), sig) in
         (state.spectra.iter().zip(&state.factorisations).zip(wiener)).zip(&state.signals)
     {
-        let band = native_band(sp, resolve_band(sp, sig.block, state.settings.band_hz)?);
+        let band = native_bins(sp, resolve_band(sp, sig.block, state.settings.band_hz)?);
         fits.push(Arc::new(structural_fit(
             sp,
             f,

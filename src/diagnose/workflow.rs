@@ -1,7 +1,7 @@
 //! The rounds of the search: identify, build each block's design, grow the model effect by
 //! effect while the criterion gains, and write the report.
 
-use crate::ident::band::{BandSetting, auto_limits};
+use crate::ident::band::BandSetting;
 use std::collections::BTreeMap;
 
 use super::DiagnoseError;
@@ -50,10 +50,7 @@ pub fn diagnose_run(
     // The diagnosis searches the whole band asked for (with "auto", the auto band's search
     // limits): a missing effect lowers the coherence, so the usable band of the identification
     // would hide the very misfit the diagnosis looks for.
-    let band_hz = match settings.band_hz {
-        BandSetting::Auto => BandSetting::Fixed(auto_limits(run.sample_rate_hz)),
-        fixed @ BandSetting::Fixed(_) => fixed,
-    };
+    let band_hz = BandSetting::Fixed(settings.band_hz.search_limits(run.sample_rate_hz));
     let settings = Settings {
         order: OrderSetting::Fixed(0),
         blocks: settings.blocks_for(&run.blocks()),

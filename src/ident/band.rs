@@ -67,13 +67,27 @@ impl fmt::Display for BandSetting {
     }
 }
 
+impl BandSetting {
+    /// The band to search: the user's as given, or the auto band's search limits.
+    #[must_use]
+    pub fn search_limits(self, sample_rate_hz: f64) -> [f64; 2] {
+        match self {
+            BandSetting::Fixed(given) => given,
+            BandSetting::Auto => auto_limits(sample_rate_hz),
+        }
+    }
+}
+
 /// The search limits of the auto band for a run sampled at `sample_rate_hz`.
 #[must_use]
 pub fn auto_limits(sample_rate_hz: f64) -> [f64; 2] {
     [AUTO_LIMITS_HZ[0], AUTO_LIMITS_HZ[1].min(0.4 * sample_rate_hz)]
 }
 
-/// Indices of the native (un-padded) Welch bins of `spectra` inside `[low, high]`.
+/// Indices of the native (un-padded) Welch bins of `spectra` inside `[low, high]`. The structural
+/// fit and the model use these: the zero-padded grid (needed for the causal projection)
+/// interpolates between them, and its neighbours are not independent, which would overstate the
+/// evidence by the padding factor.
 #[must_use]
 pub fn native_bins(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
     let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);

@@ -13,7 +13,8 @@ use num_complex::Complex64;
 
 use super::IdentError;
 use super::band::{
-    BandSetting, MIN_BAND_BINS, MIN_COHERENCE, auto_limits, best_coherence, untrusted_ranges, usable_band,
+    BandSetting, MIN_BAND_BINS, MIN_COHERENCE, auto_limits, best_coherence, native_bins, untrusted_ranges,
+    usable_band,
 };
 use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise};
@@ -175,11 +176,11 @@ pub fn identify_block_from(
 ) -> Result<BlockIdentification, IdentError> {
     // Excitation first, over the band asked for (or the auto search limits): a stand axis held
     // still is named as such, not as a band without coherence.
-    let asked = match settings.band_hz {
-        BandSetting::Fixed(given) => given,
-        BandSetting::Auto => auto_limits(spectra.sample_rate_hz),
-    };
-    check_excitation(&spectra, block, asked)?;
+    check_excitation(
+        &spectra,
+        block,
+        settings.band_hz.search_limits(spectra.sample_rate_hz),
+    )?;
     let band_hz = resolve_band(&spectra, block, settings.band_hz)?;
     check_excitation(&spectra, block, band_hz)?;
     let wiener = Arc::new(regularised_wiener(
@@ -189,7 +190,7 @@ pub fn identify_block_from(
         settings.lambda,
         band_hz,
     )?);
-    let band = native_band(&spectra, band_hz);
+    let band = native_bins(&spectra, band_hz);
     let mut warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
     let structural = Arc::new(structural_fit(
         &spectra,
@@ -265,12 +266,18 @@ pub fn resolve_band(spectra: &BlockSpectra, block: Block, band: BandSetting) -> 
     }
 }
 
-/// Indices of the analysis band's native Welch bins. The structural fit and the model use these:
-/// the zero-padded grid (needed for the causal projection) interpolates between them, and its
-/// neighbours are not independent, which would overstate the evidence by the padding factor.
+/// The generalised least-squares weights of the three output rows of an `H1`-type estimate at one
+/// bin: `Omega_i = dof S_uu / S_psi,ii` (`S_uu` made Hermitian; `noise` is `S_psi`), the inverse
+/// covariance of row `i`. The structural fit, the self-check's per-bin chi2 and the stretches'
+/// fits all weigh with this.
 #[must_use]
-pub fn native_band(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
-    super::band::native_bins(spectra, band_hz)
+pub fn row_weights(
+    s_uu: &Matrix3<Complex64>,
+    noise: &Matrix3<Complex64>,
+    dof: f64,
+) -> [Matrix3<Complex64>; 3] {
+    let s_uu = (s_uu + s_uu.adjoint()) * Complex64::from(0.5);
+    std::array::from_fn(|i| s_uu * Complex64::from(dof / noise[(i, i)].re.max(f64::MIN_POSITIVE)))
 }
 
 /// Fits the structural model to `W_u` over the band by generalised least squares: the estimate of
@@ -295,13 +302,7 @@ pub fn structural_fit(
     let dof = (spectra.equivalent_averages - 3.0).max(1.0);
     let row_weight: Vec<[Matrix3<Complex64>; 3]> = band
         .iter()
-        .map(|&k| {
-            let s_uu = (spectra.s_uu[k] + spectra.s_uu[k].adjoint()) * Complex64::from(0.5);
-            std::array::from_fn(|i| {
-                let noise = factorisation.noise_psd[k][(i, i)].re.max(f64::MIN_POSITIVE);
-                s_uu * Complex64::from(dof / noise)
-            })
-        })
+        .map(|&k| row_weights(&spectra.s_uu[k], &factorisation.noise_psd[k], dof))
         .collect();
     let choice = match order {
         OrderSetting::Fixed(n) => OrderChoice::Fixed(n),

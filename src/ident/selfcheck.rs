@@ -18,6 +18,7 @@ use std::sync::Arc;
 
 use num_complex::Complex64;
 
+use super::identify::row_weights;
 use super::settings::{OrderSetting, Settings};
 use super::signals::channel_names;
 use super::spectra::BlockSpectra;
@@ -47,12 +48,11 @@ pub fn chi2_per_bin(
         .map(|&k| {
             let model = fit.response(spectra.frequency_hz[k]);
             let r = wiener.w_u[k] - model;
-            let s_uu = (spectra.s_uu[k] + spectra.s_uu[k].adjoint()) * Complex64::from(0.5);
+            let omega = row_weights(&spectra.s_uu[k], &noise[k], dof);
             (0..3)
                 .map(|i| {
                     let row = r.row(i);
-                    let q = (row * s_uu * row.adjoint())[(0, 0)].re;
-                    2.0 * q * dof / noise[k][(i, i)].re.max(f64::MIN_POSITIVE)
+                    2.0 * (row * omega[i] * row.adjoint())[(0, 0)].re
                 })
                 .sum::<f64>()
         })

@@ -180,9 +180,7 @@ fn fit_stretch(
         let w = s.s_xu[b] * inv;
         let residual = s.s_xx[b] - w * s.s_xu[b].adjoint();
         response.push(w);
-        weights.push(std::array::from_fn(|i| {
-            s_uu * Complex64::from(dof / residual[(i, i)].re.max(f64::MIN_POSITIVE))
-        }));
+        weights.push(super::identify::row_weights(&s_uu, &residual, dof));
     }
     let input = ResponseEstimate {
         frequency_hz,

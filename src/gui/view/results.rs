@@ -163,17 +163,19 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 ui.monospace(format!("{:.1}", c.chi2));
                 ui.monospace(format!("{:.1}", c.criterion));
                 ui.monospace(format!("{:.3}", c.tau_s * 1e3));
-                match &c.rejected {
-                    None => {
-                        ui.monospace("yes");
-                    }
-                    Some(reason) => {
-                        ui.monospace(format!("no: {reason}"));
-                    }
-                }
+                ui.monospace(if c.rejected.is_some() { "no (below)" } else { "yes" });
                 ui.end_row();
             }
         });
+    // The reasons are sentences: wrapped under the table, so they do not widen the panel.
+    for c in &m.fit.candidates {
+        if let Some(reason) = &c.rejected {
+            ui.horizontal_wrapped(|ui| {
+                ui.monospace(format!("order {}:", c.order));
+                ui.add(egui::Label::new(format!("no: {reason}")).wrap());
+            });
+        }
+    }
 }
 
 fn fit(ui: &mut egui::Ui, m: &BlockModel, lambda_auto: bool) {

@@ -12,6 +12,12 @@ pub enum Block {
     Accel,
 }
 
+impl std::fmt::Display for Block {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl Block {
     /// Both blocks, gyro first.
     pub const BOTH: [Block; 2] = [Block::Gyro, Block::Accel];

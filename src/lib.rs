@@ -10,11 +10,13 @@ pub mod block;
 pub mod cli;
 pub mod compare;
 pub mod diagnose;
+pub mod effect;
 pub mod faults;
 pub mod fourier;
 #[cfg(feature = "gui")]
 pub mod gui;
 pub mod ident;
+pub mod interp;
 pub mod model;
 pub mod output;
 mod procfs;

@@ -57,7 +57,10 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
     let run = harness.state().selected().unwrap();
     let report = run.diagnosis.as_ref().unwrap();
     assert!(
-        report.findings.iter().all(|f| f.effect != "sensor_lag"),
+        report
+            .findings
+            .iter()
+            .all(|f| f.effect != imu_attest::effect::Effect::SensorLag),
         "{:?} rejected {:?} diagnosing {}",
         report
             .findings

@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 
 use super::identify::read_settings;
 use super::{Args, CliError};
-use crate::diagnose::{DiagnoseError, DiagnoseOptions, diagnose_run};
+use crate::diagnose::{DiagnoseError, DiagnoseOptions, diagnose_session};
+use crate::ident::session::Session;
 use crate::model::{MODEL_SCHEMA, Model};
 use crate::output::{ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
@@ -59,9 +60,9 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         _ => settings,
     };
 
-    let run = super::progress::load_run(run_path)?;
-    let report = diagnose_run(
-        &run,
+    let run = std::sync::Arc::new(super::progress::load_run(run_path)?);
+    let report = diagnose_session(
+        &mut Session::new(run),
         &settings,
         &DiagnoseOptions {
             given: model.as_ref(),

@@ -3,7 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use super::{Args, CliError};
-use crate::ident::identify::identify_run_with_progress;
+use std::sync::Arc;
+
+use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
 use crate::model::Model;
 use crate::output::{OutputError, ensure_not_input};
@@ -47,14 +49,15 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 
 /// Loads and identifies one run into its checked model (shared with `compare`).
 pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Model, CliError> {
-    let run = super::progress::load_run(run_path)?;
+    let run = Arc::new(super::progress::load_run(run_path)?);
     let settings = Settings {
         blocks: settings.blocks_for(&run.blocks()),
         ..settings.clone()
     };
     // Settings that do not fit this run are the user's input; anything else is ours.
     let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
-    let id = identify_run_with_progress(&run, &settings, &mut |step| {
+    let mut session = Session::new(run.clone());
+    let id = session.identify(&settings, Start::Cold, &mut |step| {
         bar.set_length(step.total as u64);
         bar.set_position(step.done as u64);
         bar.set_message(match step.block {

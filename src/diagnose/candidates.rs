@@ -5,12 +5,13 @@
 
 use std::f64::consts::PI;
 
+use super::design::Design;
 use super::fit::{Fitted, cost_at, fit};
 use super::state::State;
 use super::structure::Structure;
 use super::tone::{Tone, strongest_line};
 use crate::block::Block;
-use crate::sim::effect::Effect;
+use crate::effect::Effect;
 
 /// What a candidate adds to the model.
 #[derive(Clone, Debug)]
@@ -19,6 +20,15 @@ pub enum Extension {
     Structural(Box<Fitted>),
     /// A tone, fitted on the residual.
     Tone(Tone),
+    /// The outputs re-timed for a drifting block clock, and the model refitted on them.
+    ClockCorrected {
+        /// Clock rate error, s per s.
+        drift: f64,
+        /// The design with the re-timed outputs.
+        design: Box<Design>,
+        /// The current structure refitted on it.
+        fitted: Box<Fitted>,
+    },
 }
 
 /// One candidate effect, fitted.
@@ -102,6 +112,7 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
             start.and_then(|t| run_fit(&s, &t)),
         ));
     }
+    out.extend(super::clock::clock_candidate(state, band_hz));
     if let Some(tone) = strongest_line(design, &state.residual) {
         out.push(Candidate {
             effect: Effect::VibrationTone,

@@ -20,6 +20,8 @@
 //! needs. The grouped sums are exact sums of squares: no information is lost for factors that are
 //! constant within the group.
 
+use std::sync::Arc;
+
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 
@@ -68,6 +70,8 @@ pub struct Design {
     pub group_hz: Vec<f64>,
     /// Mean expected level per output channel and group.
     pub group_expected: [Vec<f64>; 3],
+    /// The measured outputs in time, as recorded (for re-timing them: [`Design::clock_corrected`]).
+    pub record: Arc<[Vec<f64>; 3]>,
 }
 
 /// Time-domain signals the design is built from, all the same length.
@@ -104,14 +108,8 @@ impl Design {
             return None;
         }
         let band = first_bin..=last_bin;
-        let taper: Vec<f64> = (0..n)
-            .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
-            .collect();
-        let mut spectrum = |x: &[f64]| -> Vec<Complex64> {
-            let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
-            let centred: Vec<f64> = x.iter().zip(&taper).map(|(v, w)| (v - mean) * w).collect();
-            fft.forward(&centred)[band.clone()].to_vec()
-        };
+        let taper = hann(n);
+        let mut spectrum = |x: &[f64]| band_spectrum(&mut fft, &taper, x, band.clone());
         let mut z: Vec<Vec<Complex64>> = Vec::new();
         z.extend(signals.output.iter().map(|x| spectrum(x)));
         z.extend(signals.input.iter().map(|u| spectrum(u)));
@@ -155,7 +153,30 @@ impl Design {
             groups,
             group_hz,
             group_expected,
+            record: Arc::new(signals.output.clone()),
         })
+    }
+
+    /// The design with the outputs re-timed for a block clock running at `1 + drift` against the
+    /// stand's: the output the stand's clock puts at `t` was stamped `t_c + (t - t_c)(1 + drift)`
+    /// by the block, `t_c` the record's middle (so the mean delay is unchanged). Sample positions
+    /// fall between samples; [`crate::interp::sinc`] interpolates them. Everything but the
+    /// outputs' spectra is kept.
+    #[must_use]
+    pub fn clock_corrected(&self, drift: f64) -> Self {
+        let n = self.n_samples;
+        let mut fft = RecordFft::new(self.fft_len, self.sample_rate_hz);
+        let taper = hann(n);
+        let band = self.first_bin..=self.first_bin + self.n_bins() - 1;
+        let centre = 0.5 * (n as f64 - 1.0);
+        let mut next = self.clone();
+        for (i, x) in self.record.iter().enumerate() {
+            let retimed: Vec<f64> = (0..n)
+                .map(|k| crate::interp::sinc(x, centre + (k as f64 - centre) * (1.0 + drift)))
+                .collect();
+            next.z[X + i] = band_spectrum(&mut fft, &taper, &retimed, band.clone());
+        }
+        next
     }
 
     /// Number of band bins.
@@ -196,9 +217,28 @@ impl Design {
             .collect()
     }
 
-    /// The measured outputs' spectra.
+    /// The outputs' spectra (as measured, or re-timed by [`Design::clock_corrected`]).
     #[must_use]
     pub fn outputs(&self) -> [Vec<Complex64>; 3] {
         [0, 1, 2].map(|i| self.z[X + i].clone())
     }
+}
+
+/// The Hann taper over `n` samples, `w_k = (1 - cos(2 pi k / n)) / 2`.
+fn hann(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
+        .collect()
+}
+
+/// The band bins of the DFT of `x` mean-removed and tapered.
+fn band_spectrum(
+    fft: &mut RecordFft,
+    taper: &[f64],
+    x: &[f64],
+    band: std::ops::RangeInclusive<usize>,
+) -> Vec<Complex64> {
+    let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
+    let centred: Vec<f64> = x.iter().zip(taper).map(|(v, w)| (v - mean) * w).collect();
+    fft.forward(&centred)[band].to_vec()
 }

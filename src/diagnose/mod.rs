@@ -18,6 +18,7 @@
 //! [`DiagnoseError::TooShort`]; non-finite samples cannot reach here (the loader refuses them).
 
 pub mod candidates;
+pub mod clock;
 pub mod design;
 pub mod fit;
 pub mod map;
@@ -30,7 +31,7 @@ pub mod tone;
 mod workflow;
 
 pub use report::{DISCREPANCY_SCHEMA, Finding, Report, Verdict};
-pub use workflow::{DiagnoseOptions, diagnose_run};
+pub use workflow::{DiagnoseOptions, diagnose_run, diagnose_session};
 
 /// Why a diagnosis could not be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

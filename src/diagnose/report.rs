@@ -12,9 +12,9 @@ use super::map::{DisagreementMap, ResidualPsd};
 use super::state::State;
 use super::structure::Theta;
 use crate::block::Block;
+use crate::effect::Effect;
 use crate::ident::settings::Settings;
 use crate::model::Source;
-use crate::sim::effect::Effect;
 
 /// The report's schema name.
 pub const DISCREPANCY_SCHEMA: &str = "imu-attest/discrepancy/1";
@@ -62,10 +62,10 @@ pub struct Criterion {
 /// One named effect.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Finding {
-    /// `gyro` or `accel`.
-    pub block: String,
-    /// Catalogue id.
-    pub effect: String,
+    /// The block (`gyro` or `accel` in JSON).
+    pub block: Block,
+    /// The catalogue entry (its id in JSON).
+    pub effect: Effect,
     /// Readable name.
     pub name: String,
     /// Estimated size, re-identified with every finding of the block in the model.
@@ -87,8 +87,8 @@ pub struct Finding {
 /// A candidate's evidence in one round.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateSummary {
-    /// Catalogue id.
-    pub effect: String,
+    /// The catalogue entry (its id in JSON).
+    pub effect: Effect,
     /// Reduction of `chi2`.
     pub delta_chi2: f64,
     /// Real parameters added.
@@ -125,25 +125,6 @@ pub struct BlockReport {
     /// Per-channel gap of the model given with `--model`, as it is (no refit), dB.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub given_model_gap_db: Option<[f64; 3]>,
-}
-
-/// The catalogue entry's readable name on a block.
-#[must_use]
-pub fn effect_name(effect: Effect, block: Block) -> String {
-    let b = match block {
-        Block::Gyro => "gyro",
-        Block::Accel => "accelerometer",
-    };
-    let what = match effect {
-        Effect::GSensitivity => "g-sensitivity",
-        Effect::SensorLag => "first-order lag",
-        Effect::AxisTimeSkew => "channel time skew",
-        Effect::ScaleNonlinearity => "quadratic scale factor",
-        Effect::VibrationTone => "vibration tone",
-        Effect::LeverArmError => "lever-arm error",
-        Effect::PlatformResonance => "mount resonance",
-    };
-    format!("{b} {what}")
 }
 
 /// The static gain `K` of a state.
@@ -183,6 +164,11 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
             let axis = f.structure.resonance_axes.get(index).copied().unwrap_or(0);
             let (frequency_hz, damping) = theta.resonances.get(index).copied().unwrap_or((0.0, 0.0));
             json!({"axis": input_names[axis], "axis_index": axis, "frequency_hz": frequency_hz, "damping": damping})
+        }
+        Effect::ClockDrift => {
+            let d = state.clock_drift.unwrap_or(0.0);
+            let duration = state.design.n_samples as f64 / state.design.sample_rate_hz;
+            json!({"drift_ppm": d * 1e6, "delay_change_s": d * duration})
         }
         Effect::VibrationTone => state.tones.get(index).map_or(
             Value::Null,

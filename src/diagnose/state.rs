@@ -26,6 +26,11 @@ pub struct State {
     pub outputs: [Vec<Complex64>; 3],
     /// Measured minus simulated outputs, band bins.
     pub residual: [Vec<Complex64>; 3],
+    /// The block clock's rate error the outputs are corrected for (`None`: not in the model).
+    pub clock_drift: Option<f64>,
+    /// The identification stretches' delay trend and its standard deviation, s per s: where the
+    /// search for a clock drift starts (`None`: the record was too short to cut).
+    pub drift_hint: Option<[f64; 2]>,
 }
 
 impl State {
@@ -45,6 +50,8 @@ impl State {
             tones: Vec::new(),
             outputs,
             residual,
+            clock_drift: None,
+            drift_hint: None,
         })
     }
 
@@ -54,6 +61,17 @@ impl State {
         let mut next = self.clone();
         match &candidate.extension {
             Extension::Structural(fitted) => next.fitted = (**fitted).clone(),
+            Extension::ClockCorrected {
+                drift,
+                design,
+                fitted,
+            } => {
+                next.design = (**design).clone();
+                next.outputs = without_tones(&next.design, &self.tones);
+                next.grams = next.design.grams(&next.outputs);
+                next.fitted = (**fitted).clone();
+                next.clock_drift = Some(*drift);
+            }
             Extension::Tone(tone) => {
                 let spectrum = tone.spectrum(&self.design);
                 for (out, tone) in next.outputs.iter_mut().zip(&spectrum) {
@@ -103,6 +121,18 @@ impl State {
     pub fn worst_gap_db(&self) -> f64 {
         self.gap_db().into_iter().fold(f64::NEG_INFINITY, f64::max)
     }
+}
+
+/// The design's outputs with `tones` subtracted, band bins.
+#[must_use]
+pub fn without_tones(design: &Design, tones: &[Tone]) -> [Vec<Complex64>; 3] {
+    let mut outputs = design.outputs();
+    for tone in tones {
+        for (out, t) in outputs.iter_mut().zip(&tone.spectrum(design)) {
+            out.iter_mut().zip(t).for_each(|(o, t)| *o -= t);
+        }
+    }
+    outputs
 }
 
 /// Measured (tones removed) minus simulated outputs, band bins.

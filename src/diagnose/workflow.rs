@@ -9,18 +9,19 @@ use super::candidates::{Candidate, Extension, candidates};
 use super::design::{Design, DesignSignals};
 use super::map::{disagreement_map, power, psd_cells};
 use super::report::{
-    BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, effect_name,
-    gain, parameters,
+    BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
 };
 use super::state::State;
 use crate::block::Block;
-use crate::ident::identify::{BlockIdentification, identify_run};
+use crate::effect::Effect;
+use crate::ident::identify::BlockIdentification;
+use crate::ident::session::Session;
 use crate::ident::settings::{OrderSetting, Settings};
 use crate::ident::signals::{block_signals, channel_names};
 use crate::model::{BlockModel, Model, Source};
 use crate::run::Run;
-use crate::sim::effect::Effect;
 use crate::stand::kinematics::EulerSeries;
+use std::sync::Arc;
 
 /// Effects a block can carry at most (the search stops earlier when nothing gains).
 const MAX_FINDINGS: usize = 5;
@@ -47,6 +48,22 @@ pub fn diagnose_run(
     settings: &Settings,
     options: &DiagnoseOptions<'_>,
 ) -> Result<Report, DiagnoseError> {
+    diagnose_session(&mut Session::new(Arc::new(run.clone())), settings, options)
+}
+
+/// [`diagnose_run`] on a session's run: the observer, spectra and factorisations it holds are
+/// used as they are (only the order-0 fit over the diagnosis's band is new), and its own
+/// identification is left as it was.
+///
+/// # Errors
+/// As [`diagnose_run`].
+pub fn diagnose_session(
+    session: &mut Session,
+    settings: &Settings,
+    options: &DiagnoseOptions<'_>,
+) -> Result<Report, DiagnoseError> {
+    let run = session.run().clone();
+    let run = run.as_ref();
     // The diagnosis searches the whole band asked for (with "auto", the auto band's search
     // limits): a missing effect lowers the coherence, so the usable band of the identification
     // would hide the very misfit the diagnosis looks for.
@@ -57,7 +74,7 @@ pub fn diagnose_run(
         band_hz,
         ..settings.clone()
     };
-    let id = identify_run(run, &settings)?;
+    let id = session.identify_aside(&settings)?;
     let mut findings = Vec::new();
     let mut blocks = BTreeMap::new();
     let mut penalty = 0.0;
@@ -197,7 +214,7 @@ impl Rule {
 
 fn summary(c: &Candidate, rule: Rule) -> CandidateSummary {
     CandidateSummary {
-        effect: c.effect.id().to_owned(),
+        effect: c.effect,
         delta_chi2: c.delta_chi2,
         added_parameters: c.added_params,
         criterion_gain: rule.gain(c),
@@ -217,7 +234,11 @@ fn diagnose_block(
     let name = b.block.name();
     let dof = 3.0 * design.dof_per_channel();
     let (input_names, _) = channel_names(b.block);
-    let base = State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
+    let mut base = State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
+    base.drift_hint = b
+        .stationarity
+        .as_deref()
+        .map(|st| [st.tau_trend, st.tau_trend_std]);
     let mut state = base.clone();
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
@@ -239,16 +260,18 @@ fn diagnose_block(
         let Some(next) = state.with(best, band) else { break };
         let index = match &best.extension {
             Extension::Tone(_) => state.tones.len(),
-            Extension::Structural(_) => state.fitted.structure.resonance_axes.len(),
+            Extension::Structural(_) | Extension::ClockCorrected { .. } => {
+                state.fitted.structure.resonance_axes.len()
+            }
         };
         let (delta, added) = (best.delta_chi2, best.added_params);
         let threshold = rule.threshold(added);
         let gain = delta - threshold;
         let (before, after) = (state.worst_gap_db(), next.worst_gap_db());
         let finding = Finding {
-            block: name.to_owned(),
-            effect: best.effect.id().to_owned(),
-            name: effect_name(best.effect, b.block),
+            block: b.block,
+            effect: best.effect,
+            name: best.effect.name_on(b.block),
             // Filled from the final model: every finding's size is re-identified with the others.
             parameters: serde_json::Value::Null,
             gap_before_db: before,

@@ -1,7 +1,8 @@
-//! The whole identification of a run: observer -> block signals -> spectra -> factorisation ->
-//! regularised Wiener (A, Lambda) -> structural fit (order), one block at a time. Each stage's
-//! result is an `Arc` so that callers (the app's worker) can cache a stage and redo only what a
-//! changed setting touches: [`identify_block_from`] starts from cached spectra and factorisation.
+//! A run's identification and its blocks' last stages: observer -> block signals -> spectra ->
+//! factorisation -> regularised Wiener (A, Lambda) -> structural fit (order). The stages are
+//! orchestrated and cached once, by [`Session`]; [`identify_block_from`] is the cheap end of the
+//! chain (band, excitation, Wiener, structural fit, stationarity, self-check) from cached spectra
+//! and factorisation.
 //!
 //! Nothing here reads a sidecar's simulator answer key: everything comes from the measured angles and
 //! outputs.
@@ -17,11 +18,11 @@ use super::band::{
     usable_band,
 };
 use super::excitation::check_excitation;
-use super::factorisation::{Factorisation, FactorisationSettings, factorise};
+use super::factorisation::{Factorisation, FactorisationSettings};
 use super::selfcheck::self_check;
+use super::session::{Session, Start};
 use super::settings::{OrderSetting, Settings};
-use super::signals::block_signals;
-use super::spectra::{BlockSpectra, block_spectra};
+use super::spectra::BlockSpectra;
 use super::stretches::{Stationarity, cached_stationarity, widen};
 use super::structural::{
     OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure, refit_structure,
@@ -30,8 +31,7 @@ use super::warnings::{IdentWarning, block_warnings};
 use super::wiener::{WienerEstimate, regularised_wiener};
 use crate::block::Block;
 use crate::run::Run;
-use crate::spectral::WelchPlanner;
-use crate::stand::observer::{ObserverEstimate, ObserverSettings, observe};
+use crate::stand::observer::ObserverEstimate;
 
 /// One block's identification, stage by stage.
 #[derive(Clone, Debug)]
@@ -66,7 +66,7 @@ pub struct RunIdentification {
     pub blocks: Vec<BlockIdentification>,
 }
 
-/// Where [`identify_run_with_progress`] is: the stage about to start, and how many of `total`
+/// Where [`Session::identify`] is: the stage about to start, and how many of `total`
 /// stages are done.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct IdentStep {
@@ -80,78 +80,28 @@ pub struct IdentStep {
     pub block: Option<Block>,
 }
 
-/// Identifies every block the settings name.
+impl RunIdentification {
+    /// Whether a block's factorisation or structural fit was started from an earlier one
+    /// ([`Start::Warm`]): close to, but not exactly, what `imu-attest identify` gives.
+    #[must_use]
+    pub fn provisional(&self) -> bool {
+        self.blocks
+            .iter()
+            .any(|b| !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch)
+    }
+}
+
+/// Identifies every block the settings name, from scratch: a [`Session`] of a copy of `run`
+/// (hold a session instead to keep the stages for another identification).
 ///
 /// # Errors
 /// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, an input axis
 /// not excited in the band ([`IdentError::NotExcited`]), or any stage's error for any block.
 pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification, IdentError> {
-    identify_run_with_progress(run, settings, &mut |_| {})
-}
-
-/// [`identify_run`], calling `progress` before each stage and once when done.
-///
-/// # Errors
-/// As [`identify_run`].
-pub fn identify_run_with_progress(
-    run: &Run,
-    settings: &Settings,
-    progress: &mut dyn FnMut(IdentStep),
-) -> Result<RunIdentification, IdentError> {
-    let settings = &Settings {
-        blocks: settings.blocks_for(&run.blocks()),
-        ..settings.clone()
-    };
-    settings.validate(run.len(), run.sample_rate_hz, &run.blocks())?;
-    let total = 1 + 3 * settings.blocks.len();
-    let mut done = 0;
-    let mut step = |stage, block| {
-        progress(IdentStep {
-            done,
-            total,
-            stage,
-            block,
-        });
-        done += 1;
-    };
-    step("observer", None);
-    let observer_settings = ObserverSettings {
-        angle_noise_rad: run.sidecar.angle_noise_rad,
-        ..ObserverSettings::default()
-    };
-    let motion = observe(
-        run.angles.each_ref().map(Vec::as_slice),
-        run.sample_rate_hz,
-        &observer_settings,
-    )?;
-    let mut planner = WelchPlanner::new();
-    let mut blocks = Vec::new();
-    for &block in &settings.blocks {
-        let signals =
-            block_signals(run, &motion.euler, block).ok_or(IdentError::MissingBlock(block.name()))?;
-        step("spectra", Some(block));
-        let spectra = Arc::new(block_spectra(
-            &mut planner,
-            &signals,
-            run.sample_rate_hz,
-            &settings.welch,
-        )?);
-        step("factorisation", Some(block));
-        let factorisation = Arc::new(factorise(&spectra, &FactorisationSettings::default())?);
-        step("fit", Some(block));
-        blocks.push(identify_block_from(
-            block,
-            spectra,
-            factorisation,
-            settings,
-            None,
-        )?);
-    }
-    step("done", None);
-    Ok(RunIdentification {
-        motion: Arc::new(motion),
-        blocks,
-    })
+    let mut session = Session::new(Arc::new(run.clone()));
+    let id = session.identify(settings, Start::Cold, &mut |_| {})?;
+    drop(session);
+    Ok(Arc::unwrap_or_clone(id))
 }
 
 /// The cheap stages (Wiener with A and Lambda, structural fit) from cached spectra and

@@ -10,6 +10,7 @@ pub mod excitation;
 pub mod factorisation;
 pub mod identify;
 pub mod selfcheck;
+pub mod session;
 pub mod settings;
 pub mod signals;
 pub mod spectra;

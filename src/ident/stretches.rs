@@ -107,6 +107,11 @@ impl Stationarity {
     }
 }
 
+/// How far from zero a stretch's delay is searched, s: wider than the whole record's range,
+/// since with drifting clocks a stretch's delay moves far from the record's (200 ppm over 25
+/// minutes is 0.3 s); a range that cut it off would flatten the very trend the check measures.
+const STRETCH_DELAY_REACH_S: f64 = 0.3;
+
 /// Fits every stretch of `spectra` over `band_hz` and summarises them; `None` without stretches
 /// or with fewer than [`MIN_STRETCHES`] fitted.
 #[must_use]
@@ -187,7 +192,12 @@ fn fit_stretch(
         response: &response,
         weights: Weights::RowWeight(&weights),
     };
-    let fit = fit_structure(&input, OrderChoice::Fixed(0), &StructuralSettings::default()).ok()?;
+    let settings = StructuralSettings {
+        tau_min_s: -STRETCH_DELAY_REACH_S,
+        tau_max_s: STRETCH_DELAY_REACH_S,
+        ..StructuralSettings::default()
+    };
+    let fit = fit_structure(&input, OrderChoice::Fixed(0), &settings).ok()?;
     Some(StretchFit {
         span_s: s.span_s,
         k: fit.k,

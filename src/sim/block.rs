@@ -3,14 +3,16 @@
 //!
 //! Output channel `i` is
 //! `sum_j K_ij (L u_j)(t - tau - skew_i) + k2_i ud_i |ud_i| + (G f)(t - tau) + tone_i + noise_i + bias_i`,
-//! where `L` is the optional lag and `u_j` has passed the optional mount resonance. Delays and linear filters are exact (frequency domain on a band-limited
-//! periodic signal).
+//! where `L` is the optional lag and `u_j` has passed the optional mount resonance. Delays and
+//! linear filters are exact (frequency domain on a band-limited periodic signal). A clock drift
+//! is applied last, as a time warp of the whole output (8-point Lagrange interpolation).
 
 use num_complex::Complex64;
 
 use super::effect::{Block, Effect};
 use super::synth::{Grid, first_order_lowpass, resonant_lowpass};
 use super::truth::{BlockTruth, EffectTruth, NoiseTruth};
+use crate::interp::lagrange;
 use crate::rng::Rng;
 
 /// Draws a block's true model (without effects) from `rng`.
@@ -185,7 +187,29 @@ pub fn block_outputs(
             *x += b;
         }
     }
+    for e in &truth.effects {
+        if let EffectTruth::ClockDrift { drift_ppm } = *e {
+            for col in &mut out {
+                *col = clock_drifted(col, drive.time_s, drift_ppm * 1e-6);
+            }
+        }
+    }
     out
+}
+
+/// `x` (on the grid `time_s`) as a block whose clock runs at `1 + drift` samples it: the sample
+/// the block stamps `t` was taken at the stand's `t / (1 + drift)` (the clocks agree at `t = 0`,
+/// the recording's start). The stand's rows are stamped by the stand, so the block's delay
+/// grows by `drift` per second of the run.
+fn clock_drifted(x: &[f64], time_s: &[f64], drift: f64) -> Vec<f64> {
+    let (Some(&t0), Some(&t1)) = (time_s.first(), time_s.get(1)) else {
+        return x.to_vec();
+    };
+    let rate = 1.0 / (t1 - t0);
+    time_s
+        .iter()
+        .map(|t| lagrange(x, rate, t / (1.0 + drift) - t0))
+        .collect()
 }
 
 /// Adds the cross-correlated coloured disturbance of [`NoiseTruth`].
@@ -254,6 +278,9 @@ pub fn draw_effect(
             axis: (rng.next_u64() % 3) as usize,
             frequency_hz: rng.uniform_in(18.0, 32.0),
             damping: (0.05 / scale).min(0.7),
+        },
+        Effect::ClockDrift => EffectTruth::ClockDrift {
+            drift_ppm: scale * 50.0 * rng.uniform_in(0.8, 1.25) * sign(rng),
         },
     }
 }

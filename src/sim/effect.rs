@@ -1,79 +1,13 @@
-//! The effect catalogue (contract section 5) as the simulator applies it, and the command line's
-//! `--effect ID[:block][@scale]` syntax. `@scale` (an extension of the contract) multiplies the
+//! The command line's `--effect ID[:block][@scale]` syntax. `@scale` (an extension of the contract) multiplies the
 //! effect's default size, so tests can sweep from barely significant to large.
 //!
 //! Without `:block`, an effect that exists for one block only goes to that block, and an effect
 //! that exists for either block goes to both.
 
-use std::fmt;
 use std::str::FromStr;
 
-use serde::{Deserialize, Serialize};
-
 pub use crate::block::Block;
-
-/// The catalogue's effects; ids are stable (contract section 5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Effect {
-    /// Gyro outputs respond to the specific force at the block: `x += G f`.
-    GSensitivity,
-    /// A first-order lag `1/(T s + 1)` beyond the pure delay.
-    SensorLag,
-    /// Per-channel delays.
-    AxisTimeSkew,
-    /// `x_i += k2_i u_i |u_i|`.
-    ScaleNonlinearity,
-    /// A sinusoid at a fixed frequency, incoherent with the input.
-    VibrationTone,
-    /// The true accelerometer lever arm differs from the declared one.
-    LeverArmError,
-    /// A lightly damped second-order mount mode on one input axis.
-    PlatformResonance,
-}
-
-impl Effect {
-    /// Every effect, in catalogue order.
-    pub const ALL: [Effect; 7] = [
-        Effect::GSensitivity,
-        Effect::SensorLag,
-        Effect::AxisTimeSkew,
-        Effect::ScaleNonlinearity,
-        Effect::VibrationTone,
-        Effect::LeverArmError,
-        Effect::PlatformResonance,
-    ];
-
-    /// The stable id.
-    #[must_use]
-    pub fn id(self) -> &'static str {
-        match self {
-            Effect::GSensitivity => "g_sensitivity",
-            Effect::SensorLag => "sensor_lag",
-            Effect::AxisTimeSkew => "axis_time_skew",
-            Effect::ScaleNonlinearity => "scale_nonlinearity",
-            Effect::VibrationTone => "vibration_tone",
-            Effect::LeverArmError => "lever_arm_error",
-            Effect::PlatformResonance => "platform_resonance",
-        }
-    }
-
-    /// The blocks the effect can apply to.
-    #[must_use]
-    pub fn blocks(self) -> &'static [Block] {
-        match self {
-            Effect::GSensitivity => &[Block::Gyro],
-            Effect::LeverArmError => &[Block::Accel],
-            _ => &Block::BOTH,
-        }
-    }
-}
-
-impl fmt::Display for Effect {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.id())
-    }
-}
+pub use crate::effect::Effect;
 
 /// One `--effect` request: the effect, the blocks it goes to, and a size multiplier.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,10 +24,8 @@ pub struct EffectSpec {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum EffectSpecError {
     /// Not an id of the catalogue.
-    #[error(
-        "unknown effect '{0}' (known: g_sensitivity, sensor_lag, axis_time_skew, scale_nonlinearity, vibration_tone, lever_arm_error, platform_resonance)"
-    )]
-    UnknownEffect(String),
+    #[error(transparent)]
+    UnknownEffect(#[from] crate::effect::UnknownEffect),
     /// Not `gyro` or `accel`.
     #[error("unknown block '{0}' (known: gyro, accel)")]
     UnknownBlock(String),
@@ -125,10 +57,7 @@ impl FromStr for EffectSpec {
             Some((i, b)) => (i, Some(b)),
             None => (head, None),
         };
-        let effect = Effect::ALL
-            .into_iter()
-            .find(|e| e.id() == id)
-            .ok_or_else(|| EffectSpecError::UnknownEffect(id.to_owned()))?;
+        let effect: Effect = id.parse()?;
         let blocks = match block {
             None => effect.blocks().to_vec(),
             Some(name) => {

@@ -11,7 +11,7 @@
 pub mod block;
 pub mod effect;
 pub mod fault;
-pub mod interp;
+pub use crate::interp;
 pub mod regime;
 pub mod stand;
 pub mod synth;

@@ -148,6 +148,12 @@ pub enum EffectTruth {
         /// Damping ratio.
         damping: f64,
     },
+    /// The block's clock runs at `1 + drift_ppm 1e-6` against the stand's (both read 0 at the
+    /// recording's start), so the block's delay grows by `drift_ppm` microseconds per second.
+    ClockDrift {
+        /// Clock rate error, parts per million (positive: the block's clock is fast).
+        drift_ppm: f64,
+    },
 }
 
 impl EffectTruth {
@@ -162,6 +168,7 @@ impl EffectTruth {
             EffectTruth::VibrationTone { .. } => Effect::VibrationTone,
             EffectTruth::LeverArmError { .. } => Effect::LeverArmError,
             EffectTruth::PlatformResonance { .. } => Effect::PlatformResonance,
+            EffectTruth::ClockDrift { .. } => Effect::ClockDrift,
         }
     }
 }

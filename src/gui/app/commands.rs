@@ -6,9 +6,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::{App, RunEntry, RunState};
 use crate::block::Block;
+use crate::effect::Effect;
 use crate::gui::pipeline::{Job, JobKind, RunId, Stage};
 use crate::ident::settings::Settings;
-use crate::sim::effect::Effect;
 
 /// A request from the UI.
 #[derive(Debug)]
@@ -37,9 +37,9 @@ pub enum Command {
     /// Find the missing effects of this run.
     Diagnose(RunId),
     /// Keep a named effect (`block`, effect id) in the run's model.
-    AcceptEffect(RunId, String, String),
+    AcceptEffect(RunId, Block, Effect),
     /// Drop a named effect (`block`, effect id) and diagnose again without it.
-    RejectEffect(RunId, String, String),
+    RejectEffect(RunId, Block, Effect),
     /// Forget the run's rejections and diagnose again.
     ClearRejected(RunId),
     /// Fault injection: make the worker panic in `stage` of this run's analysis, as a bug would.
@@ -119,14 +119,16 @@ impl App {
             }
             Command::Diagnose(id) => self.diagnose(id),
             Command::AcceptEffect(id, block, effect) => {
-                if let (Some(run), Some(pair)) = (self.run_mut(id), effect_of(&block, &effect))
+                let pair = (block, effect);
+                if let Some(run) = self.run_mut(id)
                     && !run.accepted.contains(&pair)
                 {
                     run.accepted.push(pair);
                 }
             }
             Command::RejectEffect(id, block, effect) => {
-                if let (Some(run), Some(pair)) = (self.run_mut(id), effect_of(&block, &effect)) {
+                let pair = (block, effect);
+                if let Some(run) = self.run_mut(id) {
                     run.accepted.retain(|p| *p != pair);
                     if !run.rejected.contains(&pair) {
                         run.rejected.push(pair);
@@ -203,11 +205,4 @@ impl App {
             kind,
         });
     }
-}
-
-/// The `(block, effect)` pair named by a finding's strings.
-fn effect_of(block: &str, effect: &str) -> Option<(Block, Effect)> {
-    let block = Block::BOTH.into_iter().find(|b| b.name() == block)?;
-    let effect = Effect::ALL.into_iter().find(|e| e.id() == effect)?;
-    Some((block, effect))
 }

@@ -22,12 +22,12 @@ pub use commands::Command;
 use crate::block::Block;
 use crate::compare::Comparison;
 use crate::diagnose::Report;
+use crate::effect::Effect;
 use crate::gui::pipeline::{
     Identification, Measured, Motion, RunId, RunSummary, Spectra, Worker, WorkerMode,
 };
 use crate::ident::settings::Settings;
 use crate::run::LoadOptions;
-use crate::sim::effect::Effect;
 
 /// Storage key of [`Prefs`] (JSON, in eframe's storage: `~/.local/share/imu-attest/app.ron` on
 /// Linux).

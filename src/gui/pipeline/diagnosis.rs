@@ -5,9 +5,9 @@
 use super::analyse::RunCache;
 use crate::block::Block;
 use crate::diagnose::{DiagnoseOptions, Report, diagnose_run};
+use crate::effect::Effect;
 use crate::ident::settings::Settings;
 use crate::run::{Run, RunSource};
-use crate::sim::effect::Effect;
 
 fn run_of(cache: &RunCache) -> Run {
     let m = &cache.measured;

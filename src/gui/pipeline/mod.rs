@@ -42,8 +42,8 @@ pub use worker::{Worker, WorkerMode};
 
 use crate::block::Block;
 use crate::diagnose::Report;
+use crate::effect::Effect;
 use crate::ident::settings::Settings;
-use crate::sim::effect::Effect;
 
 /// Identifies a run inside one app session.
 pub type RunId = u64;

@@ -63,17 +63,14 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     for f in &report.findings {
         ui.group(|ui| {
             ui.horizontal(|ui| {
-                let accepted = run
-                    .accepted
-                    .iter()
-                    .any(|(b, e)| b.name() == f.block && e.id() == f.effect);
+                let accepted = run.accepted.iter().any(|&(b, e)| b == f.block && e == f.effect);
                 if accepted {
                     ui.label("accepted");
                 } else if ui.small_button("Accept").clicked() {
-                    commands.push(Command::AcceptEffect(run.id, f.block.clone(), f.effect.clone()));
+                    commands.push(Command::AcceptEffect(run.id, f.block, f.effect));
                 }
                 if ui.small_button("Reject").clicked() {
-                    commands.push(Command::RejectEffect(run.id, f.block.clone(), f.effect.clone()));
+                    commands.push(Command::RejectEffect(run.id, f.block, f.effect));
                 }
                 ui.strong(&f.name);
                 ui.label(format!(

@@ -1,0 +1,96 @@
+//! The `clock_drift` candidate: the block's clock runs at `1 + d` against the stand's, so its
+//! delay grows by `d` each second. A drift is not a filter (no factor of the model's transfer
+//! function makes it): the outputs are re-timed onto the stand's clock
+//! ([`Design::clock_corrected`]) and the current model is refitted on them.
+//!
+//! Where to look: the identification's stretches measure the delay through the record, and the
+//! slope of those delays against time estimates `d` with its standard deviation (the drift hint).
+//! A record too short to cut is searched from `d = 0` ([`blind_width`]).
+//! The cost is profiled over the linear parameters at five drifts around the hint (the hint and
+//! one and two widths either side, the width the larger of its standard deviation and a tenth of
+//! it), extended width by width while the cheapest is at an end (a stretch's delay is biased
+//! when the delay moves much within it), refined by the parabola through the best and its
+//! neighbours, and the model refitted at the best drift found.
+
+use super::candidates::{Candidate, Extension};
+use super::design::Design;
+use super::fit::{cost_at, fit};
+use super::state::{State, without_tones};
+use crate::effect::Effect;
+
+/// How many widths the search may walk beyond its first five points.
+const MAX_STEPS: usize = 20;
+
+/// The narrowest search width, s per s (0.1 ppm: below any clock a lab would worry about).
+const MIN_WIDTH: f64 = 1e-7;
+
+/// The search width without a hint: the drift that moves the delay by a twentieth of the band
+/// top's period over the record (a phase error of 0.3 rad at the band top by the record's end).
+fn blind_width(design: &Design) -> f64 {
+    let duration = design.n_samples as f64 / design.sample_rate_hz;
+    let top = design.frequency_hz.last().copied().unwrap_or(1.0);
+    0.05 / (top * duration).max(f64::MIN_POSITIVE)
+}
+
+/// The clock-drift candidate, or `None` when the model holds one already or the refit fails.
+#[must_use]
+pub fn clock_candidate(state: &State, band_hz: [f64; 2]) -> Option<Candidate> {
+    if state.clock_drift.is_some() {
+        return None;
+    }
+    let [hint, sd] = state.drift_hint.unwrap_or([0.0, blind_width(&state.design)]);
+    if !(hint.is_finite() && sd.is_finite()) {
+        return None;
+    }
+    let structure = &state.fitted.structure;
+    let theta = &state.fitted.theta;
+    let corrected = |d: f64| -> (f64, Design) {
+        let design = state.design.clock_corrected(d);
+        let grams = design.grams(&without_tones(&design, &state.tones));
+        (cost_at(&design, &grams, structure, theta), design)
+    };
+    let width = sd.max(0.1 * hint.abs()).max(MIN_WIDTH);
+    let at = |k: i32| {
+        let d = hint + f64::from(k) * width;
+        let (cost, design) = corrected(d);
+        (d, cost, design)
+    };
+    // In order of drift; extended while the cheapest is at an end (the hint may be biased).
+    let mut tried: Vec<(f64, f64, Design)> = (-2..=2).map(at).collect();
+    let (mut low, mut high) = (-2, 2);
+    for _ in 0..MAX_STEPS {
+        let best = (0..tried.len()).min_by(|&a, &b| tried[a].1.total_cmp(&tried[b].1))?;
+        if best == 0 {
+            low -= 1;
+            tried.insert(0, at(low));
+        } else if best + 1 == tried.len() {
+            high += 1;
+            tried.push(at(high));
+        } else {
+            break;
+        }
+    }
+    let best = (0..tried.len()).min_by(|&a, &b| tried[a].1.total_cmp(&tried[b].1))?;
+    if (1..tried.len() - 1).contains(&best) {
+        let (c_lo, c_mid, c_hi) = (tried[best - 1].1, tried[best].1, tried[best + 1].1);
+        let curvature = c_lo - 2.0 * c_mid + c_hi;
+        if curvature > 0.0 {
+            let d = tried[best].0 + 0.5 * width * (c_lo - c_hi) / curvature;
+            let (cost, design) = corrected(d);
+            tried.push((d, cost, design));
+        }
+    }
+    let (drift, _, design) = tried.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let grams = design.grams(&without_tones(&design, &state.tones));
+    let fitted = fit(&design, &grams, structure, theta, band_hz)?;
+    Some(Candidate {
+        effect: Effect::ClockDrift,
+        delta_chi2: state.fitted.chi2() - fitted.chi2(),
+        added_params: 1,
+        extension: Extension::ClockCorrected {
+            drift,
+            design: Box::new(design),
+            fitted: Box::new(fitted),
+        },
+    })
+}

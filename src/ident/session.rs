@@ -1,0 +1,331 @@
+//! The one staged, cached identification pipeline of a run, used by the command line
+//! (`identify`, `discrepancy`, `compare`), `bench`, the diagnosis and the app's worker:
+//!
+//! | stage | cached per | recomputed when |
+//! |---|---|---|
+//! | observer (motion) and block signals | the run | never |
+//! | spectra | block, Welch settings | the Welch settings change |
+//! | factorisation | block, spectra | the spectra change |
+//! | Wiener and structural fit | settings | any other setting changes |
+//!
+//! Each stage's preconditions are checked in one place: the settings against the run
+//! ([`Settings::validate`]) before anything runs, the observer's own (enough samples), the
+//! excitation and the band in [`identify_block_from`]. Results are `Arc` snapshots, shared with
+//! whoever holds them (the app's plots, a model file being written).
+//!
+//! [`Start::Cold`] computes what is missing from scratch: what `imu-attest identify` gives.
+//! [`Start::Warm`] (the app while a setting moves) starts the factorisation and the structural
+//! fit from the previous ones, which is faster but may differ in the last digits; such an
+//! identification is [`RunIdentification::provisional`], and [`Session::polish`] redoes it from
+//! scratch.
+//!
+//! Nothing here reads a simulated run's answer key.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::IdentError;
+use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
+use super::identify::{BlockIdentification, IdentStep, RunIdentification, identify_block_from};
+use super::settings::Settings;
+use super::signals::{BlockSignals, block_signals};
+use super::spectra::{BlockSpectra, block_spectra};
+use super::structural::StructuralFit;
+use crate::block::Block;
+use crate::run::Run;
+use crate::spectral::{WelchPlanner, WelchSettings};
+use crate::stand::observer::{ObserverEstimate, ObserverSettings, observe};
+
+/// Where the factorisation and the structural fit start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Start {
+    /// From scratch: the command line's result.
+    Cold,
+    /// From the previous factorisation and fit of each block, where there are any.
+    Warm,
+}
+
+/// A block's entry in a per-block cache.
+type PerBlock<T> = Vec<(Block, Arc<T>)>;
+
+/// One run and its cached stages.
+#[derive(Debug)]
+pub struct Session {
+    run: Arc<Run>,
+    planner: WelchPlanner,
+    motion: Option<Arc<ObserverEstimate>>,
+    signals: PerBlock<BlockSignals>,
+    welch: Option<WelchSettings>,
+    spectra: PerBlock<BlockSpectra>,
+    factorisations: PerBlock<Factorisation>,
+    /// The factorisations of the spectra before the last Welch change: warm starts.
+    previous_factorisations: PerBlock<Factorisation>,
+    /// Every block's latest structural fit: warm starts.
+    fits: PerBlock<StructuralFit>,
+    identification: Option<(Settings, Arc<RunIdentification>)>,
+}
+
+impl Session {
+    /// A session of `run`, nothing computed yet.
+    #[must_use]
+    pub fn new(run: Arc<Run>) -> Self {
+        Self {
+            run,
+            planner: WelchPlanner::new(),
+            motion: None,
+            signals: Vec::new(),
+            welch: None,
+            spectra: Vec::new(),
+            factorisations: Vec::new(),
+            previous_factorisations: Vec::new(),
+            fits: Vec::new(),
+            identification: None,
+        }
+    }
+
+    /// The run.
+    #[must_use]
+    pub fn run(&self) -> &Arc<Run> {
+        &self.run
+    }
+
+    /// The observer's estimate of the platform motion (the sidecar's declared angle noise, else
+    /// estimated).
+    ///
+    /// # Errors
+    /// What the observer refuses (too few samples, a bad declared noise).
+    pub fn motion(&mut self) -> Result<Arc<ObserverEstimate>, IdentError> {
+        if let Some(m) = &self.motion {
+            return Ok(m.clone());
+        }
+        let settings = ObserverSettings {
+            angle_noise_rad: self.run.sidecar.angle_noise_rad,
+            ..ObserverSettings::default()
+        };
+        let run = &self.run;
+        let m = Arc::new(observe(
+            run.angles.each_ref().map(Vec::as_slice),
+            run.sample_rate_hz,
+            &settings,
+        )?);
+        self.motion = Some(m.clone());
+        Ok(m)
+    }
+
+    /// A block's input (from the observer) and output (glitches bridged).
+    ///
+    /// # Errors
+    /// The observer's errors; [`IdentError::MissingBlock`] when the run has no such block.
+    pub fn signals(&mut self, block: Block) -> Result<Arc<BlockSignals>, IdentError> {
+        if let Some(s) = of_block(&self.signals, block) {
+            return Ok(s);
+        }
+        let motion = self.motion()?;
+        let s = Arc::new(
+            block_signals(&self.run, &motion.euler, block).ok_or(IdentError::MissingBlock(block.name()))?,
+        );
+        self.signals.push((block, s.clone()));
+        Ok(s)
+    }
+
+    /// The Welch spectra of `blocks` under `welch`. A change of the Welch settings drops the
+    /// cached spectra and factorisations (the latter kept as warm starts).
+    ///
+    /// # Errors
+    /// The signals' errors, or what Welch refuses (a segment longer than the run, ...).
+    pub fn spectra(
+        &mut self,
+        welch: &WelchSettings,
+        blocks: &[Block],
+    ) -> Result<PerBlock<BlockSpectra>, IdentError> {
+        if self.welch.as_ref() != Some(welch) {
+            self.spectra.clear();
+            if !self.factorisations.is_empty() {
+                self.previous_factorisations = std::mem::take(&mut self.factorisations);
+            }
+            self.welch = Some(*welch);
+        }
+        let mut out = Vec::with_capacity(blocks.len());
+        for &block in blocks {
+            let spectra = if let Some(s) = of_block(&self.spectra, block) {
+                s
+            } else {
+                let signals = self.signals(block)?;
+                let s = Arc::new(block_spectra(
+                    &mut self.planner,
+                    &signals,
+                    self.run.sample_rate_hz,
+                    welch,
+                )?);
+                self.spectra.push((block, s.clone()));
+                s
+            };
+            out.push((block, spectra));
+        }
+        Ok(out)
+    }
+
+    /// The factorisations of `blocks`' spectra under `welch`, the missing ones computed in
+    /// parallel (each block's two Wilson factorisations take unequal times; together they keep
+    /// the cores busy).
+    ///
+    /// # Errors
+    /// The spectra's errors, or a factorisation's.
+    pub fn factorisations(
+        &mut self,
+        welch: &WelchSettings,
+        blocks: &[Block],
+        start: Start,
+    ) -> Result<PerBlock<Factorisation>, IdentError> {
+        let spectra = self.spectra(welch, blocks)?;
+        let (known, previous) = (&self.factorisations, &self.previous_factorisations);
+        let done: Result<Vec<_>, IdentError> = spectra
+            .into_par_iter()
+            .map(|(block, spectra)| {
+                // A warm-started factorisation is no answer to a cold request.
+                if let Some(f) = of_block(known, block).filter(|f| start == Start::Warm || f.from_scratch) {
+                    return Ok((block, f, false));
+                }
+                let warm = match start {
+                    Start::Warm => of_block(previous, block),
+                    Start::Cold => None,
+                };
+                let f = factorise_from(&spectra, &FactorisationSettings::default(), warm.as_deref())?;
+                Ok((block, Arc::new(f), true))
+            })
+            .collect();
+        let mut out = Vec::new();
+        for (block, f, new) in done? {
+            if new {
+                self.factorisations.retain(|(b, _)| *b != block);
+                self.factorisations.push((block, f.clone()));
+            }
+            out.push((block, f));
+        }
+        Ok(out)
+    }
+
+    /// The identification under `settings` (its blocks filled in from the run when empty),
+    /// calling `progress` before each stage and once when done. A cached identification with
+    /// the same settings is returned as it is (with [`Start::Cold`], only if it is not
+    /// provisional).
+    ///
+    /// # Errors
+    /// Settings that do not fit the run, and every stage's errors.
+    pub fn identify(
+        &mut self,
+        settings: &Settings,
+        start: Start,
+        progress: &mut dyn FnMut(IdentStep),
+    ) -> Result<Arc<RunIdentification>, IdentError> {
+        self.compute(settings, start, progress, true)
+    }
+
+    /// An identification from scratch under `settings` that leaves the session's identification
+    /// and warm starts as they were (the diagnosis's order-0 fit over its own band): only the
+    /// observer, spectra and factorisations are shared.
+    ///
+    /// # Errors
+    /// As [`Session::identify`].
+    pub fn identify_aside(&mut self, settings: &Settings) -> Result<Arc<RunIdentification>, IdentError> {
+        self.compute(settings, Start::Cold, &mut |_| {}, false)
+    }
+
+    fn compute(
+        &mut self,
+        settings: &Settings,
+        start: Start,
+        progress: &mut dyn FnMut(IdentStep),
+        keep: bool,
+    ) -> Result<Arc<RunIdentification>, IdentError> {
+        let run = self.run.clone();
+        settings.validate(run.len(), run.sample_rate_hz, &run.blocks())?;
+        let settings = Settings {
+            blocks: settings.blocks_for(&run.blocks()),
+            ..settings.clone()
+        };
+        if let Some((_, id)) = self
+            .identification
+            .as_ref()
+            .filter(|(s, id)| keep && *s == settings && (start == Start::Warm || !id.provisional()))
+        {
+            return Ok(id.clone());
+        }
+        let blocks = settings.blocks.clone();
+        let total = 1 + 3 * blocks.len();
+        let mut done = 0;
+        let mut step = |stage, block, count: usize| {
+            progress(IdentStep {
+                done,
+                total,
+                stage,
+                block,
+            });
+            done += count;
+        };
+        step("observer", None, 1);
+        let motion = self.motion()?;
+        for &block in &blocks {
+            step("spectra", Some(block), 1);
+            self.spectra(&settings.welch, &[block])?;
+        }
+        step("factorisation", None, blocks.len());
+        let factorisations = self.factorisations(&settings.welch, &blocks, start)?;
+        let spectra = self.spectra(&settings.welch, &blocks)?;
+        step("fit", None, blocks.len());
+        let fits = &self.fits;
+        let identified: Result<Vec<BlockIdentification>, IdentError> = spectra
+            .into_iter()
+            .zip(factorisations)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|((block, spectra), (_, factorisation))| {
+                let previous = match start {
+                    Start::Warm => of_block(fits, block),
+                    Start::Cold => None,
+                };
+                identify_block_from(block, spectra, factorisation, &settings, previous.as_deref())
+            })
+            .collect();
+        let identified = identified?;
+        step("done", None, 0);
+        let id = Arc::new(RunIdentification {
+            motion,
+            blocks: identified,
+        });
+        if !keep {
+            return Ok(id);
+        }
+        for b in &id.blocks {
+            self.fits.retain(|(block, _)| *block != b.block);
+            self.fits.push((b.block, b.structural.clone()));
+        }
+        self.identification = Some((settings, id.clone()));
+        Ok(id)
+    }
+
+    /// The latest identification and its settings, if any.
+    #[must_use]
+    pub fn identification(&self) -> Option<(&Settings, &Arc<RunIdentification>)> {
+        self.identification.as_ref().map(|(s, id)| (s, id))
+    }
+
+    /// Redoes a provisional identification from scratch (its factorisations and fits); `None`
+    /// when there is nothing to redo.
+    ///
+    /// # Errors
+    /// Every stage's errors.
+    pub fn polish(&mut self) -> Option<Result<Arc<RunIdentification>, IdentError>> {
+        let (settings, id) = self.identification.clone()?;
+        if !id.provisional() {
+            return None;
+        }
+        Some(self.identify(&settings, Start::Cold, &mut |_| {}))
+    }
+}
+
+/// The entry of `block` in a per-block list.
+fn of_block<T>(list: &[(Block, Arc<T>)], block: Block) -> Option<Arc<T>> {
+    list.iter().find(|(b, _)| *b == block).map(|(_, v)| v.clone())
+}

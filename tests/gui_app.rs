@@ -147,7 +147,7 @@ fn a_cancelled_load_reports_cancelled_and_loads_nothing() {
             events.last(),
             Some(Event::Failed {
                 run: 7,
-                cancelled: true,
+                kind: imu_attest::gui::pipeline::FailureKind::Cancelled,
                 ..
             })
         ),

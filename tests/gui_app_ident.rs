@@ -76,7 +76,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
         .clone()
         .expect("identified");
     assert!(!Arc::ptr_eq(&before, &after), "a new identification");
-    for (a, b) in before.blocks.iter().zip(&after.blocks) {
+    for (a, b) in before.blocks().iter().zip(after.blocks()) {
         assert!(Arc::ptr_eq(&a.spectra, &b.spectra), "spectra not redone");
         assert!(
             Arc::ptr_eq(&a.factorisation, &b.factorisation),

@@ -178,6 +178,10 @@ fn a_recording_fault_is_shown_and_exported() {
     let sentence = summary.recording_faults[0].to_string();
     assert!(sentence.contains("gy"), "{sentence}");
     harness.get_by_label(&format!("recording fault: {sentence}"));
+    // The Time series view marks it on its channel's plot (a named line in the legend).
+    harness.get_by_label("Time series").click();
+    harness.run_steps(3);
+    harness.get_by_label(&summary.recording_faults[0].short_label());
     let exported = dir.path().join("m.json");
     harness
         .state_mut()
@@ -192,4 +196,31 @@ fn a_recording_fault_is_shown_and_exported() {
     // With the glitch bridged on both paths, the app's file is identify's, byte for byte.
     let written = identify_file(&path, &dir.path().join("cli.json"));
     assert!(written == text.as_bytes(), "app and identify differ");
+}
+
+/// A block whose clock drifts: the results show the stretches' delays with the drift named.
+#[test]
+fn results_show_the_stretches_and_name_a_drifting_clock() {
+    use imu_attest::gui::view::stationarity::stationarity_label;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.duration_s = 240.0;
+    config.seed = 35;
+    config.effects = vec!["clock_drift:gyro@2".parse().expect("an effect spec")];
+    let path = dir.path().join("drift.csv");
+    write_run(&simulate(&config).expect("simulated"), &path).expect("written");
+    let harness = app(vec![path]);
+    let id = harness.state().runs()[0]
+        .identification
+        .clone()
+        .expect("identified");
+    let gyro = id.model.blocks.get("gyro").expect("gyro");
+    let st = gyro.stationarity.as_ref().expect("240 s is cut into stretches");
+    let label = stationarity_label("gyro", st);
+    assert!(label.contains("the delay drifts"), "{label}");
+    harness.get_by_label(&label);
+    let accel = id.model.blocks.get("accel").expect("accel");
+    let label = stationarity_label("accel", accel.stationarity.as_ref().expect("cut"));
+    assert!(label.contains("no significant drift"), "{label}");
+    harness.get_by_label(&label);
 }

@@ -9,7 +9,7 @@ use imu_attest::run::{LoadOptions, Run, load};
 use imu_attest::sim::fault::{FaultKind, FaultSpec, FaultTruth};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
-use imu_attest::sim::{SimConfig, simulate};
+use imu_attest::sim::{SimConfig, SimulatedRun, simulate};
 
 mod binary;
 use binary::imu_attest;
@@ -260,6 +260,22 @@ fn identify_writes_the_faults_into_the_model_and_warns() {
 
 #[test]
 fn one_large_gyro_glitch_leaves_k_and_tau_within_their_uncertainty() {
+    one_glitch_leaves_k_and_tau(Channel::Gx, 50.0, |sim, sample| {
+        sim.gyro.as_mut().expect("gyro")[0][sample] += 50.0;
+    });
+}
+
+/// A spike in an angle is differentiated twice into every input: bridged before the observer.
+#[test]
+fn one_large_angle_glitch_leaves_k_and_tau_within_their_uncertainty() {
+    one_glitch_leaves_k_and_tau(Channel::Roll, 0.2, |sim, sample| {
+        sim.angles[0][sample] += 0.2;
+    });
+}
+
+/// Identifies a clean run and a copy with one glitch put in by `inject`: the glitch is found at its
+/// sample, and the gyro's K and tau stay within the clean run's standard deviations.
+fn one_glitch_leaves_k_and_tau(channel: Channel, size: f64, inject: impl Fn(&mut SimulatedRun, usize)) {
     use imu_attest::ident::identify::identify_run;
     use imu_attest::ident::settings::Settings;
     let dir = tempfile::tempdir().expect("a temporary directory");
@@ -269,7 +285,7 @@ fn one_large_gyro_glitch_leaves_k_and_tau_within_their_uncertainty() {
     let clean_path = dir.path().join("clean.csv");
     write_run(&sim, &clean_path).expect("written");
     let sample = sim.time_s.len() / 3;
-    sim.gyro.as_mut().expect("gyro")[0][sample] += 50.0;
+    inject(&mut sim, sample);
     let glitched_path = dir.path().join("glitched.csv");
     write_run(&sim, &glitched_path).expect("written");
     let clean = load(&clean_path, &LoadOptions::default()).expect("loaded");
@@ -277,8 +293,8 @@ fn one_large_gyro_glitch_leaves_k_and_tau_within_their_uncertainty() {
     let found = detect(&glitched);
     assert_eq!(found.len(), 1, "{found:?}");
     assert!(
-        matches!(found[0], RecordingFault::Glitch { channel: Channel::Gx, sample: s, .. } if s == sample),
-        "{found:?}"
+        matches!(found[0], RecordingFault::Glitch { channel: c, sample: s, .. } if s == sample && c == channel),
+        "{size} in {channel:?}: {found:?}"
     );
     let gyro = |run: &Run| {
         identify_run(run, &Settings::default())

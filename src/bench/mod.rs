@@ -164,7 +164,7 @@ pub fn run_bench(
     let mut times = time_stages(&mut state, stages, &mut |n| on_stage(n, count))?;
     let load_peak_rss_mb = memory::peak_rss_bytes().map(mb);
     times.extend(time_stages(&mut state, rest, &mut |n| on_stage(n, count))?);
-    let (samples, rate_hz, columns) = state.run.as_ref().map_or((0, 0.0, 0), |r| {
+    let (samples, rate_hz, columns) = state.run().map_or((0, 0.0, 0), |r| {
         (
             r.len(),
             r.sample_rate_hz,
@@ -231,6 +231,39 @@ mod tests {
                 }
             ),
             "{err}"
+        );
+    }
+
+    /// The bench's session, after every stage (warm retunes, order changes, a Welch change and
+    /// the diagnosis in between), identifies the run under the original settings from scratch
+    /// exactly as a fresh `identify` does: the same model file, byte for byte.
+    #[test]
+    fn the_bench_session_gives_identify_s_model_file() {
+        use crate::ident::session::Start;
+        use crate::model::Model;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/approach.csv.gz");
+        let settings = crate::ident::settings::Settings::default();
+        let mut state = BenchState::new(path.clone(), settings.clone());
+        time_stages(&mut state, standard_stages(), &mut |_| {}).unwrap();
+        let session = state.session.as_mut().unwrap();
+        let run = session.run().clone();
+        let after = session.identify(&settings, Start::Cold, &mut |_| {}).unwrap();
+        let fresh = crate::ident::identify::identify_run(&run, &settings).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let bytes = |id: &crate::ident::identify::RunIdentification, name: &str| {
+            let file = dir.path().join(name);
+            let resolved = crate::ident::settings::Settings {
+                blocks: settings.blocks_for(&run.blocks()),
+                ..settings.clone()
+            };
+            Model::from_identification(&run, &resolved, id)
+                .write_file(&file)
+                .unwrap();
+            std::fs::read(file).unwrap()
+        };
+        assert!(
+            bytes(&after, "bench.json") == bytes(&fresh, "identify.json"),
+            "the session's cold identification differs from identify's"
         );
     }
 }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::identify::read_settings;
 use super::{Args, CliError};
-use crate::diagnose::{DiagnoseError, DiagnoseOptions, diagnose_session};
+use crate::diagnose::{DiagnoseOptions, diagnose_session};
 use crate::ident::session::Session;
 use crate::model::{MODEL_SCHEMA, Model};
 use crate::output::{ensure_not_input, write_atomic};
@@ -69,15 +69,11 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             rejected: Vec::new(),
         },
     )
-    .map_err(|e| match e {
-        DiagnoseError::Ident(ref i) if i.is_input_error() => {
+    .map_err(|e| {
+        if e.is_input_error() {
             CliError::Input(format!("{}: {e}", run_path.display()))
-        }
-        DiagnoseError::TooShort { .. } | DiagnoseError::Degenerate(_) => {
-            CliError::Input(format!("{}: {e}", run_path.display()))
-        }
-        other @ DiagnoseError::Ident(_) => {
-            CliError::Internal(anyhow::anyhow!("{}: {other}", run_path.display()))
+        } else {
+            CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
         }
     })?;
     let value = serde_json::to_value(&report).map_err(|e| CliError::Internal(e.into()))?;

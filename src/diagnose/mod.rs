@@ -19,6 +19,7 @@
 
 pub mod candidates;
 pub mod clock;
+pub mod describe;
 pub mod design;
 pub mod fit;
 pub mod map;
@@ -52,6 +53,18 @@ pub enum DiagnoseError {
     /// The base model could not be fitted (degenerate inputs).
     #[error("the {0} block's base model cannot be fitted: its inputs are degenerate")]
     Degenerate(&'static str),
+}
+
+impl DiagnoseError {
+    /// Whether the error is the user's input (the run, or settings that do not fit it): exit
+    /// status 2 and an error panel, where anything else is our fault (exit status 1).
+    #[must_use]
+    pub fn is_input_error(&self) -> bool {
+        match self {
+            DiagnoseError::Ident(e) => e.is_input_error(),
+            DiagnoseError::TooShort { .. } | DiagnoseError::Degenerate(_) => true,
+        }
+    }
 }
 
 #[cfg(test)]

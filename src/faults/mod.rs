@@ -92,6 +92,27 @@ pub enum RecordingFault {
 }
 
 impl RecordingFault {
+    /// Where it starts, s (the run's `t`).
+    #[must_use]
+    pub fn time_s(&self) -> f64 {
+        match self {
+            RecordingFault::Glitch { time_s, .. } => *time_s,
+            RecordingFault::HeldSamples { first_time_s, .. }
+            | RecordingFault::Clipping { first_time_s, .. } => *first_time_s,
+        }
+    }
+
+    /// What it is, in two or three words ("glitch in gx").
+    #[must_use]
+    pub fn short_label(&self) -> String {
+        let what = match self {
+            RecordingFault::Glitch { .. } => "glitch",
+            RecordingFault::HeldSamples { .. } => "held samples",
+            RecordingFault::Clipping { .. } => "clipping",
+        };
+        format!("{what} in {}", self.channel().name())
+    }
+
     /// The channel the fault is in.
     #[must_use]
     pub fn channel(&self) -> Channel {

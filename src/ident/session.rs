@@ -29,7 +29,7 @@ use super::IdentError;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
 use super::identify::{BlockIdentification, IdentStep, RunIdentification, identify_block_from};
 use super::settings::Settings;
-use super::signals::{BlockSignals, block_signals};
+use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
 use super::structural::StructuralFit;
 use crate::block::Block;
@@ -91,7 +91,8 @@ impl Session {
     }
 
     /// The observer's estimate of the platform motion (the sidecar's declared angle noise, else
-    /// estimated).
+    /// estimated), from the measured angles with their isolated glitches bridged
+    /// ([`bridged`]: a spike in an angle would be differentiated twice into every block's input).
     ///
     /// # Errors
     /// What the observer refuses (too few samples, a bad declared noise).
@@ -103,10 +104,10 @@ impl Session {
             angle_noise_rad: self.run.sidecar.angle_noise_rad,
             ..ObserverSettings::default()
         };
-        let run = &self.run;
+        let angles = bridged(self.run.angles.clone());
         let m = Arc::new(observe(
-            run.angles.each_ref().map(Vec::as_slice),
-            run.sample_rate_hz,
+            angles.each_ref().map(Vec::as_slice),
+            self.run.sample_rate_hz,
             &settings,
         )?);
         self.motion = Some(m.clone());

@@ -3,8 +3,9 @@
 //!
 //! Gyro block: `u` = body rate (rad/s), `x` = `gx, gy, gz`. Accelerometer block: `u` = specific
 //! force at the sidecar's declared lever arm with the vertical channel g-compensated (m/s^2),
-//! `x` = `ax, ay, az`. Isolated glitches in the outputs (`faults::glitch`) are bridged by a
-//! straight line in the identifier's copy; glitches in the angles are reported, not bridged.
+//! `x` = `ax, ay, az`. Isolated glitches (`faults::glitch`) are bridged by a straight line in the
+//! identifier's copy: in the outputs here, in the angles before the observer
+//! ([`crate::ident::session::Session::motion`]).
 
 use crate::block::Block;
 use crate::faults::glitch::{bridge_glitches, find_glitches};
@@ -37,16 +38,16 @@ pub struct BlockSignals {
     pub output: [Vec<f64>; 3],
 }
 
-/// `output` with its isolated glitches bridged by a straight line: they would leak broadband
+/// `columns` with their isolated glitches bridged by a straight line: they would leak broadband
 /// power into every Welch segment they touch (they are reported by `faults::detect` from the run
-/// itself). Every path to the identifier (the command line, the app) uses this.
+/// itself). The session applies it to the outputs and to the angles.
 #[must_use]
-pub fn bridged(mut output: [Vec<f64>; 3]) -> [Vec<f64>; 3] {
-    for x in &mut output {
+pub fn bridged(mut columns: [Vec<f64>; 3]) -> [Vec<f64>; 3] {
+    for x in &mut columns {
         let glitches = find_glitches(x);
         bridge_glitches(x, &glitches);
     }
-    output
+    columns
 }
 
 /// The block's signals, or `None` when the run has no such block.

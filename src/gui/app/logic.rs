@@ -8,7 +8,7 @@ use eframe::egui;
 use super::{App, Command, HeatmapMode, RunState};
 use crate::block::Block;
 use crate::compare::compare;
-use crate::gui::pipeline::{Event, RunId, Stage};
+use crate::gui::pipeline::{Event, FailureKind, RunId, Stage};
 use crate::gui::view::colormap;
 use crate::model::Model;
 
@@ -168,6 +168,7 @@ impl App {
                 run,
                 generation,
                 message,
+                kind,
                 ..
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
@@ -175,6 +176,7 @@ impl App {
                     return;
                 }
                 entry.diagnosing = false;
+                let message = described(&message, kind);
                 entry.diagnosis_error = Some(message.clone());
                 let name = entry.name();
                 self.errors.push(format!("{name}: diagnosis: {message}"));
@@ -184,12 +186,13 @@ impl App {
                 generation,
                 stage,
                 message,
-                cancelled,
-            } => self.failed(run, generation, stage, message, cancelled),
+                kind,
+            } => self.failed(run, generation, stage, &message, kind),
         }
     }
 
-    fn failed(&mut self, run: RunId, generation: u64, stage: Stage, message: String, cancelled: bool) {
+    fn failed(&mut self, run: RunId, generation: u64, stage: Stage, message: &str, kind: FailureKind) {
+        let message = described(message, kind);
         let Some(entry) = self.run_mut(run) else { return };
         if stage == Stage::Load {
             let name = entry.name();
@@ -197,7 +200,7 @@ impl App {
             if self.selected == Some(run) {
                 self.selected = self.runs.first().map(|r| r.id);
             }
-            self.errors.push(if cancelled {
+            self.errors.push(if kind == FailureKind::Cancelled {
                 format!("loading {name} cancelled")
             } else {
                 message
@@ -233,5 +236,14 @@ impl App {
         let image = colormap::pair_image(block, view.heatmap_mode);
         let texture = ctx.load_texture("pair-heatmap", image, egui::TextureOptions::NEAREST);
         self.pair_texture = Some((key, texture));
+    }
+}
+
+/// `message` as the error panel shows it: an internal error says so (the command line's exit
+/// status 1), an input error is the message as it is.
+fn described(message: &str, kind: FailureKind) -> String {
+    match kind {
+        FailureKind::Internal => format!("internal error (please report it): {message}"),
+        FailureKind::Input | FailureKind::Cancelled => message.to_owned(),
     }
 }

@@ -8,17 +8,17 @@
 //! wrapped to (-180°, 180°]: unwrapping the noisy phase of a weak cross-axis element would let
 //! it drift by whole turns.
 
-use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use egui_plot::PlotPoint;
 use num_complex::Complex64;
 
-use super::RunSummary;
 use crate::block::Block;
 use crate::ident::band::{AUTO_LIMITS_HZ, multiple_coherence, native_bins};
-use crate::ident::identify::BlockIdentification;
+use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
-use crate::model::{BlockModel, MODEL_SCHEMA, Model, Source};
+use crate::model::{BlockModel, Model};
+use crate::run::Run;
 
 /// Number of standard deviations of the confidence bands.
 pub const BAND_SIGMAS: f64 = 2.0;
@@ -69,54 +69,44 @@ pub struct BlockBode {
 pub struct Identification {
     /// The settings as used (blocks resolved).
     pub settings: Settings,
-    /// The core's results, stage by stage.
-    pub blocks: Vec<BlockIdentification>,
-    /// The model file (contract section 4).
+    /// The core's results (shared with the worker's session).
+    pub core: Arc<RunIdentification>,
+    /// The model file (contract section 4): `Model::from_identification`, what `identify` writes.
     pub model: Model,
-    /// Curves, one entry per block of `blocks`.
+    /// Curves, one entry per block of `core`.
     pub bode: Vec<BlockBode>,
 }
 
 impl Identification {
     /// Builds the snapshot from the core's results.
     #[must_use]
-    pub fn new(summary: &RunSummary, settings: Settings, blocks: Vec<BlockIdentification>) -> Self {
-        let models: Vec<BlockModel> = blocks.iter().map(BlockModel::from_identification).collect();
-        let bode = blocks.iter().zip(&models).map(|(b, m)| bode(b, m)).collect();
-        let model = Model {
-            schema: MODEL_SCHEMA.to_owned(),
-            source: Source {
-                file: summary.file_name.clone(),
-                sha256: summary.sha256.clone(),
-                regime: summary.regime.clone(),
-                sample_rate_hz: summary.sample_rate_hz,
-            },
-            settings: settings.clone(),
-            blocks: blocks
-                .iter()
-                .zip(models)
-                .map(|(b, m)| (b.block.name().to_owned(), m))
-                .collect::<BTreeMap<_, _>>(),
-            // The app's snapshot holds no columns; recording faults are not shown there yet.
-            recording_faults: summary.recording_faults.clone(),
-        };
+    pub fn new(run: &Run, settings: Settings, core: Arc<RunIdentification>) -> Self {
+        let model = Model::from_identification(run, &settings, &core);
+        let bode = core
+            .blocks
+            .iter()
+            .filter_map(|b| model.blocks.get(b.block.name()).map(|m| bode(b, m)))
+            .collect();
         Self {
             settings,
-            blocks,
+            core,
             model,
             bode,
         }
     }
 
-    /// Whether a structural fit was refined from the previous settings' fit, or a factorisation
-    /// started from the previous Welch settings' factors, rather than computed from scratch: the
-    /// worker then redoes them from scratch when idle and sends the result again (what
-    /// `imu-attest identify` gives for these settings).
+    /// Every block's identification, in the order of the settings.
+    #[must_use]
+    pub fn blocks(&self) -> &[BlockIdentification] {
+        &self.core.blocks
+    }
+
+    /// Whether a structural fit or a factorisation was started from an earlier one rather than
+    /// computed from scratch: the worker then redoes them from scratch when idle and sends the
+    /// result again (what `imu-attest identify` gives for these settings).
     #[must_use]
     pub fn provisional(&self) -> bool {
-        self.blocks
-            .iter()
-            .any(|b| !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch)
+        self.core.provisional()
     }
 
     /// The model of `block`, if identified.

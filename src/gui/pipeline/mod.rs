@@ -216,7 +216,31 @@ pub enum Event {
         stage: Stage,
         /// What went wrong, one line.
         message: String,
-        /// The user cancelled a load.
-        cancelled: bool,
+        /// Whose fault: the input's, ours, or a cancelled load.
+        kind: FailureKind,
     },
+}
+
+/// What kind of failure an [`Event::Failed`] is: one classification with the command line's
+/// exit status 2 (input) versus 1 (internal).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FailureKind {
+    /// The run, or settings that do not fit it: the user can fix it.
+    Input,
+    /// Our fault (a numerical failure, a panic): worth a bug report.
+    Internal,
+    /// The user cancelled a load.
+    Cancelled,
+}
+
+impl FailureKind {
+    /// From an error's own classification.
+    #[must_use]
+    pub fn of(input: bool) -> Self {
+        if input {
+            FailureKind::Input
+        } else {
+            FailureKind::Internal
+        }
+    }
 }

@@ -5,7 +5,12 @@
 //! of [`FIRST_BUCKET`] samples, each next level merges pairs of buckets. Memory: about half the
 //! signal's own. A query picks the finest level that still fits the requested point budget.
 
+use std::sync::Arc;
+
 use egui_plot::PlotPoint;
+
+use crate::faults::Channel;
+use crate::run::Run;
 
 /// Samples per bucket on the finest pyramid level.
 pub const FIRST_BUCKET: usize = 8;
@@ -18,6 +23,27 @@ struct Level {
     max: Vec<f64>,
 }
 
+/// Where a series' samples live: its own, or a column of the loaded run (shared with the core's
+/// pipeline, not copied).
+#[derive(Debug)]
+pub enum Samples {
+    /// Computed for display (e.g. rates by central differences).
+    Owned(Vec<f64>),
+    /// A measured column of the run.
+    Run(Arc<Run>, Channel),
+}
+
+impl Samples {
+    /// The samples.
+    #[must_use]
+    pub fn as_slice(&self) -> &[f64] {
+        match self {
+            Samples::Owned(v) => v,
+            Samples::Run(run, channel) => channel.values(run).unwrap_or_default(),
+        }
+    }
+}
+
 /// A named signal sampled at `t0 + k dt`.
 #[derive(Debug)]
 pub struct Series {
@@ -27,8 +53,7 @@ pub struct Series {
     pub t0: f64,
     /// Sampling step, s.
     pub dt: f64,
-    /// The samples.
-    pub values: Vec<f64>,
+    samples: Samples,
     levels: Vec<Level>,
 }
 
@@ -36,6 +61,24 @@ impl Series {
     /// Builds the series and its pyramid (O(n)).
     #[must_use]
     pub fn new(name: impl Into<String>, t0: f64, dt: f64, values: Vec<f64>) -> Self {
+        Self::of(name, t0, dt, Samples::Owned(values))
+    }
+
+    /// A measured column of `run`, shared (the pyramid is the only new memory).
+    #[must_use]
+    pub fn of_run(run: &Arc<Run>, channel: Channel) -> Self {
+        let t0 = run.time_s.first().copied().unwrap_or(0.0);
+        Self::of(channel.name(), t0, run.dt_s(), Samples::Run(run.clone(), channel))
+    }
+
+    /// The samples.
+    #[must_use]
+    pub fn values(&self) -> &[f64] {
+        self.samples.as_slice()
+    }
+
+    fn of(name: impl Into<String>, t0: f64, dt: f64, samples: Samples) -> Self {
+        let values = samples.as_slice();
         let mut levels: Vec<Level> = Vec::new();
         if values.len() > FIRST_BUCKET {
             let (min, max) = values
@@ -71,7 +114,7 @@ impl Series {
             name: name.into(),
             t0,
             dt,
-            values,
+            samples,
             levels,
         }
     }
@@ -79,7 +122,7 @@ impl Series {
     /// Time of the last sample, s.
     #[must_use]
     pub fn t_end(&self) -> f64 {
-        self.t0 + self.values.len().saturating_sub(1) as f64 * self.dt
+        self.t0 + self.values().len().saturating_sub(1) as f64 * self.dt
     }
 
     /// The sample nearest to time `t`, if `t` is inside the series.
@@ -89,7 +132,7 @@ impl Series {
         if k < 0.0 {
             return None;
         }
-        self.values.get(k as usize).copied()
+        self.values().get(k as usize).copied()
     }
 
     /// Writes into `out` (cleared first) the points to draw `[t_min, t_max]` with about
@@ -97,7 +140,7 @@ impl Series {
     /// (two points per bucket, at the bucket's centre, so the envelope is kept).
     pub fn decimate(&self, t_min: f64, t_max: f64, max_points: usize, out: &mut Vec<PlotPoint>) {
         out.clear();
-        let n = self.values.len();
+        let n = self.values().len();
         if n == 0 || !(t_min.is_finite() && t_max.is_finite()) || t_max < t_min {
             return;
         }
@@ -128,7 +171,7 @@ impl Series {
             }
             _ => {
                 out.extend(
-                    self.values[i0..i1]
+                    self.values()[i0..i1]
                         .iter()
                         .enumerate()
                         .map(|(k, &v)| PlotPoint::new(self.t0 + (i0 + k) as f64 * self.dt, v)),

@@ -5,12 +5,13 @@ use std::sync::Arc;
 use super::display::{self, Spectra};
 use super::{RunSummary, Series};
 use crate::block::Block;
+use crate::faults::Channel;
 use crate::ident;
-use crate::ident::signals::{BlockSignals, channel_names};
-use crate::run::{Run, Sidecar};
-use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
+use crate::ident::signals::channel_names;
+use crate::run::Run;
+use crate::spectral::WelchSettings;
 use crate::stand::inputs::{accel_input, differentiate, gyro_input};
-use crate::stand::observer::{NoiseSource, ObserverError, ObserverSettings, observe};
+use crate::stand::observer::{NoiseSource, ObserverEstimate};
 
 /// Measured columns of a run: angles and the blocks' outputs.
 #[derive(Debug)]
@@ -62,11 +63,10 @@ impl Motion {
     }
 }
 
-/// Splits a loaded run into its summary and its plotted columns (moved, not copied).
+/// A loaded run's summary and its measured columns, shared with the run (the core's pipeline
+/// holds the same `Arc`).
 #[must_use]
-pub fn split_run(run: Run) -> (RunSummary, Measured, Sidecar) {
-    let t0 = run.time_s.first().copied().unwrap_or(0.0);
-    let dt = run.dt_s();
+pub fn split_run(run: &Arc<Run>) -> (RunSummary, Measured) {
     let summary = RunSummary {
         file_name: run.source.file_name.clone(),
         path: run.source.path.clone(),
@@ -77,37 +77,26 @@ pub fn split_run(run: Run) -> (RunSummary, Measured, Sidecar) {
         blocks: run.blocks(),
         sha256: run.source.sha256.clone(),
         notices: run.notices.clone(),
-        recording_faults: crate::faults::detect(&run),
+        recording_faults: crate::faults::detect(run),
     };
-    let triple = |names: [&str; 3], cols: [Vec<f64>; 3]| {
-        let [a, b, c] = cols;
-        [
-            Series::new(names[0], t0, dt, a),
-            Series::new(names[1], t0, dt, b),
-            Series::new(names[2], t0, dt, c),
-        ]
-    };
+    let column = |k: usize| Series::of_run(run, Channel::ALL[k]);
+    let triple = |first: usize| [column(first), column(first + 1), column(first + 2)];
     let measured = Measured {
-        angles: triple(["roll", "yaw", "pitch"], run.angles),
-        gyro: run.gyro.map(|g| triple(["gx", "gy", "gz"], g)),
-        accel: run.accel.map(|a| triple(["ax", "ay", "az"], a)),
+        angles: triple(0),
+        gyro: run.gyro.is_some().then(|| triple(3)),
+        accel: run.accel.is_some().then(|| triple(6)),
     };
-    (summary, measured, run.sidecar)
+    (summary, measured)
 }
 
-/// Observer, block inputs, and plain differentiation for comparison.
-///
-/// # Errors
-/// What the observer refuses (too short a run, a bad declared noise).
-pub fn motion(measured: &Measured, sample_rate_hz: f64, sidecar: &Sidecar) -> Result<Motion, ObserverError> {
+/// The observer's estimate as block inputs, with plain differentiation of the measured angles
+/// for comparison.
+#[must_use]
+pub fn motion(estimate: &ObserverEstimate, measured: &Measured, run: &Run) -> Motion {
     let [r, y, p] = &measured.angles;
-    let angles = [r.values.as_slice(), y.values.as_slice(), p.values.as_slice()];
-    let settings = ObserverSettings {
-        angle_noise_rad: sidecar.angle_noise_rad,
-        ..ObserverSettings::default()
-    };
-    let estimate = observe(angles, sample_rate_hz, &settings)?;
-    let differentiated = differentiate(angles, sample_rate_hz);
+    let angles = [r.values(), y.values(), p.values()];
+    let differentiated = differentiate(angles, run.sample_rate_hz);
+    let sidecar = &run.sidecar;
     let (t0, dt) = (r.t0, r.dt);
     let triple = |names: [&str; 3], cols: [Vec<f64>; 3]| {
         let [a, b, c] = cols;
@@ -118,7 +107,7 @@ pub fn motion(measured: &Measured, sample_rate_hz: f64, sidecar: &Sidecar) -> Re
         ]
     };
     let (lever, g) = (sidecar.accel_lever_arm_m, sidecar.g_mps2);
-    Ok(Motion {
+    Motion {
         angle_noise_rad: estimate.angle_noise_rad,
         noise_declared: estimate.noise_source == NoiseSource::Declared,
         body_rate: triple(["wx", "wy", "wz"], gyro_input(&estimate.euler)),
@@ -131,41 +120,24 @@ pub fn motion(measured: &Measured, sample_rate_hz: f64, sidecar: &Sidecar) -> Re
             ["fx (diff)", "fy (diff)", "fz (diff)"],
             accel_input(&differentiated, lever, g),
         ),
-    })
+    }
 }
 
-/// The identifier's Welch spectra of every block present (inputs from the observer, outputs as
-/// measured), with what the spectra tab draws.
-///
-/// # Errors
-/// What Welch refuses (segment longer than the run, bad overlap, ...).
-pub fn spectra(
-    planner: &mut WelchPlanner,
-    measured: &Measured,
-    motion: &Motion,
-    sample_rate_hz: f64,
-    welch: &WelchSettings,
-) -> Result<Spectra, SpectralError> {
-    let mut blocks = Vec::new();
-    for block in Block::BOTH {
-        let Some(outputs) = measured.outputs(block) else {
-            continue;
-        };
-        let column = |s: &Series| s.values.clone();
-        let signals = BlockSignals {
-            block,
-            input: motion.inputs(block).each_ref().map(column),
-            output: ident::signals::bridged(outputs.each_ref().map(column)),
-        };
-        let core = ident::spectra::block_spectra(planner, &signals, sample_rate_hz, welch)?;
-        let (inputs, outputs) = channel_names(block);
-        let names = [
-            inputs[0], inputs[1], inputs[2], outputs[0], outputs[1], outputs[2],
-        ];
-        blocks.push(display::block_spectra(block, names, Arc::new(core)));
-    }
-    Ok(Spectra {
+/// What the spectra tab draws from the identifier's own spectra of every block.
+#[must_use]
+pub fn spectra(core: Vec<(Block, Arc<ident::spectra::BlockSpectra>)>, welch: &WelchSettings) -> Spectra {
+    let blocks = core
+        .into_iter()
+        .map(|(block, core)| {
+            let (inputs, outputs) = channel_names(block);
+            let names = [
+                inputs[0], inputs[1], inputs[2], outputs[0], outputs[1], outputs[2],
+            ];
+            display::block_spectra(block, names, core)
+        })
+        .collect();
+    Spectra {
         welch: *welch,
         blocks,
-    })
+    }
 }

@@ -11,10 +11,10 @@ use std::time::Duration;
 
 use super::analyse::{Analysis, RunCache};
 use super::stages;
-use super::{Event, Job, JobKind, RunId, Stage};
+use super::{Event, FailureKind, Job, JobKind, RunId, Stage};
+use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::run::{LoadError, LoadOptions, load_with_progress};
-use crate::spectral::WelchPlanner;
 
 /// Called after every event so the UI wakes up (egui's `request_repaint`).
 pub type Waker = Arc<dyn Fn() + Send + Sync>;
@@ -111,10 +111,9 @@ impl Worker {
     }
 }
 
-/// The stage caches and the reusable FFT planner.
+/// Every loaded run's session and display snapshots.
 struct Pipeline {
     runs: HashMap<RunId, RunCache>,
-    planner: WelchPlanner,
     events: Sender<Event>,
     waker: Waker,
     load: LoadOptions,
@@ -131,7 +130,6 @@ impl Pipeline {
     fn new(events: Sender<Event>, waker: Waker, load: LoadOptions) -> Self {
         Self {
             runs: HashMap::new(),
-            planner: WelchPlanner::new(),
             events,
             waker,
             load,
@@ -197,7 +195,7 @@ impl Pipeline {
                 generation,
                 stage: Stage::Identify,
                 message: "internal error (panic) while refitting the structural model".into(),
-                cancelled: false,
+                kind: FailureKind::Internal,
             });
         }
     }
@@ -223,7 +221,7 @@ impl Pipeline {
                 generation,
                 stage,
                 message: format!("internal error (panic) in the {} stage: {what}", stage.name()),
-                cancelled: false,
+                kind: FailureKind::Internal,
             });
         }
     }
@@ -254,19 +252,21 @@ impl Pipeline {
             }
             JobKind::Diagnose { settings, rejected } => {
                 *stage = Stage::Diagnose;
-                let Some(cache) = self.runs.get(&run) else { return };
+                let Some(cache) = self.runs.get_mut(&run) else {
+                    return;
+                };
                 let event = match super::diagnosis::diagnose(cache, &settings, &rejected) {
                     Ok(report) => Event::Diagnosed {
                         run,
                         generation,
                         report: Arc::new(report),
                     },
-                    Err(message) => Event::Failed {
+                    Err(e) => Event::Failed {
                         run,
                         generation,
                         stage: Stage::Diagnose,
-                        message,
-                        cancelled: false,
+                        message: e.to_string(),
+                        kind: FailureKind::of(e.is_input_error()),
                     },
                 };
                 self.send(event);
@@ -296,10 +296,13 @@ impl Pipeline {
         };
         match load_with_progress(path, &self.load.clone(), &mut progress) {
             Ok(loaded) => {
-                let (summary, measured, sidecar) = stages::split_run(loaded);
+                let loaded = Arc::new(loaded);
+                let (summary, measured) = stages::split_run(&loaded);
                 let (summary, measured) = (Arc::new(summary), Arc::new(measured));
-                self.runs
-                    .insert(run, RunCache::new(summary.clone(), sidecar, measured.clone()));
+                self.runs.insert(
+                    run,
+                    RunCache::new(summary.clone(), measured.clone(), Session::new(loaded)),
+                );
                 self.send(Event::Loaded {
                     run,
                     generation,
@@ -311,7 +314,11 @@ impl Pipeline {
                 run,
                 generation,
                 stage: Stage::Load,
-                cancelled: matches!(e, LoadError::Cancelled),
+                kind: if matches!(e, LoadError::Cancelled) {
+                    FailureKind::Cancelled
+                } else {
+                    FailureKind::Input
+                },
                 message: e.to_string(),
             }),
         }
@@ -319,11 +326,7 @@ impl Pipeline {
 
     fn analyse(&mut self, run: RunId, generation: u64, settings: &Settings, stage: &mut Stage) {
         let Pipeline {
-            runs,
-            planner,
-            events,
-            waker,
-            ..
+            runs, events, waker, ..
         } = self;
         let send = |event: Event| {
             // The app is gone when this fails; nothing left to tell.
@@ -336,7 +339,7 @@ impl Pipeline {
             generation,
             send: &send,
         }
-        .analyse(cache, planner, settings, stage);
+        .analyse(cache, settings, stage);
     }
 }
 
@@ -409,7 +412,7 @@ mod tests {
                 generation: 1,
                 stage: Stage::Load,
                 message,
-                cancelled: false,
+                kind: super::FailureKind::Internal,
             },
         ] = &events[..]
         else {
@@ -490,7 +493,7 @@ mod tests {
         // The refit is what `identify` gives for these settings.
         let run = crate::run::load(&path, &crate::run::LoadOptions::default()).expect("sample run");
         let reference = identify_run(&run, &retuned).expect("identify");
-        for (shown, cold) in polished.blocks.iter().zip(&reference.blocks) {
+        for (shown, cold) in polished.blocks().iter().zip(&reference.blocks) {
             assert_eq!(shown.block, cold.block);
             assert_eq!(*shown.structural, *cold.structural, "{:?}", shown.block);
         }
@@ -506,12 +509,12 @@ mod tests {
         worker.submit(job(4, analyse(&rewelched)));
         let sent = identified(&worker);
         assert_eq!(sent.len(), 2, "the provisional result, then the one from scratch");
-        assert!(sent[0].1.blocks.iter().all(|b| !b.factorisation.from_scratch));
+        assert!(sent[0].1.blocks().iter().all(|b| !b.factorisation.from_scratch));
         assert!(sent[0].1.provisional());
         let polished = &sent[1].1;
         assert!(!polished.provisional());
         let reference = identify_run(&run, &rewelched).expect("identify");
-        for (shown, cold) in polished.blocks.iter().zip(&reference.blocks) {
+        for (shown, cold) in polished.blocks().iter().zip(&reference.blocks) {
             assert_eq!(*shown.structural, *cold.structural, "{:?}", shown.block);
             assert_eq!(
                 shown.factorisation.causal_wiener,

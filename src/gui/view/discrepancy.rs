@@ -78,7 +78,13 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
                     f.gap_before_db, f.gap_after_db
                 ));
             });
-            ui.label(format!("size: {}", f.parameters));
+            let lines = crate::diagnose::describe::describe(f);
+            if lines.is_empty() {
+                ui.label(format!("size: {}", f.parameters));
+            }
+            for line in lines {
+                ui.label(line);
+            }
             ui.weak(&f.evidence);
         });
     }

@@ -10,6 +10,7 @@ pub mod heatmap;
 pub mod results;
 pub mod runs;
 pub mod spectra;
+pub mod stationarity;
 pub mod timeseries;
 
 use eframe::egui::Color32;

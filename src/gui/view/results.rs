@@ -84,7 +84,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     }
     let auto_order = id.settings.order == OrderSetting::Auto;
     for (name, m) in id
-        .blocks
+        .blocks()
         .iter()
         .filter_map(|b| id.model.blocks.get_key_value(b.block.name()))
     {
@@ -114,6 +114,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ui.monospace(k_row_label(name, m, i));
         }
         figures(ui, name, m);
+        super::stationarity::show(ui, name, m);
         candidates(ui, name, m);
         fit(ui, m, id.settings.lambda == LambdaSetting::Auto);
     }

@@ -2,9 +2,10 @@
 //! drawn from its min/max pyramid at about two points per pixel.
 
 use eframe::egui;
-use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints};
+use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, PlotUi, VLine};
 
 use super::palette;
+use crate::faults::RecordingFault;
 use crate::gui::app::{RunEntry, ViewState};
 use crate::gui::pipeline::{Measured, Motion, Series};
 
@@ -64,6 +65,7 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
         }
     });
     let groups = groups(measured, run.motion.as_deref(), view.show_differentiated);
+    let faults: &[RecordingFault] = run.summary.as_ref().map_or(&[], |s| &s.recording_faults);
     let [first, ..] = &measured.angles;
     let (t_start, t_end) = (first.t0, first.t_end().max(first.t0 + first.dt));
     let link = egui::Id::unique("time-series-link");
@@ -110,6 +112,7 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
                         .style(style),
                 );
             }
+            mark_faults(plot, series, faults);
             let cursor = plot
                 .response()
                 .hovered()
@@ -126,6 +129,26 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
         cursor_t = cursor_t.or(cursor);
     }
     readout(ui, &groups, cursor_t);
+}
+
+/// The recording faults of the plot's channels: a red line where each starts (named in the
+/// legend), and a clipping's level.
+fn mark_faults(plot: &mut PlotUi<'_>, series: &[(&Series, bool)], faults: &[RecordingFault]) {
+    let red = egui::Color32::from_rgb(220, 40, 40);
+    for fault in faults {
+        let channel = fault.channel().name();
+        if !series.iter().any(|(s, diff)| !diff && s.name == channel) {
+            continue;
+        }
+        plot.vline(
+            VLine::new(fault.short_label(), fault.time_s())
+                .color(red)
+                .style(LineStyle::dashed_loose()),
+        );
+        if let RecordingFault::Clipping { level, .. } = fault {
+            plot.hline(HLine::new(fault.short_label(), *level).color(red));
+        }
+    }
 }
 
 fn readout(ui: &mut egui::Ui, groups: &[Group<'_>], t: Option<f64>) {

@@ -1,0 +1,172 @@
+//! A finding's size in the lab's words and units, for people (the app, the command line's
+//! summary): the report's `parameters` (contract section 5) read back and formatted, never JSON.
+
+use serde_json::Value;
+
+use super::report::Finding;
+use crate::effect::Effect;
+use crate::ident::signals::channel_names;
+
+/// Reads a number.
+fn num(v: &Value) -> Option<f64> {
+    v.as_f64()
+}
+
+/// Reads three numbers.
+fn three(v: &Value) -> Option<[f64; 3]> {
+    let a = v.as_array()?;
+    Some([num(a.first()?)?, num(a.get(1)?)?, num(a.get(2)?)?])
+}
+
+/// `gx +1.20, gy -0.80, gz +0.00` with `scale` and `decimals`.
+fn per_channel(names: [&str; 3], v: [f64; 3], scale: f64, decimals: usize) -> String {
+    names
+        .iter()
+        .zip(v)
+        .map(|(n, x)| format!("{n} {:+.decimals$}", x * scale))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The finding's size as lines of text with units (empty when the parameters cannot be read).
+#[must_use]
+pub fn describe(f: &Finding) -> Vec<String> {
+    let p = &f.parameters;
+    let (inputs, outputs) = channel_names(f.block);
+    let unit = match f.block {
+        crate::block::Block::Gyro => "rad/s",
+        crate::block::Block::Accel => "m/s²",
+    };
+    let lines = match f.effect {
+        Effect::GSensitivity => p.get("G").and_then(Value::as_array).map(|rows| {
+            let mut out = vec![format!("G, {unit} per m/s² (rows: outputs; columns: fx fy fz):")];
+            for (name, row) in outputs.iter().zip(rows) {
+                if let Some([a, b, c]) = three(row) {
+                    out.push(format!("  {name}: {a:+.3e} {b:+.3e} {c:+.3e}"));
+                }
+            }
+            out
+        }),
+        Effect::SensorLag => p
+            .get("T_s")
+            .and_then(num)
+            .map(|t| vec![format!("first-order lag, time constant T = {:.3} ms", t * 1e3)]),
+        Effect::AxisTimeSkew => p.get("skew_s").and_then(three).map(|s| {
+            vec![format!(
+                "channel delays relative to their mean, ms: {}",
+                per_channel(outputs, s, 1e3, 3)
+            )]
+        }),
+        Effect::ScaleNonlinearity => p.get("k2").and_then(three).map(|k| {
+            vec![format!(
+                "quadratic scale factor k2 (x += k2 u|u|), per {unit}: {}",
+                per_channel(outputs, k, 1.0, 5)
+            )]
+        }),
+        Effect::VibrationTone => {
+            let fr = p.get("frequency_hz").and_then(num);
+            let a = p.get("amplitude").and_then(three);
+            fr.zip(a).map(|(fr, a)| {
+                vec![format!(
+                    "tone at {fr:.3} Hz; amplitude, {unit}: {}",
+                    per_channel(outputs, a, 1.0, 6)
+                )]
+            })
+        }
+        Effect::LeverArmError => p.get("offset_m").and_then(three).map(|o| {
+            vec![format!(
+                "lever arm off by (true minus declared), cm: {}",
+                per_channel(["x", "y", "z"], o, 100.0, 2)
+            )]
+        }),
+        Effect::PlatformResonance => {
+            let axis = p.get("axis_index").and_then(Value::as_u64).map(|a| a as usize);
+            let fr = p.get("frequency_hz").and_then(num);
+            let z = p.get("damping").and_then(num);
+            match (axis, fr, z) {
+                (Some(a), Some(fr), Some(z)) if a < 3 => Some(vec![format!(
+                    "mount resonance on input {}: {fr:.2} Hz, damping ratio {z:.3}",
+                    inputs[a]
+                )]),
+                _ => None,
+            }
+        }
+        Effect::ClockDrift => {
+            let d = p.get("drift_ppm").and_then(num);
+            let c = p.get("delay_change_s").and_then(num);
+            d.zip(c).map(|(d, c)| {
+                vec![format!(
+                    "block clock {} by {:.1} ppm: the delay changes by {:+.2} ms over the record",
+                    if d >= 0.0 { "fast" } else { "slow" },
+                    d.abs(),
+                    c * 1e3
+                )]
+            })
+        }
+    };
+    lines.unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use serde_json::json;
+
+    use super::*;
+    use crate::block::Block;
+
+    fn finding(block: Block, effect: Effect, parameters: Value) -> Finding {
+        Finding {
+            block,
+            effect,
+            name: effect.name_on(block),
+            parameters,
+            gap_before_db: -20.0,
+            gap_after_db: -30.0,
+            evidence: String::new(),
+            delta_chi2: 100.0,
+            added_parameters: 1,
+            criterion_gain: 80.0,
+        }
+    }
+
+    #[test]
+    fn sizes_read_with_units() {
+        let f = finding(Block::Gyro, Effect::SensorLag, json!({"T_s": 0.004_02}));
+        assert_eq!(describe(&f), vec!["first-order lag, time constant T = 4.020 ms"]);
+        let f = finding(
+            Block::Accel,
+            Effect::ClockDrift,
+            json!({"drift_ppm": -19.9, "delay_change_s": -0.005_97}),
+        );
+        assert_eq!(
+            describe(&f),
+            vec!["block clock slow by 19.9 ppm: the delay changes by -5.97 ms over the record"]
+        );
+        let f = finding(
+            Block::Accel,
+            Effect::LeverArmError,
+            json!({"offset_m": [0.02, -0.015, 0.0301]}),
+        );
+        assert_eq!(
+            describe(&f),
+            vec!["lever arm off by (true minus declared), cm: x +2.00, y -1.50, z +3.01"]
+        );
+        let f = finding(
+            Block::Gyro,
+            Effect::PlatformResonance,
+            json!({"axis": "wy", "axis_index": 1, "frequency_hz": 24.13, "damping": 0.051}),
+        );
+        assert_eq!(
+            describe(&f),
+            vec!["mount resonance on input wy: 24.13 Hz, damping ratio 0.051"]
+        );
+    }
+
+    #[test]
+    fn unreadable_parameters_give_no_line() {
+        let f = finding(Block::Gyro, Effect::SensorLag, json!({"T": "x"}));
+        assert!(describe(&f).is_empty());
+        let f = finding(Block::Gyro, Effect::VibrationTone, Value::Null);
+        assert!(describe(&f).is_empty());
+    }
+}

@@ -1,0 +1,92 @@
+//! The stationarity check in the results panel: the block identified on stretches of the record,
+//! each stretch's delay (with ±2σ bars) and scale-factor errors against time, the whole record's
+//! delay and the fitted trend. A clock that drifts shows as a sloping line of delays.
+
+use eframe::egui;
+use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points};
+
+use super::palette;
+use crate::ident::stretches::Stationarity;
+use crate::model::BlockModel;
+
+/// The summary line, e.g. `gyro stretches: 12; delay trend +0.3 ± 0.8 ppm (no significant drift)`.
+#[must_use]
+pub fn stationarity_label(block: &str, st: &Stationarity) -> String {
+    format!(
+        "{block} stretches: {}; delay trend {:+.1} ± {:.1} ppm ({})",
+        st.stretches.len(),
+        st.tau_trend * 1e6,
+        st.tau_trend_std * 1e6,
+        if st.drifts() {
+            "the delay drifts: the clocks of block and stand disagree"
+        } else {
+            "no significant drift"
+        }
+    )
+}
+
+/// Draws the delay and scale-factor plots of `m`'s stretches (nothing for a record too short to
+/// cut).
+pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
+    let Some(st) = &m.stationarity else {
+        ui.weak(format!(
+            "{name}: record too short to cut into stretches (stationarity not checked)"
+        ));
+        return;
+    };
+    ui.label(stationarity_label(name, st));
+    let mid = |s: &crate::ident::stretches::StretchFit| 0.5 * (s.span_s[0] + s.span_s[1]);
+    let link = egui::Id::unique(("stretches", name));
+    Plot::new(("stretch-delay", name))
+        .height(110.0)
+        .link_axis(link, [true, false])
+        .legend(Legend::default())
+        .y_axis_label("τ, ms")
+        .allow_scroll(false)
+        .show(ui, |plot| {
+            for s in &st.stretches {
+                let (t, tau, sd) = (mid(s), s.tau_s * 1e3, 2.0 * s.tau_std_s * 1e3);
+                plot.line(
+                    Line::new("±2σ", PlotPoints::new(vec![[t, tau - sd], [t, tau + sd]])).color(palette(2)),
+                );
+            }
+            let points: Vec<[f64; 2]> = st.stretches.iter().map(|s| [mid(s), s.tau_s * 1e3]).collect();
+            plot.points(
+                Points::new("stretch delay", PlotPoints::new(points))
+                    .radius(3.0)
+                    .color(palette(2)),
+            );
+            plot.hline(HLine::new("whole record", m.tau_s * 1e3).style(LineStyle::dashed_loose()));
+            let n = st.stretches.len() as f64;
+            let t_mean = st.stretches.iter().map(mid).sum::<f64>() / n;
+            let tau_mean = st.stretches.iter().map(|s| s.tau_s).sum::<f64>() / n;
+            let (Some(first), Some(last)) = (st.stretches.first(), st.stretches.last()) else {
+                return;
+            };
+            let line = |t: f64| [t, (tau_mean + st.tau_trend * (t - t_mean)) * 1e3];
+            plot.line(
+                Line::new(
+                    "trend",
+                    PlotPoints::new(vec![line(first.span_s[0]), line(last.span_s[1])]),
+                )
+                .color(palette(3)),
+            );
+        });
+    Plot::new(("stretch-gain", name))
+        .height(110.0)
+        .link_axis(link, [true, false])
+        .legend(Legend::default())
+        .y_axis_label("scale error, ppm")
+        .x_axis_label("t, s")
+        .allow_scroll(false)
+        .show(ui, |plot| {
+            for i in 0..3 {
+                let points: Vec<[f64; 2]> = st
+                    .stretches
+                    .iter()
+                    .map(|s| [mid(s), (s.k[i][i] - 1.0) * 1e6])
+                    .collect();
+                plot.line(Line::new(m.outputs[i].as_str(), PlotPoints::new(points)).color(palette(3 + i)));
+            }
+        });
+}

@@ -90,7 +90,7 @@ fn a_new_segment_length_recomputes_the_spectra_only() {
     let mut harness = app_on_sample();
     let (g0, motion0) = {
         let run = &harness.state().runs()[0];
-        (run.spectra_generation, run.motion.clone().expect("motion"))
+        (run.spectra.generation, run.motion.clone().expect("motion"))
     };
     let mut settings = harness.state().settings().clone();
     assert_ne!(settings.welch.segment_len, 1024);
@@ -100,7 +100,7 @@ fn a_new_segment_length_recomputes_the_spectra_only() {
         .push_command(Command::SetSettings(Box::new(settings.clone())));
     harness.run_steps(2);
     let run = &harness.state().runs()[0];
-    assert!(run.spectra_generation > g0, "generation advances");
+    assert!(run.spectra.generation > g0, "generation advances");
     let spectra = run.spectra.as_ref().expect("spectra");
     assert_eq!(spectra.welch.segment_len, 1024);
     assert_eq!(spectra.blocks[0].matrix.n_bins(), 513);
@@ -114,17 +114,39 @@ fn a_new_segment_length_recomputes_the_spectra_only() {
     settings.welch.segment_len = 1 << 17;
     harness
         .state_mut()
-        .push_command(Command::SetSettings(Box::new(settings)));
+        .push_command(Command::SetSettings(Box::new(settings.clone())));
     harness.run_steps(2);
     let app = harness.state();
     let run = &app.runs()[0];
-    assert!(run.analysis_error.is_some());
+    assert!(run.spectra.error.is_some() && run.identification.error.is_some());
     assert_eq!(run.spectra.as_ref().expect("kept").welch.segment_len, 1024);
     assert!(
         app.errors().iter().any(|e| e.contains("spectra")),
         "{:?}",
         app.errors()
     );
+    let errors_before = app.errors().len();
+
+    // Another bad segment, then the same one again: one line per distinct failure.
+    for segment_len in [1 << 18, 1 << 17] {
+        settings.welch.segment_len = segment_len;
+        harness
+            .state_mut()
+            .push_command(Command::SetSettings(Box::new(settings.clone())));
+        harness.run_steps(2);
+    }
+    let errors = harness.state().errors();
+    assert_eq!(errors.len(), errors_before + 1, "{errors:?}");
+    assert!(errors.last().is_some_and(|e| e.ends_with("(x2)")), "{errors:?}");
+
+    // Fixed: the run's analysis errors leave the panel.
+    settings.welch.segment_len = 1024;
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings)));
+    harness.run_steps(3);
+    let errors = harness.state().errors();
+    assert!(!errors.iter().any(|e| e.contains("spectra")), "{errors:?}");
 }
 
 #[test]

@@ -32,7 +32,7 @@ fn the_clean_sample_run_has_no_missing_effect() {
     harness.get_by_label("verdict: no missing effect");
     let run = harness.state().selected().unwrap();
     assert!(run.diagnosis.as_ref().unwrap().findings.is_empty());
-    assert!(!run.diagnosing);
+    assert!(!run.diagnosis.running());
 }
 
 #[test]
@@ -68,7 +68,7 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
             .map(|f| (&f.block, &f.effect))
             .collect::<Vec<_>>(),
         run.rejected,
-        run.diagnosing
+        run.diagnosis.running()
     );
     harness.get_by_label_contains("rejected: gyro sensor_lag");
     // The app stays usable: the Bode tab still draws the identification.

@@ -61,6 +61,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     harness.get_by_label(&k0);
     let before = harness.state().runs()[0]
         .identification
+        .value
         .clone()
         .expect("identified");
 
@@ -73,6 +74,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     assert!(harness.query_by_label(&k0).is_none(), "the old K is gone");
     let after = harness.state().runs()[0]
         .identification
+        .value
         .clone()
         .expect("identified");
     assert!(!Arc::ptr_eq(&before, &after), "a new identification");
@@ -92,6 +94,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     harness.get_by_label(&tau2);
     let id = harness.state().runs()[0]
         .identification
+        .value
         .clone()
         .expect("identified");
     assert_eq!(id.model.blocks["gyro"].order, other);
@@ -106,6 +109,7 @@ fn a_worker_panic_is_shown_the_last_result_kept_and_the_app_goes_on() {
     let mut harness = sample_app();
     let good = harness.state().runs()[0]
         .identification
+        .value
         .clone()
         .expect("identified");
     let id = harness.state().runs()[0].id;
@@ -129,7 +133,7 @@ fn a_worker_panic_is_shown_the_last_result_kept_and_the_app_goes_on() {
     // Still responsive: a new order is identified and clears the failure.
     set(&mut harness, |s| s.order = OrderSetting::Fixed(0));
     let run = &harness.state().runs()[0];
-    assert!(run.analysis_error.is_none());
+    assert!(run.identification.error.is_none());
     assert_eq!(
         run.identification.as_ref().expect("new").model.blocks["gyro"].order,
         0
@@ -178,6 +182,7 @@ fn an_exported_model_reads_back_and_an_input_is_never_overwritten() {
     assert_eq!(model.schema, MODEL_SCHEMA);
     let shown = &harness.state().runs()[0]
         .identification
+        .value
         .clone()
         .expect("identified")
         .model;

@@ -98,7 +98,7 @@ fn a_run_with_a_still_stand_axis_is_refused_with_the_message_of_identify() {
     let harness = app(vec![path]);
     let run = &harness.state().runs()[0];
     assert!(run.identification.is_none(), "no model is shown for a still axis");
-    let shown = run.analysis_error.clone().expect("an error");
+    let shown = run.identification.error.clone().expect("an error");
     assert!(shown.contains(&expected), "app: {shown}\nidentify: {expected}");
     assert!(harness.get_all_by_label_contains("not excited").count() >= 1);
 }
@@ -122,13 +122,13 @@ fn a_stale_diagnosis_never_replaces_a_newer_one() {
     harness.run_steps(2);
     let run = &harness.state().runs()[0];
     assert!(run.diagnosis.is_none(), "the first (stale) report was dropped");
-    assert!(run.diagnosing, "the newer one is still awaited");
-    let newest = run.diagnosis_generation;
+    assert!(run.diagnosis.running(), "the newer one is still awaited");
+    let newest = run.diagnosis.requested;
     assert_eq!(harness.state_mut().run_worker_jobs(), 1);
     harness.run_steps(2);
     let run = &harness.state().runs()[0];
-    assert!(run.diagnosis.is_some() && !run.diagnosing);
-    assert_eq!(run.diagnosis_generation, newest);
+    assert!(run.diagnosis.is_some() && !run.diagnosis.running());
+    assert_eq!(run.diagnosis.generation, newest);
 }
 
 /// The app and `identify` give the same model file, byte for byte, for the same run and
@@ -212,6 +212,7 @@ fn results_show_the_stretches_and_name_a_drifting_clock() {
     let harness = app(vec![path]);
     let id = harness.state().runs()[0]
         .identification
+        .value
         .clone()
         .expect("identified");
     let gyro = id.model.blocks.get("gyro").expect("gyro");
@@ -223,4 +224,48 @@ fn results_show_the_stretches_and_name_a_drifting_clock() {
     let label = stationarity_label("accel", accel.stationarity.as_ref().expect("cut"));
     assert!(label.contains("no significant drift"), "{label}");
     harness.get_by_label(&label);
+}
+
+/// A span set in the app: the results say so, and the export is `identify --settings` with the
+/// same span, byte for byte.
+#[test]
+fn a_span_set_in_the_app_is_identify_s_span() {
+    use imu_attest::gui::{Command, sample_run_path};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = sample_run_path().expect("sample");
+    let mut harness = app(vec![path.clone()]);
+    let settings = Settings {
+        span_s: Some([20.0, 100.0]),
+        ..Settings::default()
+    };
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings.clone())));
+    harness.run_steps(6);
+    harness.get_by_label("gyro analysed over t = 20.00 to 100.00 s of the record");
+    let exported = dir.path().join("app.json");
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(exported.clone())));
+    harness.run_steps(2);
+    let settings_path = dir.path().join("span.json");
+    std::fs::write(&settings_path, serde_json::to_vec(&settings).expect("json")).expect("written");
+    let out = dir.path().join("cli.json");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_imu-attest"))
+        .arg("identify")
+        .arg(&path)
+        .arg("--settings")
+        .arg(&settings_path)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let app_file = std::fs::read(&exported).expect("exported");
+    assert!(
+        app_file == std::fs::read(&out).expect("written"),
+        "the app's span differs from identify's"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&app_file).expect("json");
+    assert_eq!(v["settings"]["span_s"], serde_json::json!([20.0, 100.0]));
 }

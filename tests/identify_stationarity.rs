@@ -89,3 +89,26 @@ fn clean_runs_do_not_drift_and_their_stretches_agree() {
         }
     }
 }
+
+/// No false drift warning on ten clean runs of every regime (120 s, cut into stretches).
+#[test]
+fn ten_clean_runs_raise_no_drift_warning() {
+    for seed in 0..10_u64 {
+        let regime = Regime::ALL[seed as usize % Regime::ALL.len()];
+        let mut config = SimConfig::new(regime);
+        config.seed = 61 + seed;
+        config.duration_s = 120.0;
+        let sim = simulate(&config).expect("simulated");
+        let (drift, st) = gyro_drift(&sim);
+        assert!(
+            st.stretches.len() >= 4,
+            "{regime} seed {seed}: {} stretches",
+            st.stretches.len()
+        );
+        assert!(
+            drift.is_none(),
+            "{regime} seed {seed}: false drift {drift:?} ({:.2} ppm)",
+            st.tau_trend * 1e6
+        );
+    }
+}

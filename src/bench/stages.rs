@@ -105,10 +105,10 @@ impl BenchState {
 
     /// The session's cached spectra and factorisations of every block (computed if missing).
     fn cached(&mut self, stage: &'static str) -> Result<Vec<Cached>, BenchError> {
-        let (welch, blocks) = (self.settings.welch, self.settings.blocks.clone());
+        let settings = self.settings.clone();
         let session = self.session(stage)?;
-        let spectra = session.spectra(&welch, &blocks)?;
-        let factorisations = session.factorisations(&welch, &blocks, Start::Cold)?;
+        let spectra = session.spectra(&settings, &settings.blocks)?;
+        let factorisations = session.factorisations(&settings, &settings.blocks, Start::Cold)?;
         Ok(spectra
             .into_iter()
             .zip(factorisations)
@@ -139,17 +139,17 @@ fn observer_stage(state: &mut BenchState) -> Result<(), BenchError> {
 }
 
 fn spectra_stage(state: &mut BenchState) -> Result<(), BenchError> {
-    let (welch, blocks) = (state.settings.welch, state.settings.blocks.clone());
-    state.session("spectra")?.spectra(&welch, &blocks)?;
+    let settings = state.settings.clone();
+    state.session("spectra")?.spectra(&settings, &settings.blocks)?;
     Ok(())
 }
 
 fn factorisation_stage(state: &mut BenchState) -> Result<(), BenchError> {
-    let (welch, blocks) = (state.settings.welch, state.settings.blocks.clone());
+    let settings = state.settings.clone();
     // The blocks at once, as `rewelch` and the app do.
     state
         .session("factorisation")?
-        .factorisations(&welch, &blocks, Start::Cold)?;
+        .factorisations(&settings, &settings.blocks, Start::Cold)?;
     Ok(())
 }
 

@@ -116,6 +116,16 @@ impl State {
         gap_db(&self.design, &residual)
     }
 
+    /// Band power of the residual of all three channels relative to the measured outputs', dB.
+    #[must_use]
+    pub fn total_gap_db(&self) -> f64 {
+        let r: f64 = self.residual.iter().flatten().map(Complex64::norm_sqr).sum();
+        let x: f64 = (0..3)
+            .map(|i| self.design.z[i].iter().map(Complex64::norm_sqr).sum::<f64>())
+            .sum();
+        10.0 * (r / x.max(f64::MIN_POSITIVE)).max(1e-30).log10()
+    }
+
     /// The worst channel's gap, dB.
     #[must_use]
     pub fn worst_gap_db(&self) -> f64 {

@@ -75,12 +75,13 @@ pub fn diagnose_session(
         ..settings.clone()
     };
     let id = session.identify_aside(&settings)?;
+    let span = session.span(&settings)?;
     let mut findings = Vec::new();
     let mut blocks = BTreeMap::new();
     let mut penalty = 0.0;
     for b in &id.blocks {
         let band = b.band_hz;
-        let design = block_design(run, &id.motion.euler, b, band).ok_or(DiagnoseError::TooShort {
+        let design = block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
             block: b.block.name(),
             low: band[0],
             high: band[1],
@@ -119,8 +120,15 @@ pub fn diagnose_session(
 
 /// The block's whole-record design, its expected disturbance level taken from the
 /// identification's `S_psi`.
-fn block_design(run: &Run, motion: &EulerSeries, b: &BlockIdentification, band: [f64; 2]) -> Option<Design> {
+fn block_design(
+    run: &Run,
+    motion: &EulerSeries,
+    b: &BlockIdentification,
+    band: [f64; 2],
+    span: &std::ops::Range<usize>,
+) -> Option<Design> {
     let signals = block_signals(run, motion, b.block)?;
+    let cut = |x: &[f64]| x[span.clone()].to_vec();
     let g = run.sidecar.g_mps2;
     let auxiliary: Vec<Vec<f64>> = match b.block {
         Block::Gyro => motion
@@ -154,9 +162,9 @@ fn block_design(run: &Run, motion: &EulerSeries, b: &BlockIdentification, band: 
     Design::new(
         &DesignSignals {
             block: b.block,
-            output: &signals.output,
-            input: &signals.input,
-            auxiliary: &auxiliary,
+            output: &signals.output.each_ref().map(|x| cut(x)),
+            input: &signals.input.each_ref().map(|x| cut(x)),
+            auxiliary: &auxiliary.iter().map(|x| cut(x)).collect::<Vec<_>>(),
             sample_rate_hz: run.sample_rate_hz,
         },
         band,
@@ -253,11 +261,20 @@ fn diagnose_block(
         if round == 0 {
             first_round = cands.iter().map(|c| summary(c, rule)).collect();
         }
-        let Some(best) = cands.first() else { break };
-        if rule.gain(best) <= 0.0 {
-            break;
-        }
-        let Some(next) = state.with(best, band) else { break };
+        // The best significant candidate that closes part of the gap (contract section 5) and
+        // opens it nowhere: one that trades the strong bins for the weak ones is no finding.
+        let before = state.worst_gap_db();
+        let chosen = cands
+            .iter()
+            .take_while(|c| rule.gain(c) > 0.0)
+            .filter(|c| within_reach(c, band))
+            .find_map(|c| {
+                state
+                    .with(c, band)
+                    .filter(|n| closes_gap(&state, n))
+                    .map(|n| (c, n))
+            });
+        let Some((best, next)) = chosen else { break };
         let index = match &best.extension {
             Extension::Tone(_) => state.tones.len(),
             Extension::Structural(_) | Extension::ClockCorrected { .. } => {
@@ -267,7 +284,7 @@ fn diagnose_block(
         let (delta, added) = (best.delta_chi2, best.added_params);
         let threshold = rule.threshold(added);
         let gain = delta - threshold;
-        let (before, after) = (state.worst_gap_db(), next.worst_gap_db());
+        let after = next.worst_gap_db();
         let finding = Finding {
             block: b.block,
             effect: best.effect,
@@ -297,6 +314,44 @@ fn diagnose_block(
     let mut report = block_report(&base, &state, first_round, dof);
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     Ok((report, findings, dof.ln()))
+}
+
+/// Highest damping ratio of a resonance reported as a finding: a mode damped more has no peak
+/// (none at all beyond 0.707), and the data cannot tell it from a gentle roll-off (a lag, or the
+/// stand's band limit). The catalogue's weakest simulated resonance has damping 0.5.
+const MAX_RESONANCE_DAMPING: f64 = 0.6;
+/// How close to a band edge (relative) a resonance may sit and still be a finding.
+const EDGE_MARGIN: f64 = 0.03;
+
+/// Whether a candidate's size is inside what the data can show: a resonance inside the band
+/// (not within [`EDGE_MARGIN`] of an edge, where the fit parks a mode that explains a misfit
+/// beyond the band) and damped at most [`MAX_RESONANCE_DAMPING`]. (A lag whose corner lies
+/// beyond the band is still seen by its droop: a 1.2 ms lag takes 4 % off the gain at 40 Hz.)
+fn within_reach(c: &Candidate, band: [f64; 2]) -> bool {
+    match (&c.extension, c.effect) {
+        (Extension::Structural(fitted), Effect::PlatformResonance) => {
+            fitted.theta.resonances.last().is_some_and(|&(f, zeta)| {
+                f > band[0] * (1.0 + EDGE_MARGIN)
+                    && f < band[1] * (1.0 - EDGE_MARGIN)
+                    && zeta <= MAX_RESONANCE_DAMPING
+            })
+        }
+        _ => true,
+    }
+}
+
+/// Numerical tolerance of "a channel's gap does not grow", dB: refitting every parameter moves
+/// the gap of a channel the effect does not touch by a few ten-thousandths of a dB either way.
+const GAP_TOLERANCE_DB: f64 = 0.005;
+
+/// Whether `next` closes part of `state`'s gap and opens it nowhere: the total (all channels)
+/// shrinks, and no channel's gap (the worst's included) grows beyond [`GAP_TOLERANCE_DB`]. A
+/// skew of 0.1 ms between channels closes the gap of the channels it delays and leaves the
+/// worst channel's as it was, to 0.0004 dB.
+fn closes_gap(state: &State, next: &State) -> bool {
+    let (before, after) = (state.gap_db(), next.gap_db());
+    next.total_gap_db() < state.total_gap_db()
+        && before.iter().zip(&after).all(|(b, a)| *a <= b + GAP_TOLERANCE_DB)
 }
 
 fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, dof: f64) -> BlockReport {

@@ -4,7 +4,7 @@
 //! | stage | cached per | recomputed when |
 //! |---|---|---|
 //! | observer (motion) and block signals | the run | never |
-//! | spectra | block, Welch settings | the Welch settings change |
+//! | spectra | block, Welch settings, span | the Welch settings or the span (`span_s`) change |
 //! | factorisation | block, spectra | the spectra change |
 //! | Wiener and structural fit | settings | any other setting changes |
 //!
@@ -21,6 +21,7 @@
 //!
 //! Nothing here reads a simulated run's answer key.
 
+use std::ops::Range;
 use std::sync::Arc;
 
 use rayon::prelude::*;
@@ -56,7 +57,8 @@ pub struct Session {
     planner: WelchPlanner,
     motion: Option<Arc<ObserverEstimate>>,
     signals: PerBlock<BlockSignals>,
-    welch: Option<WelchSettings>,
+    /// The Welch settings and span (sample range) of `spectra`.
+    spectra_key: Option<(WelchSettings, Range<usize>)>,
     spectra: PerBlock<BlockSpectra>,
     factorisations: PerBlock<Factorisation>,
     /// The factorisations of the spectra before the last Welch change: warm starts.
@@ -75,7 +77,7 @@ impl Session {
             planner: WelchPlanner::new(),
             motion: None,
             signals: Vec::new(),
-            welch: None,
+            spectra_key: None,
             spectra: Vec::new(),
             factorisations: Vec::new(),
             previous_factorisations: Vec::new(),
@@ -130,34 +132,60 @@ impl Session {
         Ok(s)
     }
 
-    /// The Welch spectra of `blocks` under `welch`. A change of the Welch settings drops the
-    /// cached spectra and factorisations (the latter kept as warm starts).
+    /// The samples `settings.span_s` selects (all without a span).
     ///
     /// # Errors
-    /// The signals' errors, or what Welch refuses (a segment longer than the run, ...).
+    /// [`SettingsError::Span`](super::settings::SettingsError::Span) for a span outside the record.
+    pub fn span(&self, settings: &Settings) -> Result<Range<usize>, IdentError> {
+        Ok(settings.span_range(&self.run.time_s)?)
+    }
+
+    /// A block's signals over `span` (the whole record's, cut: the observer saw everything).
+    fn span_signals(&mut self, block: Block, span: &Range<usize>) -> Result<Arc<BlockSignals>, IdentError> {
+        let whole = self.signals(block)?;
+        if *span == (0..self.run.len()) {
+            return Ok(whole);
+        }
+        let cut = |c: &[Vec<f64>; 3]| c.each_ref().map(|x| x[span.clone()].to_vec());
+        Ok(Arc::new(BlockSignals {
+            block,
+            input: cut(&whole.input),
+            output: cut(&whole.output),
+        }))
+    }
+
+    /// The Welch spectra of `blocks` under `settings`' Welch settings and span. A change of
+    /// either drops the cached spectra and factorisations (the latter kept as warm starts).
+    ///
+    /// # Errors
+    /// The signals' errors, a span outside the record, or what Welch refuses (a segment longer
+    /// than the span, ...).
     pub fn spectra(
         &mut self,
-        welch: &WelchSettings,
+        settings: &Settings,
         blocks: &[Block],
     ) -> Result<PerBlock<BlockSpectra>, IdentError> {
-        if self.welch.as_ref() != Some(welch) {
+        let welch = settings.welch;
+        let key = (welch, self.span(settings)?);
+        if self.spectra_key.as_ref() != Some(&key) {
             self.spectra.clear();
             if !self.factorisations.is_empty() {
                 self.previous_factorisations = std::mem::take(&mut self.factorisations);
             }
-            self.welch = Some(*welch);
+            self.spectra_key = Some(key.clone());
         }
+        let span = key.1;
         let mut out = Vec::with_capacity(blocks.len());
         for &block in blocks {
             let spectra = if let Some(s) = of_block(&self.spectra, block) {
                 s
             } else {
-                let signals = self.signals(block)?;
+                let signals = self.span_signals(block, &span)?;
                 let s = Arc::new(block_spectra(
                     &mut self.planner,
                     &signals,
                     self.run.sample_rate_hz,
-                    welch,
+                    &welch,
                 )?);
                 self.spectra.push((block, s.clone()));
                 s
@@ -167,7 +195,7 @@ impl Session {
         Ok(out)
     }
 
-    /// The factorisations of `blocks`' spectra under `welch`, the missing ones computed in
+    /// The factorisations of `blocks`' spectra under `settings`, the missing ones computed in
     /// parallel (each block's two Wilson factorisations take unequal times; together they keep
     /// the cores busy).
     ///
@@ -175,13 +203,13 @@ impl Session {
     /// The spectra's errors, or a factorisation's.
     pub fn factorisations(
         &mut self,
-        welch: &WelchSettings,
+        settings: &Settings,
         blocks: &[Block],
         start: Start,
     ) -> Result<PerBlock<Factorisation>, IdentError> {
-        let spectra = self.spectra(welch, blocks)?;
+        let spectra = self.spectra(settings, blocks)?;
         let (known, previous) = (&self.factorisations, &self.previous_factorisations);
-        let done: Result<Vec<_>, IdentError> = spectra
+        let done: Vec<Result<_, IdentError>> = spectra
             .into_par_iter()
             .map(|(block, spectra)| {
                 // A warm-started factorisation is no answer to a cold request.
@@ -197,7 +225,9 @@ impl Session {
             })
             .collect();
         let mut out = Vec::new();
-        for (block, f, new) in done? {
+        // The first block's error in the settings' order, whichever thread failed first.
+        let done: Vec<_> = done.into_iter().collect::<Result<_, _>>()?;
+        for (block, f, new) in done {
             if new {
                 self.factorisations.retain(|(b, _)| *b != block);
                 self.factorisations.push((block, f.clone()));
@@ -241,7 +271,8 @@ impl Session {
         keep: bool,
     ) -> Result<Arc<RunIdentification>, IdentError> {
         let run = self.run.clone();
-        settings.validate(run.len(), run.sample_rate_hz, &run.blocks())?;
+        let span = self.span(settings)?;
+        settings.validate(span.len(), run.sample_rate_hz, &run.blocks())?;
         let settings = Settings {
             blocks: settings.blocks_for(&run.blocks()),
             ..settings.clone()
@@ -269,14 +300,14 @@ impl Session {
         let motion = self.motion()?;
         for &block in &blocks {
             step("spectra", Some(block), 1);
-            self.spectra(&settings.welch, &[block])?;
+            self.spectra(&settings, &[block])?;
         }
         step("factorisation", None, blocks.len());
-        let factorisations = self.factorisations(&settings.welch, &blocks, start)?;
-        let spectra = self.spectra(&settings.welch, &blocks)?;
+        let factorisations = self.factorisations(&settings, &blocks, start)?;
+        let spectra = self.spectra(&settings, &blocks)?;
         step("fit", None, blocks.len());
         let fits = &self.fits;
-        let identified: Result<Vec<BlockIdentification>, IdentError> = spectra
+        let identified: Vec<Result<BlockIdentification, IdentError>> = spectra
             .into_iter()
             .zip(factorisations)
             .collect::<Vec<_>>()
@@ -289,7 +320,8 @@ impl Session {
                 identify_block_from(block, spectra, factorisation, &settings, previous.as_deref())
             })
             .collect();
-        let identified = identified?;
+        // The first block's error in the settings' order, whichever thread failed first.
+        let identified: Vec<BlockIdentification> = identified.into_iter().collect::<Result<_, _>>()?;
         step("done", None, 0);
         let id = Arc::new(RunIdentification {
             motion,

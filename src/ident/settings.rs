@@ -59,6 +59,12 @@ pub struct Settings {
     /// Whether the blocks are calibrated (K near identity): the self-check then warns about a
     /// gain far from it ([`crate::ident::selfcheck`]). `false` for a raw, uncalibrated block.
     pub calibrated: bool,
+    /// The stretch of the record to analyse, `[t1, t2]` in the run's time column (s), or the
+    /// whole record (`null`, the default). The observer still runs over the whole record (no
+    /// edge effects at the span's ends); the spectra, the identification and the diagnosis use
+    /// the span only. Absent from a model file when not set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub span_s: Option<[f64; 2]>,
 }
 
 impl Default for Settings {
@@ -71,6 +77,7 @@ impl Default for Settings {
             order: OrderSetting::Auto,
             blocks: Vec::new(),
             calibrated: true,
+            span_s: None,
         }
     }
 }
@@ -96,6 +103,18 @@ pub fn max_shrink(a: &Matrix3<f64>, lambda: &[f64; 3]) -> f64 {
 /// Why settings were refused.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SettingsError {
+    /// `span_s` is not an ordered stretch inside the record.
+    #[error("span_s [{from}, {to}] s is not an ordered stretch inside the record ({start} to {end} s)")]
+    Span {
+        /// Requested start, s.
+        from: f64,
+        /// Requested end, s.
+        to: f64,
+        /// The record's first time, s.
+        start: f64,
+        /// Its last time, s.
+        end: f64,
+    },
     /// The settings file is not valid JSON or has a wrong field.
     #[error("{file}:{line}:{column}: {detail}")]
     Parse {
@@ -201,7 +220,28 @@ impl Settings {
         }
     }
 
-    /// Checks the settings against a run of `n_samples` at `sample_rate_hz` having `blocks`.
+    /// The samples of `span_s` in a record with times `time_s` (all of them without a span).
+    ///
+    /// # Errors
+    /// [`SettingsError::Span`] when the span is not finite, not ordered, or not inside the record.
+    pub fn span_range(&self, time_s: &[f64]) -> Result<std::ops::Range<usize>, SettingsError> {
+        let Some([from, to]) = self.span_s else {
+            return Ok(0..time_s.len());
+        };
+        let (start, end) = (
+            time_s.first().copied().unwrap_or(0.0),
+            time_s.last().copied().unwrap_or(0.0),
+        );
+        if !(from.is_finite() && to.is_finite() && from < to && from >= start && to <= end) {
+            return Err(SettingsError::Span { from, to, start, end });
+        }
+        let first = time_s.partition_point(|&t| t < from);
+        let last = time_s.partition_point(|&t| t <= to);
+        Ok(first..last)
+    }
+
+    /// Checks the settings against a run (or its span) of `n_samples` at `sample_rate_hz` having
+    /// `blocks`.
     ///
     /// # Errors
     /// The first violated rule of the module docs.

@@ -75,6 +75,9 @@ impl App {
                 }
                 self.runs.retain(|r| r.id != id);
                 self.compared.retain(|r| *r != id);
+                // A closed run's computing errors are moot.
+                self.errors.clear(super::ErrorTopic::Analysis(id));
+                self.errors.clear(super::ErrorTopic::Diagnosis(id));
                 let generation = self.next_generation();
                 self.worker.submit(Job {
                     run: id,
@@ -143,11 +146,7 @@ impl App {
                 }
             }
             Command::InjectPanic(id, stage) => self.request(id, JobKind::InjectPanic { stage }),
-            Command::DismissError(index) => {
-                if index < self.errors.len() {
-                    self.errors.remove(index);
-                }
-            }
+            Command::DismissError(index) => self.errors.dismiss(index),
         }
     }
 
@@ -181,9 +180,7 @@ impl App {
         if run.summary.is_none() {
             return;
         }
-        run.diagnosing = true;
-        run.diagnosis_error = None;
-        run.diagnosis_generation = generation;
+        run.diagnosis.request(generation);
         let rejected = run.rejected.clone();
         self.worker.submit(Job {
             run: id,
@@ -196,8 +193,8 @@ impl App {
     fn request(&mut self, id: RunId, kind: JobKind) {
         let generation = self.next_generation();
         if let Some(run) = self.run_mut(id) {
-            run.requested_generation = generation;
-            run.analysis_error = None;
+            run.spectra.request(generation);
+            run.identification.request(generation);
         }
         self.worker.submit(Job {
             run: id,

@@ -9,6 +9,7 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 use eframe::egui::{self, ColorImage};
 
 use super::App;
+use super::ErrorTopic;
 use crate::output::{OutputError, ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
 
@@ -68,7 +69,7 @@ impl App {
         let outcome = self.try_export_model(path);
         match outcome {
             Ok(()) => self.status = Some(format!("model written to {}", path.display())),
-            Err(e) => self.errors.push(format!("export: {e}")),
+            Err(e) => self.errors.push(ErrorTopic::Export, format!("export: {e}")),
         }
     }
 
@@ -109,7 +110,7 @@ impl App {
             let inputs: Vec<PathBuf> = self.runs.iter().map(|r| r.path.clone()).collect();
             match ensure_not_input(&path, &inputs).and_then(|()| write_png(&path, &image)) {
                 Ok(()) => self.status = Some(format!("view written to {}", path.display())),
-                Err(e) => self.errors.push(format!("export: {e}")),
+                Err(e) => self.errors.push(ErrorTopic::Export, format!("export: {e}")),
             }
         }
     }

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use eframe::egui;
 
-use super::{App, Command, HeatmapMode, RunState};
+use super::{App, Command, ErrorTopic, HeatmapMode, RunState};
 use crate::block::Block;
 use crate::compare::compare;
 use crate::gui::pipeline::{Event, FailureKind, RunId, Stage};
@@ -67,7 +67,7 @@ impl App {
             .iter()
             .filter_map(|&id| self.run(id))
             .filter(|r| r.identification.is_some())
-            .map(|r| (r.id, r.identification_generation))
+            .map(|r| (r.id, r.identification.generation))
             .collect();
         if key.len() < 2 {
             self.comparison = None;
@@ -126,10 +126,9 @@ impl App {
                 spectra,
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
-                if generation >= entry.requested_generation {
-                    entry.spectra = Some(spectra);
-                    entry.spectra_generation = generation;
-                    entry.analysis_error = None;
+                // Only the newest analysis's spectra (an older job's would flicker).
+                if generation >= entry.spectra.requested {
+                    entry.spectra.offer(generation, spectra);
                 }
             }
             Event::Identified {
@@ -139,12 +138,9 @@ impl App {
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
                 // The same generation again is its refit from scratch (see `provisional`).
-                if generation >= entry.identification_generation {
-                    entry.identification = Some(identification);
-                    entry.identification_generation = generation;
-                    if generation >= entry.requested_generation {
-                        entry.analysis_error = None;
-                    }
+                entry.identification.offer(generation, identification);
+                if entry.identification.error.is_none() && generation >= entry.identification.requested {
+                    self.errors.clear(ErrorTopic::Analysis(run));
                 }
             }
             Event::Diagnosed {
@@ -154,14 +150,11 @@ impl App {
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
                 // A stale report (an older request finishing after a newer one) never replaces
-                // the newer one.
-                if generation < entry.diagnosis_generation {
-                    return;
+                // the newer one: only the newest request's report is taken.
+                if generation >= entry.diagnosis.requested {
+                    entry.diagnosis.offer(generation, report);
+                    self.errors.clear(ErrorTopic::Diagnosis(run));
                 }
-                entry.diagnosis = Some(report);
-                entry.diagnosis_generation = generation;
-                entry.diagnosing = false;
-                entry.diagnosis_error = None;
             }
             Event::Failed {
                 stage: Stage::Diagnose,
@@ -172,14 +165,15 @@ impl App {
                 ..
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
-                if generation < entry.diagnosis_generation {
+                let message = described(&message, kind);
+                if !entry.diagnosis.fail(generation, message.clone()) {
                     return;
                 }
-                entry.diagnosing = false;
-                let message = described(&message, kind);
-                entry.diagnosis_error = Some(message.clone());
                 let name = entry.name();
-                self.errors.push(format!("{name}: diagnosis: {message}"));
+                self.errors.push(
+                    ErrorTopic::Diagnosis(run),
+                    format!("{name}: diagnosis: {message}"),
+                );
             }
             Event::Failed {
                 run,
@@ -200,19 +194,28 @@ impl App {
             if self.selected == Some(run) {
                 self.selected = self.runs.first().map(|r| r.id);
             }
-            self.errors.push(if kind == FailureKind::Cancelled {
+            let line = if kind == FailureKind::Cancelled {
                 format!("loading {name} cancelled")
             } else {
                 message
-            });
-        } else if generation >= entry.requested_generation {
-            let name = entry
-                .summary
-                .as_ref()
-                .map_or_else(String::new, |s| s.file_name.clone());
-            entry.analysis_error = Some(message.clone());
-            self.errors
-                .push(format!("{name}: {} stage: {message}", stage.name()));
+            };
+            self.errors.push(ErrorTopic::Load, line);
+        } else {
+            // A failure before the spectra leaves neither spectra nor identification; a later
+            // one leaves the spectra of this request standing.
+            if matches!(stage, Stage::Motion | Stage::Spectra) {
+                entry.spectra.fail(generation, message.clone());
+            }
+            if entry.identification.fail(generation, message.clone()) {
+                let name = entry
+                    .summary
+                    .as_ref()
+                    .map_or_else(String::new, |s| s.file_name.clone());
+                self.errors.push(
+                    ErrorTopic::Analysis(run),
+                    format!("{name}: {} stage: {message}", stage.name()),
+                );
+            }
         }
     }
 
@@ -220,7 +223,9 @@ impl App {
     fn update_pair_texture(&mut self, ctx: &egui::Context) {
         let view = &self.prefs.view;
         let Some(run) = self.selected() else { return };
-        let Some(spectra) = &run.spectra else { return };
+        let Some(spectra) = run.spectra.as_ref() else {
+            return;
+        };
         let Some(block) = spectra
             .blocks
             .iter()
@@ -229,7 +234,7 @@ impl App {
         else {
             return;
         };
-        let key = (run.id, run.spectra_generation, block.block, view.heatmap_mode);
+        let key = (run.id, run.spectra.generation, block.block, view.heatmap_mode);
         if self.pair_texture.as_ref().is_some_and(|(k, _)| *k == key) {
             return;
         }

@@ -6,8 +6,10 @@
 //! directly; everything that reaches the pipeline goes through a [`Command`].
 
 mod commands;
+mod errors;
 mod export;
 mod logic;
+mod record;
 mod ui;
 
 use std::path::PathBuf;
@@ -28,6 +30,8 @@ use crate::gui::pipeline::{
 };
 use crate::ident::settings::Settings;
 use crate::run::LoadOptions;
+pub use errors::{ErrorEntry, ErrorLog, ErrorTopic};
+pub use record::StageRecord;
 
 /// Storage key of [`Prefs`] (JSON, in eframe's storage: `~/.local/share/imu-attest/app.ron` on
 /// Linux).
@@ -151,32 +155,18 @@ pub struct RunEntry {
     pub state: RunState,
     /// Generation of the load job.
     pub load_generation: u64,
-    /// Newest analysis requested.
-    pub requested_generation: u64,
-    /// Generation of the spectra shown (0: none yet).
-    pub spectra_generation: u64,
     /// Summary, once loaded.
     pub summary: Option<Arc<RunSummary>>,
     /// Measured series, once loaded.
     pub measured: Option<Arc<Measured>>,
     /// Observer and block inputs.
     pub motion: Option<Arc<Motion>>,
-    /// Spectra (the last good ones).
-    pub spectra: Option<Arc<Spectra>>,
-    /// Identification (the last good one).
-    pub identification: Option<Arc<Identification>>,
-    /// Generation of the identification shown (0: none yet).
-    pub identification_generation: u64,
-    /// Why the newest analysis failed, if it did.
-    pub analysis_error: Option<String>,
-    /// The missing-effect report (the last good one).
-    pub diagnosis: Option<Arc<Report>>,
-    /// Generation of the newest diagnosis requested (results of older ones are dropped).
-    pub diagnosis_generation: u64,
-    /// A diagnosis is under way.
-    pub diagnosing: bool,
-    /// Why the newest diagnosis failed, if it did.
-    pub diagnosis_error: Option<String>,
+    /// Spectra (the last good ones), requested with every analysis.
+    pub spectra: StageRecord<Spectra>,
+    /// Identification (the last good one), requested with every analysis.
+    pub identification: StageRecord<Identification>,
+    /// The missing-effect report (the last good one; results of older requests are dropped).
+    pub diagnosis: StageRecord<Report>,
     /// Effects the engineer accepted (kept in the model shown).
     pub accepted: Vec<(Block, Effect)>,
     /// Effects the engineer rejected (never offered again).
@@ -193,19 +183,12 @@ impl RunEntry {
                 cancel,
             },
             load_generation: generation,
-            requested_generation: 0,
-            spectra_generation: 0,
             summary: None,
             measured: None,
             motion: None,
-            spectra: None,
-            identification: None,
-            identification_generation: 0,
-            analysis_error: None,
-            diagnosis: None,
-            diagnosis_generation: 0,
-            diagnosing: false,
-            diagnosis_error: None,
+            spectra: StageRecord::default(),
+            identification: StageRecord::default(),
+            diagnosis: StageRecord::default(),
             accepted: Vec::new(),
             rejected: Vec::new(),
         }
@@ -216,8 +199,8 @@ impl RunEntry {
     pub fn busy(&self) -> bool {
         let refitting = self.identification.as_ref().is_some_and(|i| i.provisional());
         matches!(self.state, RunState::Loading { .. })
-            || (self.analysis_error.is_none()
-                && (self.identification_generation < self.requested_generation || refitting))
+            || self.identification.running()
+            || (self.identification.error.is_none() && refitting)
     }
 
     /// The file name shown.
@@ -236,7 +219,7 @@ pub struct App {
     worker: Worker,
     runs: Vec<RunEntry>,
     selected: Option<RunId>,
-    errors: Vec<String>,
+    errors: ErrorLog,
     commands: Vec<Command>,
     next_run: RunId,
     generation: u64,
@@ -277,7 +260,7 @@ impl App {
             worker,
             runs: Vec::new(),
             selected: None,
-            errors: Vec::new(),
+            errors: ErrorLog::default(),
             commands: Vec::new(),
             next_run: 1,
             generation: 0,
@@ -307,8 +290,8 @@ impl App {
 
     /// Error messages shown in the error panel.
     #[must_use]
-    pub fn errors(&self) -> &[String] {
-        &self.errors
+    pub fn errors(&self) -> Vec<String> {
+        self.errors.lines()
     }
 
     /// The runs chosen for comparison, in the order chosen.

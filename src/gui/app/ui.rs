@@ -45,7 +45,8 @@ impl App {
             });
         });
         if !self.errors.is_empty() {
-            egui::Panel::bottom("errors").show(ui, |ui| errors::show(ui, &self.errors, &mut commands));
+            egui::Panel::bottom("errors")
+                .show(ui, |ui| errors::show(ui, self.errors.entries(), &mut commands));
         }
         let selected = self.selected.and_then(|id| self.runs.iter().find(|r| r.id == id));
         egui::Panel::left("side").default_size(320.0).show(ui, |ui| {

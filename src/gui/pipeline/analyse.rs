@@ -23,6 +23,8 @@ pub(super) struct RunCache {
     pub session: Session,
     pub motion: Option<Arc<Motion>>,
     pub spectra: Option<Arc<Spectra>>,
+    /// The span of `spectra`.
+    pub spectra_span: Option<[f64; 2]>,
     pub identification: Option<Arc<Identification>>,
 }
 
@@ -34,6 +36,7 @@ impl RunCache {
             session,
             motion: None,
             spectra: None,
+            spectra_span: None,
             identification: None,
         }
     }
@@ -86,12 +89,14 @@ impl Analysis<'_> {
             }
         }
         *stage = Stage::Spectra;
-        let spectra = match cache.spectra.as_ref().filter(|s| s.welch == settings.welch) {
+        let same = |s: &&Arc<Spectra>| s.welch == settings.welch && cache.spectra_span == settings.span_s;
+        let spectra = match cache.spectra.as_ref().filter(same) {
             Some(s) => s.clone(),
-            None => match cache.session.spectra(&settings.welch, &cache.summary.blocks) {
+            None => match cache.session.spectra(settings, &cache.summary.blocks) {
                 Ok(core) => {
                     let s = Arc::new(stages::spectra(core, &settings.welch));
                     cache.spectra = Some(s.clone());
+                    cache.spectra_span = settings.span_s;
                     s
                 }
                 Err(e) => return self.fail(&e),

@@ -138,6 +138,8 @@ pub struct RunSummary {
     pub sample_rate_hz: f64,
     /// `t_last - t_first`, s.
     pub duration_s: f64,
+    /// Time of the first sample, s (the file's time column).
+    pub start_s: f64,
     /// Blocks present, gyro first.
     pub blocks: Vec<Block>,
     /// SHA-256 of the file as stored (for the model's source).

@@ -74,6 +74,7 @@ pub fn split_run(run: &Arc<Run>) -> (RunSummary, Measured) {
         n_samples: run.len(),
         sample_rate_hz: run.sample_rate_hz,
         duration_s: run.duration_s(),
+        start_s: run.time_s.first().copied().unwrap_or(0.0),
         blocks: run.blocks(),
         sha256: run.source.sha256.clone(),
         notices: run.notices.clone(),

@@ -190,8 +190,8 @@ pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
 
 /// The Bode tab for `run`.
 pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
-    let Some(id) = &run.identification else {
-        if let Some(e) = &run.analysis_error {
+    let Some(id) = run.identification.as_ref() else {
+        if let Some(e) = &run.identification.error {
             ui.colored_label(ui.visuals().error_fg_color, e);
         } else {
             ui.horizontal(|ui| {

@@ -65,6 +65,7 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
             .labelled_by(high.id);
         });
     }
+    span(ui, &mut s, run);
     weight(ui, &mut s);
     lambda(ui, &mut s);
     ui.separator();
@@ -197,5 +198,55 @@ fn lambda(ui: &mut egui::Ui, s: &mut Settings) {
     }
     if let Err(e) = s.validate_weight_and_lambda() {
         ui.colored_label(ui.visuals().error_fg_color, e.to_string());
+    }
+}
+
+/// The stretch of the record to analyse (`span_s`): the whole record, or `from`..`to` in the
+/// file's time (rests and spin-up transients left out). The observer still sees everything.
+fn span(ui: &mut egui::Ui, s: &mut Settings, run: Option<&RunSummary>) {
+    let (start, end) = run.map_or((0.0, f64::MAX), |r| (r.start_s, r.start_s + r.duration_s));
+    ui.horizontal(|ui| {
+        let mut whole = s.span_s.is_none();
+        if ui
+            .checkbox(&mut whole, "whole record")
+            .on_hover_text(
+                "Untick to identify and diagnose only a stretch of the record (the observer still \
+                 runs over all of it, so the stretch has no edge effects).",
+            )
+            .changed()
+        {
+            s.span_s = if whole {
+                None
+            } else {
+                Some([
+                    start,
+                    if end.is_finite() && end < f64::MAX {
+                        end
+                    } else {
+                        start + 1.0
+                    },
+                ])
+            };
+        }
+    });
+    if let Some(span) = &mut s.span_s {
+        ui.horizontal(|ui| {
+            let from = ui.label("analyse from");
+            ui.add(
+                DragValue::new(&mut span[0])
+                    .speed(0.1)
+                    .range(start..=end)
+                    .suffix(" s"),
+            )
+            .labelled_by(from.id);
+            let to = ui.label("to");
+            ui.add(
+                DragValue::new(&mut span[1])
+                    .speed(0.1)
+                    .range(start..=end)
+                    .suffix(" s"),
+            )
+            .labelled_by(to.id);
+        });
     }
 }

@@ -32,7 +32,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         if ui.button("Find missing effects").clicked() {
             commands.push(Command::Diagnose(run.id));
         }
-        if run.diagnosing {
+        if run.diagnosis.running() {
             ui.spinner();
             ui.weak("diagnosing…");
         }
@@ -48,10 +48,10 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             }
         }
     });
-    if let Some(e) = &run.diagnosis_error {
+    if let Some(e) = &run.diagnosis.error {
         ui.colored_label(ui.visuals().error_fg_color, e);
     }
-    let Some(report) = &run.diagnosis else {
+    let Some(report) = run.diagnosis.as_ref() else {
         ui.weak("The diagnosis simulates each block with its identified model, examines the residual against the model's disturbance model, and names the catalogue effect that explains it.");
         return;
     };

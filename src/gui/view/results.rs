@@ -62,15 +62,15 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         ui.weak("no run selected");
         return;
     };
-    let Some(id) = &run.identification else {
-        if let Some(e) = &run.analysis_error {
+    let Some(id) = run.identification.as_ref() else {
+        if let Some(e) = &run.identification.error {
             ui.colored_label(ui.visuals().error_fg_color, e);
         } else {
             ui.weak("identifying…");
         }
         return;
     };
-    if let Some(e) = &run.analysis_error {
+    if let Some(e) = &run.identification.error {
         ui.colored_label(
             ui.visuals().error_fg_color,
             format!("current settings failed: {e}; showing the last good result"),
@@ -98,6 +98,11 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ui.colored_label(ui.visuals().error_fg_color, format!("warning: {w}"));
         }
         ui.label(band_label(name, m, id.settings.band_hz == BandSetting::Auto));
+        if let Some([from, to]) = id.settings.span_s {
+            ui.label(format!(
+                "{name} analysed over t = {from:.2} to {to:.2} s of the record"
+            ));
+        }
         ui.label(tau_label(name, m));
         ui.label(format!(
             "order {} ({}), {}",

@@ -64,7 +64,7 @@ pub fn show(ui: &mut egui::Ui, runs: &[RunEntry], selected: Option<RunId>, comma
                 for fault in &s.recording_faults {
                     ui.colored_label(ui.visuals().error_fg_color, format!("recording fault: {fault}"));
                 }
-                if let Some(e) = &run.analysis_error {
+                if let Some(e) = &run.identification.error {
                     ui.colored_label(ui.visuals().error_fg_color, e);
                 }
             }

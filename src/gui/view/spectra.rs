@@ -11,8 +11,8 @@ use crate::gui::pipeline::BlockSpectra;
 
 /// Draws the tab for `run`; `texture` is the pair grid of the block shown, when ready.
 pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState, texture: Option<&TextureHandle>) {
-    let Some(spectra) = &run.spectra else {
-        if let Some(e) = &run.analysis_error {
+    let Some(spectra) = run.spectra.as_ref() else {
+        if let Some(e) = &run.spectra.error {
             ui.colored_label(ui.visuals().error_fg_color, e);
         } else {
             ui.horizontal(|ui| {
@@ -101,7 +101,7 @@ fn controls(
             ui.spinner();
             ui.label("recomputing…");
         }
-        if let Some(e) = &run.analysis_error {
+        if let Some(e) = &run.spectra.error {
             ui.colored_label(
                 ui.visuals().error_fg_color,
                 format!("current settings: {e} (showing last good)"),

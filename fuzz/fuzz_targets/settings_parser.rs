@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use imu_attest::ident::band::BandSetting;
 use imu_attest::ident::settings::Settings;
 use imu_attest::run::Block;
 use libfuzzer_sys::fuzz_target;
@@ -12,8 +13,9 @@ fuzz_target!(|data: &[u8]| {
     match Settings::from_json(data, Path::new("fuzz.json")) {
         Ok(s) => {
             for (n, rate) in [(0, 500.0), (30_000, 500.0), (1 << 20, 1.0)] {
-                if s.validate(n, rate, &[Block::Gyro, Block::Accel]).is_ok() {
-                    let [low, high] = s.band_hz;
+                if s.validate(n, rate, &[Block::Gyro, Block::Accel]).is_ok()
+                    && let BandSetting::Fixed([low, high]) = s.band_hz
+                {
                     assert!(low > 0.0 && low < high && high <= rate / 2.0);
                 }
             }

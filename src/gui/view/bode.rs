@@ -227,7 +227,8 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
             colour: palette(2),
             details: true,
         };
-        grid(ui, &[entry], "bode");
+        // Per run: each run keeps its own zoom, and a run shown first starts from its own extent.
+        grid(ui, &[entry], &format!("bode-{}", run.id));
         ui.separator();
         coherence_and_noise(ui, bode);
     });

@@ -51,7 +51,7 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState, texture: Op
         w.detrend
     ));
     let psd_height = (ui.available_height() * 0.45).max(160.0);
-    psd_plot(ui, block, psd_height, block.matrix.frequency_hz[bin]);
+    psd_plot(ui, block, psd_height, block.matrix.frequency_hz[bin], run.id);
     ui.separator();
     let range = super::colormap::value_range(block, view.heatmap_mode);
     ui.horizontal_top(|ui| {
@@ -119,8 +119,14 @@ fn log_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     }
 }
 
-fn psd_plot(ui: &mut egui::Ui, block: &BlockSpectra, height: f32, marker_hz: f64) {
-    Plot::new(("psd", block.block))
+fn psd_plot(
+    ui: &mut egui::Ui,
+    block: &BlockSpectra,
+    height: f32,
+    marker_hz: f64,
+    run: crate::gui::pipeline::RunId,
+) {
+    Plot::new(("psd", block.block, run))
         .height(height)
         .legend(Legend::default())
         .x_axis_label("frequency, Hz (log)")

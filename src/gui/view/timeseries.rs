@@ -68,12 +68,13 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
     let faults: &[RecordingFault] = run.summary.as_ref().map_or(&[], |s| &s.recording_faults);
     let [first, ..] = &measured.angles;
     let (t_start, t_end) = (first.t0, first.t_end().max(first.t0 + first.dt));
-    let link = egui::Id::unique("time-series-link");
+    // Per run: switching runs shows the new run's whole time span, not the last one's zoom.
+    let link = egui::Id::unique(("time-series-link", run.id));
     let readout_height = 22.0;
     let height = ((ui.available_height() - readout_height) / groups.len() as f32 - 4.0).max(80.0);
     let mut cursor_t = None;
     for (k, (title, series)) in groups.iter().enumerate() {
-        let mut plot = Plot::new(("ts", *title))
+        let mut plot = Plot::new(("ts", *title, run.id))
             .height(height)
             .link_axis(link, [true, false])
             .link_cursor(link, [true, false])

@@ -5,7 +5,8 @@
 //!
 //! Where to look: the identification's stretches measure the delay through the record, and the
 //! slope of those delays against time estimates `d` with its standard deviation (the drift hint).
-//! A record too short to cut is searched from `d = 0` ([`blind_width`]).
+//! A record too short to cut is searched from `d = 0` ([`blind_width`]); where the stretches see
+//! no significant trend, there is no candidate.
 //! The cost is profiled over the linear parameters at five drifts around the hint (the hint and
 //! one and two widths either side, the width the larger of its standard deviation and a tenth of
 //! it), extended width by width while the cheapest is at an end (a stretch's delay is biased
@@ -20,6 +21,15 @@ use crate::effect::Effect;
 
 /// How many widths the search may walk beyond its first five points.
 const MAX_STEPS: usize = 20;
+
+/// How many standard deviations the stretches' delay trend must reach for a clock drift to be
+/// searched (below it, the stretches found no drift).
+const HINT_SIGMAS: f64 = 3.0;
+
+/// What a step at an end must gain (in cost, half the chi2 times the window's bandwidth) for the
+/// walk to go on: a few chi2, far below what a real drift's next step gains (thousands), above the
+/// noise of a flat cost.
+const WALK_GAIN: f64 = 2.0;
 
 /// The narrowest search width, s per s (0.1 ppm: below any clock a lab would worry about).
 const MIN_WIDTH: f64 = 1e-7;
@@ -42,6 +52,12 @@ pub fn clock_candidate(state: &State, band_hz: [f64; 2]) -> Option<Candidate> {
     if !(hint.is_finite() && sd.is_finite()) {
         return None;
     }
+    // The stretches test the drift directly: where they see none (the trend within
+    // [`HINT_SIGMAS`] of its standard deviation), there is nothing to re-time (each try costs a
+    // pass over the whole record).
+    if state.drift_hint.is_some() && hint.abs() < HINT_SIGMAS * sd {
+        return None;
+    }
     let structure = &state.fitted.structure;
     let theta = &state.fitted.theta;
     let corrected = |d: f64| -> (f64, Design) {
@@ -58,12 +74,15 @@ pub fn clock_candidate(state: &State, band_hz: [f64; 2]) -> Option<Candidate> {
     // In order of drift; extended while the cheapest is at an end (the hint may be biased).
     let mut tried: Vec<(f64, f64, Design)> = (-2..=2).map(at).collect();
     let (mut low, mut high) = (-2, 2);
+    // Walk only while the end keeps gaining significantly: on a flat (driftless) cost the
+    // cheapest point is at an end by chance, and walking there costs a re-timing per step.
     for _ in 0..MAX_STEPS {
         let best = (0..tried.len()).min_by(|&a, &b| tried[a].1.total_cmp(&tried[b].1))?;
-        if best == 0 {
+        let last = tried.len() - 1;
+        if best == 0 && tried[1].1 - tried[0].1 > WALK_GAIN {
             low -= 1;
             tried.insert(0, at(low));
-        } else if best + 1 == tried.len() {
+        } else if best == last && tried[last - 1].1 - tried[last].1 > WALK_GAIN {
             high += 1;
             tried.push(at(high));
         } else {

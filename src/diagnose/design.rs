@@ -170,9 +170,21 @@ impl Design {
         let band = self.first_bin..=self.first_bin + self.n_bins() - 1;
         let centre = 0.5 * (n as f64 - 1.0);
         let mut next = self.clone();
+        // Content well below Nyquist (the band's top under a tenth of the rate) is re-timed by
+        // the 8-point Lagrange polynomial (error under 3e-5 there), eight times cheaper than the
+        // 64-tap sinc that records sampled close to their band need.
+        let fs = self.sample_rate_hz;
+        let smooth = self.frequency_hz.last().is_some_and(|&top| top <= 0.1 * fs);
         for (i, x) in self.record.iter().enumerate() {
             let retimed: Vec<f64> = (0..n)
-                .map(|k| crate::interp::sinc(x, centre + (k as f64 - centre) * (1.0 + drift)))
+                .map(|k| {
+                    let pos = centre + (k as f64 - centre) * (1.0 + drift);
+                    if smooth {
+                        crate::interp::lagrange(x, fs, pos / fs)
+                    } else {
+                        crate::interp::sinc(x, pos)
+                    }
+                })
                 .collect();
             next.z[X + i] = band_spectrum(&mut fft, &taper, &retimed, band.clone());
         }

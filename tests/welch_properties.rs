@@ -272,3 +272,79 @@ fn zero_padding_refines_the_same_estimate() {
         );
     }
 }
+
+/// The groups of `welch_matrix_parts` are the un-padded Welch matrices of their segments, and its
+/// total is `welch_matrix`'s, from one pass over the segment transforms.
+#[test]
+fn parts_are_the_groups_own_welch_matrices_and_the_total_is_unchanged() {
+    use imu_attest::spectral::{WelchPlanner, WelchSettings};
+    let mut rng = imu_attest::rng::Rng::new(11);
+    let n = 20_000;
+    let channels: Vec<Vec<f64>> = (0..3)
+        .map(|c| {
+            let mut acc = 0.0;
+            (0..n)
+                .map(|k| {
+                    acc = 0.9 * acc + rng.normal();
+                    acc + (0.01 * k as f64 * f64::from(c + 1)).sin()
+                })
+                .collect()
+        })
+        .collect();
+    let views: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+    let settings = WelchSettings {
+        segment_len: 512,
+        fft_len: Some(2048),
+        ..WelchSettings::default()
+    };
+    let mut planner = WelchPlanner::new();
+    let whole = planner.welch_matrix(&views, 200.0, &settings).expect("whole");
+    let parts_count = 5;
+    let (total, parts) = planner
+        .welch_matrix_parts(&views, 200.0, &settings, parts_count)
+        .expect("parts");
+    let parts = parts.expect("2048 is a multiple of 512");
+    let close =
+        |a: num_complex::Complex64, b: num_complex::Complex64, scale: f64| (a - b).norm() <= 1e-12 * scale;
+    let peak = |m: &imu_attest::spectral::SpectralMatrix| {
+        (0..m.n_bins()).map(|f| m[(f, 0, 0)].re).fold(0.0, f64::max)
+    };
+    for f in 0..whole.n_bins() {
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!(
+                    close(total[(f, i, j)], whole[(f, i, j)], peak(&whole)),
+                    "total bin {f}"
+                );
+            }
+        }
+    }
+    let n_segments = settings.n_segments(n);
+    let step = settings.step();
+    let native = WelchSettings {
+        fft_len: None,
+        ..settings
+    };
+    assert_eq!(parts.len(), parts_count);
+    for (p, part) in parts.iter().enumerate() {
+        let (first, last) = (p * n_segments / parts_count, (p + 1) * n_segments / parts_count);
+        let (start, end) = (first * step, (last - 1) * step + settings.segment_len);
+        let slices: Vec<&[f64]> = views.iter().map(|c| &c[start..end]).collect();
+        let reference = planner.welch_matrix(&slices, 200.0, &native).expect("group");
+        assert_eq!(part.n_bins(), reference.n_bins());
+        assert_eq!(part.n_averages, reference.n_averages);
+        for f in 0..part.n_bins() {
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!(
+                        close(part[(f, i, j)], reference[(f, i, j)], peak(&reference)),
+                        "part {p} bin {f} ({i}, {j}): {} vs {}",
+                        part[(f, i, j)],
+                        reference[(f, i, j)]
+                    );
+                }
+            }
+        }
+    }
+    assert!(planner.welch_matrix_parts(&views, 200.0, &settings, 0).is_err());
+}

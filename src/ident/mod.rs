@@ -123,7 +123,7 @@ impl IdentError {
             | IdentError::NoUsableBand { .. }
             | IdentError::Observer(_) => true,
             IdentError::Singular(what) => *what == "weight_A" || *what == "auto-lambda system",
-            IdentError::Spectra(e) => !matches!(e, S::Fft(_) | S::ShapeMismatch { .. }),
+            IdentError::Spectra(e) => !matches!(e, S::Fft(_) | S::ShapeMismatch { .. } | S::BadParts { .. }),
             IdentError::Structural(e) => matches!(e, F::EmptyBand | F::TooFewBins { .. }),
             IdentError::Factor(_) => false,
         }

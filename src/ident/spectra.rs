@@ -68,11 +68,22 @@ pub fn block_spectra(
         .chain(signals.output.iter())
         .map(Vec::as_slice)
         .collect();
-    let m = planner.welch_matrix(&channels, sample_rate_hz, settings)?;
+    // The stretches' matrices come from the same segment transforms when the grid allows
+    // (`welch_matrix_parts`), else from a second pass.
+    let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
+    let n_stretches = stretch_count(n_segments);
+    let (m, parts) = if n_stretches > 0 {
+        planner.welch_matrix_parts(&channels, sample_rate_hz, settings, n_stretches)?
+    } else {
+        (planner.welch_matrix(&channels, sample_rate_hz, settings)?, None)
+    };
     let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
     let bins = m.n_bins();
     let window = planner.window(settings.window, settings.segment_len);
-    let stretches = stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?;
+    let stretches = match parts {
+        Some(parts) => stretches_of(&parts, n_segments, settings, sample_rate_hz, &window),
+        None => stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?,
+    };
     Ok(BlockSpectra {
         stretches,
         stationarity_cache: StationarityCache::default(),
@@ -89,7 +100,38 @@ pub fn block_spectra(
     })
 }
 
-/// The spectral matrices of each stretch ([`super::stretches`]) on the segment's native grid.
+/// The stretches from the groups' matrices of [`WelchPlanner::welch_matrix_parts`] (group `i` is
+/// stretch `i`: the same segments as [`stretch_spectra`] takes).
+fn stretches_of(
+    parts: &[crate::spectral::SpectralMatrix],
+    n_segments: usize,
+    settings: &WelchSettings,
+    sample_rate_hz: f64,
+    window: &[f64],
+) -> Vec<StretchSpectra> {
+    let m = parts.len();
+    let step = settings.step();
+    parts
+        .iter()
+        .enumerate()
+        .map(|(i, sm)| {
+            let (first, last) = (i * n_segments / m, (i + 1) * n_segments / m);
+            let (start, end) = (first * step, (last - 1) * step + settings.segment_len);
+            let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|a, b| sm[(f, r0 + a, c0 + b)]);
+            let bins = sm.n_bins();
+            StretchSpectra {
+                span_s: [start as f64 / sample_rate_hz, end as f64 / sample_rate_hz],
+                s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
+                s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
+                s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
+                equivalent_averages: equivalent_averages(window, step, sm.n_averages),
+            }
+        })
+        .collect()
+}
+
+/// The spectral matrices of each stretch ([`super::stretches`]) on the segment's native grid,
+/// by a second Welch pass over each stretch.
 fn stretch_spectra(
     planner: &mut WelchPlanner,
     channels: &[&[f64]],

@@ -3,6 +3,14 @@
 /// Why a spectral estimate was refused. Every variant carries the numbers that explain it.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SpectralError {
+    /// A split of the segments into groups that is empty or finer than the segments.
+    #[error("cannot split {n_segments} Welch segments into {parts} groups")]
+    BadParts {
+        /// Groups asked for.
+        parts: usize,
+        /// Segments there are.
+        n_segments: usize,
+    },
     /// No channels were given.
     #[error("no channels given: a spectral matrix needs at least one signal")]
     NoChannels,

@@ -100,6 +100,51 @@ impl WelchPlanner {
         sample_rate_hz: f64,
         settings: &WelchSettings,
     ) -> Result<SpectralMatrix, SpectralError> {
+        let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
+        Ok(self
+            .welch_with_parts(
+                channels,
+                sample_rate_hz,
+                settings,
+                n_segments.min(MAX_CHUNKS),
+                false,
+            )?
+            .0)
+    }
+
+    /// [`WelchPlanner::welch_matrix`] and, from the same segment transforms, the un-padded
+    /// (native, `fft_len = segment_len`) matrices of `parts` consecutive groups of segments (group
+    /// `p` holds segments `p n / parts .. (p + 1) n / parts`, `n` the segment count): the even
+    /// bins of a transform of twice the segment are the segment's own transform, so the groups
+    /// cost only their cross products. `None` for the groups when the transform length is not a
+    /// multiple of the segment (a segment of no fast length): compute them apart then. The total
+    /// is summed over the `parts` groups in order (deterministic, as [`MAX_CHUNKS`] chunks are).
+    ///
+    /// # Errors
+    /// As [`WelchPlanner::welch_matrix`]; `parts` of 0 or above the segment count is
+    /// [`SpectralError::BadParts`].
+    pub fn welch_matrix_parts(
+        &mut self,
+        channels: &[&[f64]],
+        sample_rate_hz: f64,
+        settings: &WelchSettings,
+        parts: usize,
+    ) -> Result<(SpectralMatrix, Option<Vec<SpectralMatrix>>), SpectralError> {
+        let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
+        if parts == 0 || parts > n_segments.max(1) {
+            return Err(SpectralError::BadParts { parts, n_segments });
+        }
+        self.welch_with_parts(channels, sample_rate_hz, settings, parts, true)
+    }
+
+    fn welch_with_parts(
+        &mut self,
+        channels: &[&[f64]],
+        sample_rate_hz: f64,
+        settings: &WelchSettings,
+        n_chunks: usize,
+        want_parts: bool,
+    ) -> Result<(SpectralMatrix, Option<Vec<SpectralMatrix>>), SpectralError> {
         check_input(channels, sample_rate_hz, settings)?;
         let seg = settings.segment_len;
         let nfft = settings.nfft();
@@ -117,10 +162,10 @@ impl WelchPlanner {
         };
 
         let n_segments = settings.n_segments(channels[0].len());
-        let n_chunks = n_segments.min(MAX_CHUNKS);
+        let bounds = |c: usize| c * n_segments / n_chunks;
         let partials = (0..n_chunks)
             .into_par_iter()
-            .map(|c| plan.accumulate(c * n_segments / n_chunks..(c + 1) * n_segments / n_chunks))
+            .map(|c| plan.accumulate(bounds(c)..bounds(c + 1)))
             .collect::<Result<Vec<_>, _>>()?;
         let mut sums = vec![Complex64::default(); plan.n_bins * n * (n + 1) / 2];
         for partial in &partials {
@@ -133,6 +178,16 @@ impl WelchPlanner {
         }
 
         let sum_w2: f64 = window.iter().map(|w| w * w).sum();
+        let parts = (want_parts && len.is_multiple_of(seg))
+            .then(|| {
+                (0..n_chunks)
+                    .map(|c| {
+                        let count = bounds(c + 1) - bounds(c);
+                        native_part(&partials[c], n, len / seg, seg, sample_rate_hz, sum_w2, count)
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .transpose()?;
         let base = 1.0 / (sample_rate_hz * sum_w2 * n_segments as f64);
         let mut data = vec![Complex64::default(); n_bins * n * n];
         let mut pairs = sums.chunks_exact(n_bins);
@@ -158,8 +213,54 @@ impl WelchPlanner {
         let frequency_hz = (0..n_bins)
             .map(|k| k as f64 * sample_rate_hz / nfft as f64)
             .collect();
-        SpectralMatrix::from_parts(sample_rate_hz, nfft, n, n_segments, frequency_hz, data)
+        Ok((
+            SpectralMatrix::from_parts(sample_rate_hz, nfft, n, n_segments, frequency_hz, data)?,
+            parts,
+        ))
     }
+}
+
+/// The native-grid (`segment_len`-point) matrix of one group's sums on a grid `stride` times
+/// finer: every `stride`-th bin, scaled as [`WelchPlanner::welch_matrix`] scales (one-sided,
+/// density, `count` segments).
+fn native_part(
+    sums: &[Complex64],
+    n: usize,
+    stride: usize,
+    seg: usize,
+    sample_rate_hz: f64,
+    sum_w2: f64,
+    count: usize,
+) -> Result<SpectralMatrix, SpectralError> {
+    let fine_bins = sums.len() / (n * (n + 1) / 2).max(1);
+    let n_bins = seg / 2 + 1;
+    let base = 1.0 / (sample_rate_hz * sum_w2 * count.max(1) as f64);
+    let mut data = vec![Complex64::default(); n_bins * n * n];
+    let mut pairs = sums.chunks_exact(fine_bins);
+    for i in 0..n {
+        for j in i..n {
+            let pair = pairs.next().unwrap_or_default();
+            for (k, bin) in data.chunks_exact_mut(n * n).enumerate() {
+                let s = pair.get(k * stride).copied().unwrap_or_default();
+                let scale = if k == 0 || k == n_bins - 1 {
+                    base
+                } else {
+                    2.0 * base
+                };
+                if i == j {
+                    bin[i * n + i] = Complex64::new(s.re.max(0.0) * scale, 0.0);
+                } else {
+                    let s = s * scale;
+                    bin[i * n + j] = s;
+                    bin[j * n + i] = s.conj();
+                }
+            }
+        }
+    }
+    let frequency_hz = (0..n_bins)
+        .map(|k| k as f64 * sample_rate_hz / seg as f64)
+        .collect();
+    SpectralMatrix::from_parts(sample_rate_hz, seg, n, count, frequency_hz, data)
 }
 
 /// [`WelchPlanner::welch_matrix`] with a fresh planner, for one-off estimates.

@@ -117,17 +117,28 @@ fn stretches_of(
         .map(|(i, sm)| {
             let (first, last) = (i * n_segments / m, (i + 1) * n_segments / m);
             let (start, end) = (first * step, (last - 1) * step + settings.segment_len);
-            let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|a, b| sm[(f, r0 + a, c0 + b)]);
-            let bins = sm.n_bins();
-            StretchSpectra {
-                span_s: [start as f64 / sample_rate_hz, end as f64 / sample_rate_hz],
-                s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
-                s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
-                s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
-                equivalent_averages: equivalent_averages(window, step, sm.n_averages),
-            }
+            stretch(sm, [start, end], sample_rate_hz, window, step)
         })
         .collect()
+}
+
+/// One stretch (samples `span[0]..span[1]`) from its un-padded 6x6 matrix of `[u; x]`.
+fn stretch(
+    sm: &crate::spectral::SpectralMatrix,
+    span: [usize; 2],
+    sample_rate_hz: f64,
+    window: &[f64],
+    step: usize,
+) -> StretchSpectra {
+    let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|a, b| sm[(f, r0 + a, c0 + b)]);
+    let bins = sm.n_bins();
+    StretchSpectra {
+        span_s: span.map(|k| k as f64 / sample_rate_hz),
+        s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
+        s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
+        s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
+        equivalent_averages: equivalent_averages(window, step, sm.n_averages),
+    }
 }
 
 /// The spectral matrices of each stretch ([`super::stretches`]) on the segment's native grid,
@@ -152,15 +163,7 @@ fn stretch_spectra(
             let (start, end) = (first * step, (last - 1) * step + settings.segment_len);
             let slices: Vec<&[f64]> = channels.iter().map(|c| &c[start..end]).collect();
             let sm = planner.welch_matrix(&slices, sample_rate_hz, &native)?;
-            let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|a, b| sm[(f, r0 + a, c0 + b)]);
-            let bins = sm.n_bins();
-            Ok(StretchSpectra {
-                span_s: [start as f64 / sample_rate_hz, end as f64 / sample_rate_hz],
-                s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
-                s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
-                s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
-                equivalent_averages: equivalent_averages(window, step, sm.n_averages),
-            })
+            Ok(stretch(&sm, [start, end], sample_rate_hz, window, step))
         })
         .collect()
 }

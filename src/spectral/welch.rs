@@ -149,7 +149,6 @@ impl WelchPlanner {
         let seg = settings.segment_len;
         let nfft = settings.nfft();
         let len = transform_len(seg, nfft);
-        let n_bins = nfft / 2 + 1;
         let n = channels.len();
         let window = self.window(settings.window, seg);
         let fft = self.fft.plan_fft_forward(len);
@@ -183,60 +182,36 @@ impl WelchPlanner {
                 (0..n_chunks)
                     .map(|c| {
                         let count = bounds(c + 1) - bounds(c);
-                        native_part(&partials[c], n, len / seg, seg, sample_rate_hz, sum_w2, count)
+                        density_matrix(&partials[c], n, len / seg, seg, sample_rate_hz, sum_w2, count)
                     })
                     .collect::<Result<Vec<_>, _>>()
             })
             .transpose()?;
-        let base = 1.0 / (sample_rate_hz * sum_w2 * n_segments as f64);
-        let mut data = vec![Complex64::default(); n_bins * n * n];
-        let mut pairs = sums.chunks_exact(n_bins);
-        for i in 0..n {
-            for j in i..n {
-                let pair = pairs.next().unwrap_or_default();
-                for (f, (bin, s)) in data.chunks_exact_mut(n * n).zip(pair).enumerate() {
-                    let scale = if f == 0 || f == n_bins - 1 {
-                        base
-                    } else {
-                        2.0 * base
-                    };
-                    if i == j {
-                        bin[i * n + i] = Complex64::new(s.re.max(0.0) * scale, 0.0);
-                    } else {
-                        let s = s * scale;
-                        bin[i * n + j] = s;
-                        bin[j * n + i] = s.conj();
-                    }
-                }
-            }
-        }
-        let frequency_hz = (0..n_bins)
-            .map(|k| k as f64 * sample_rate_hz / nfft as f64)
-            .collect();
         Ok((
-            SpectralMatrix::from_parts(sample_rate_hz, nfft, n, n_segments, frequency_hz, data)?,
+            density_matrix(&sums, n, 1, nfft, sample_rate_hz, sum_w2, n_segments)?,
             parts,
         ))
     }
 }
 
-/// The native-grid (`segment_len`-point) matrix of one group's sums on a grid `stride` times
-/// finer: every `stride`-th bin, scaled as [`WelchPlanner::welch_matrix`] scales (one-sided,
-/// density, `count` segments).
-fn native_part(
+/// The one-sided density matrix on an `fft_len`-point grid from pair sums (`[pair][bin]`, pairs
+/// row by row of the upper triangle) on a grid `stride` times finer: every `stride`-th bin,
+/// scaled by `1 / (fs sum(w^2) count)`, doubled except at 0 and Nyquist; auto-spectra real and
+/// non-negative.
+fn density_matrix(
     sums: &[Complex64],
     n: usize,
     stride: usize,
-    seg: usize,
+    fft_len: usize,
     sample_rate_hz: f64,
     sum_w2: f64,
     count: usize,
 ) -> Result<SpectralMatrix, SpectralError> {
     let fine_bins = sums.len() / (n * (n + 1) / 2).max(1);
-    let n_bins = seg / 2 + 1;
+    let n_bins = fft_len / 2 + 1;
     let base = 1.0 / (sample_rate_hz * sum_w2 * count.max(1) as f64);
     let mut data = vec![Complex64::default(); n_bins * n * n];
-    let mut pairs = sums.chunks_exact(fine_bins);
+    let mut pairs = sums.chunks_exact(fine_bins.max(1));
     for i in 0..n {
         for j in i..n {
             let pair = pairs.next().unwrap_or_default();
@@ -258,9 +233,9 @@ fn native_part(
         }
     }
     let frequency_hz = (0..n_bins)
-        .map(|k| k as f64 * sample_rate_hz / seg as f64)
+        .map(|k| k as f64 * sample_rate_hz / fft_len as f64)
         .collect();
-    SpectralMatrix::from_parts(sample_rate_hz, seg, n, count, frequency_hz, data)
+    SpectralMatrix::from_parts(sample_rate_hz, fft_len, n, count, frequency_hz, data)
 }
 
 /// [`WelchPlanner::welch_matrix`] with a fresh planner, for one-off estimates.

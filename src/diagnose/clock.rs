@@ -42,6 +42,14 @@ fn blind_width(design: &Design) -> f64 {
     0.05 / (top * duration).max(f64::MIN_POSITIVE)
 }
 
+/// The cheapest re-timed design tried so far.
+struct Kept {
+    drift: f64,
+    cost: f64,
+    design: Design,
+    grams: Vec<nalgebra::DMatrix<num_complex::Complex64>>,
+}
+
 /// The clock-drift candidate, or `None` when the model holds one already or the refit fails.
 #[must_use]
 pub fn clock_candidate(state: &State, band_hz: [f64; 2]) -> Option<Candidate> {
@@ -60,19 +68,30 @@ pub fn clock_candidate(state: &State, band_hz: [f64; 2]) -> Option<Candidate> {
     }
     let structure = &state.fitted.structure;
     let theta = &state.fitted.theta;
-    let corrected = |d: f64| -> (f64, Design) {
+    // Only the cheapest re-timed design is kept (with its Gram matrices, for the final fit):
+    // a design of a long record is tens of megabytes, and the walk may try tens of drifts.
+    let mut kept: Option<Kept> = None;
+    let mut try_drift = |d: f64| -> f64 {
         let design = state.design.clock_corrected(d);
         let grams = design.grams(&without_tones(&design, &state.tones));
-        (cost_at(&design, &grams, structure, theta), design)
+        let cost = cost_at(&design, &grams, structure, theta);
+        if kept.as_ref().is_none_or(|k| cost < k.cost) {
+            kept = Some(Kept {
+                drift: d,
+                cost,
+                design,
+                grams,
+            });
+        }
+        cost
     };
     let width = sd.max(0.1 * hint.abs()).max(MIN_WIDTH);
-    let at = |k: i32| {
+    let mut at = |k: i32| {
         let d = hint + f64::from(k) * width;
-        let (cost, design) = corrected(d);
-        (d, cost, design)
+        (d, try_drift(d))
     };
     // In order of drift; extended while the cheapest is at an end (the hint may be biased).
-    let mut tried: Vec<(f64, f64, Design)> = (-2..=2).map(at).collect();
+    let mut tried: Vec<(f64, f64)> = (-2..=2).map(&mut at).collect();
     let (mut low, mut high) = (-2, 2);
     // Walk only while the end keeps gaining significantly: on a flat (driftless) cost the
     // cheapest point is at an end by chance, and walking there costs a re-timing per step.
@@ -94,13 +113,12 @@ pub fn clock_candidate(state: &State, band_hz: [f64; 2]) -> Option<Candidate> {
         let (c_lo, c_mid, c_hi) = (tried[best - 1].1, tried[best].1, tried[best + 1].1);
         let curvature = c_lo - 2.0 * c_mid + c_hi;
         if curvature > 0.0 {
-            let d = tried[best].0 + 0.5 * width * (c_lo - c_hi) / curvature;
-            let (cost, design) = corrected(d);
-            tried.push((d, cost, design));
+            try_drift(tried[best].0 + 0.5 * width * (c_lo - c_hi) / curvature);
         }
     }
-    let (drift, _, design) = tried.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
-    let grams = design.grams(&without_tones(&design, &state.tones));
+    let Kept {
+        drift, design, grams, ..
+    } = kept?;
     let fitted = fit(&design, &grams, structure, theta, band_hz)?;
     Some(Candidate {
         effect: Effect::ClockDrift,

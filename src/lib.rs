@@ -18,6 +18,7 @@ pub mod gui;
 pub mod ident;
 pub mod interp;
 pub mod model;
+pub mod noise;
 pub mod output;
 mod procfs;
 pub mod rng;

@@ -78,7 +78,9 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
             eprintln!("imu-attest: warning: {} block: {warning}", block.block.name());
         }
     }
-    let model = Model::from_identification(&run, &settings, &id);
+    let mut model = Model::from_identification(&run, &settings, &id);
+    crate::noise::of_model::attach_noise(&mut model, &mut session, &settings)
+        .map_err(|e| CliError::Internal(anyhow::anyhow!("{}: noise terms: {e}", run_path.display())))?;
     for fault in &model.recording_faults {
         eprintln!("imu-attest: warning: {fault}");
     }

@@ -50,6 +50,7 @@ usage:
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel]
                       [--stand real] [--angle-latency S] [--angle-band-hz HZ]
                       [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
+                      [--sensor-noise default|white] [--random-walk K]
                       [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv
   imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json

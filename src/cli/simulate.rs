@@ -1,7 +1,8 @@
 //! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
 //! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
-//! [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv`
+//! [--sensor-noise default|white] [--random-walk K] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
+//! --out RUN.csv`
 
 use std::path::Path;
 
@@ -80,6 +81,22 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     {
         return Err(CliError::Input(
             "stand imperfections: latency must be finite and below 1 s, coloured noise >= 0 rad, corner > 0 Hz"
+                .into(),
+        ));
+    }
+    match args.get("sensor-noise") {
+        None | Some("default") => {}
+        Some("white") => config.sensor_noise.white_only = true,
+        Some(other) => {
+            return Err(CliError::Input(format!(
+                "--sensor-noise: unknown noise '{other}' (known: default, white)"
+            )));
+        }
+    }
+    config.sensor_noise.random_walk = args.parsed_or("random-walk", 0.0)?;
+    if !(config.sensor_noise.random_walk.is_finite() && config.sensor_noise.random_walk >= 0.0) {
+        return Err(CliError::Input(
+            "--random-walk: the walk's strength must be a number >= 0 (output units per s per sqrt(s))"
                 .into(),
         ));
     }

@@ -141,6 +141,10 @@ pub struct BlockModel {
     /// and delay, their spread and the delay's trend. Absent for a record too short to cut.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stationarity: Option<crate::ident::stretches::Stationarity>,
+    /// Noise terms of the block's disturbance (the residual of this model over the analysed
+    /// span; `crate::noise`). Absent when not computed or the span is too short.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::noise::BlockNoise>,
     /// Quality figures.
     pub fit: Fit,
 }
@@ -223,6 +227,7 @@ impl BlockModel {
             coherence: band.iter().map(|&k| w.coherence[k]).collect(),
             band_hz: b.band_hz,
             stationarity: b.stationarity.as_deref().cloned(),
+            noise: None,
             fit: Fit {
                 k_std: s.k_std.map(|r| r.map(finite)),
                 tau_std_s: finite(s.tau_std_s),

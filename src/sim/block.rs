@@ -41,6 +41,7 @@ pub fn draw_block(block: Block, rng: &mut Rng) -> BlockTruth {
         coloured_asd: [0; 3].map(|_| coloured * rng.uniform_in(0.8, 1.25)),
         coloured_correlation: random_correlation(rng, 0.7),
         coloured_corner_hz: corner,
+        random_walk: [0.0; 3],
     };
     BlockTruth {
         k,
@@ -229,6 +230,18 @@ fn add_noise(grid: &mut Grid, noise: &NoiseTruth, out: &mut [Vec<f64>; 3], rng: 
         }
         let t = grid.fft.inverse(spec);
         out[i].iter_mut().zip(&t).for_each(|(x, n)| *x += n);
+    }
+    // The random walk in time (it is not periodic); drawn only when asked for, so that runs
+    // without it keep their noise.
+    let step = (1.0 / grid.fft.sample_rate_hz()).sqrt();
+    for (col, &k) in out.iter_mut().zip(&noise.random_walk) {
+        if k > 0.0 {
+            let mut walk = 0.0;
+            for x in col.iter_mut() {
+                walk += k * step * rng.normal();
+                *x += walk;
+            }
+        }
     }
 }
 

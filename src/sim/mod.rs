@@ -60,6 +60,19 @@ pub struct SimConfig {
     pub stand: StandImperfections,
     /// Recording faults to inject into the finished recording, in order (none by default).
     pub faults: Vec<FaultSpec>,
+    /// The sensors' noise beyond the drawn default.
+    pub sensor_noise: SensorNoiseOptions,
+}
+
+/// Changes to the sensors' drawn noise (white plus a first-order coloured part by default), for
+/// runs whose noise terms have closed forms.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SensorNoiseOptions {
+    /// Only the white part: no coloured part.
+    pub white_only: bool,
+    /// A rate (acceleration) random walk `K` on every output channel of both blocks, in each
+    /// block's output units per s per sqrt(s) (Allan variance `K^2 tau / 3`).
+    pub random_walk: f64,
 }
 
 impl SimConfig {
@@ -75,6 +88,7 @@ impl SimConfig {
             blocks: Block::BOTH.to_vec(),
             stand: StandImperfections::default(),
             faults: Vec::new(),
+            sensor_noise: SensorNoiseOptions::default(),
         }
     }
 }
@@ -229,6 +243,10 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
         }
         let mut rng = root.fork(10 + index as u64);
         let mut truth = draw_block(block, &mut rng);
+        if config.sensor_noise.white_only {
+            truth.noise.coloured_asd = [0.0; 3];
+        }
+        truth.noise.random_walk = [config.sensor_noise.random_walk; 3];
         let rms_probe = match block {
             Block::Gyro => &gyro_input,
             Block::Accel => &motion.specific_forces(DECLARED_ACCEL_LEVER_ARM_M, G_STANDARD),

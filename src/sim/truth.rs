@@ -80,6 +80,10 @@ pub struct NoiseTruth {
     pub coloured_correlation: [[f64; 3]; 3],
     /// Corner of the coloured part, Hz.
     pub coloured_corner_hz: f64,
+    /// Rate random walk per channel (independent), output units per s per sqrt(s): the output
+    /// drifts by `K sqrt(dt)` per step (`simulate --random-walk`; 0 by default).
+    #[serde(default)]
+    pub random_walk: [f64; 3],
 }
 
 impl NoiseTruth {
@@ -95,6 +99,10 @@ impl NoiseTruth {
                         * self.coloured_correlation[i][j]
                         * self.coloured_asd[j]
                         * roll_off;
+            }
+            // One-sided density of a random walk: 2 K^2 / (2 pi f)^2.
+            if self.random_walk[i] > 0.0 {
+                s[i][i] += 2.0 * (self.random_walk[i] / (2.0 * std::f64::consts::PI * f_hz)).powi(2);
             }
         }
         s

@@ -80,6 +80,61 @@ pub struct ObserverEstimate {
     pub angle_noise_rad: [f64; 3],
     /// Where that came from.
     pub noise_source: NoiseSource,
+    /// The spectral density of the estimate's error, per angle axis (see [`ErrorPsd`]).
+    pub error_psd: ErrorPsd,
+}
+
+/// The one-sided spectral density of the angle estimate's error `theta_hat - theta`, rad^2/Hz,
+/// per axis, averaged over bands a twentieth of a decade wide (ascending, positive frequencies).
+/// For the Wiener smoother it is `H N` per bin (the part of the angle noise that passes, where
+/// the motion is; the motion that is smoothed away, bounded by the noise, where it is not), with
+/// `N = 2 sigma^2 / fs` the white angle noise's density. Rates' errors are `w^2` times it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ErrorPsd {
+    /// Band centres (geometric), Hz.
+    pub frequency_hz: Vec<f64>,
+    /// Band edges, Hz (`frequency_hz.len() + 1` values).
+    pub edges_hz: Vec<f64>,
+    /// Mean density in each band, per axis, rad^2/Hz.
+    pub psd: Vec<[f64; 3]>,
+}
+
+/// Bands per decade of [`ErrorPsd`].
+const ERROR_BANDS_PER_DECADE: f64 = 20.0;
+
+impl ErrorPsd {
+    /// Band-averages the per-bin densities `per_bin[k]` on the grid `f_k = k df`.
+    fn from_bins(per_bin: &[[f64; 3]], df: f64) -> Self {
+        let mut out = Self::default();
+        if per_bin.len() < 2 {
+            return out;
+        }
+        let ratio = 10.0_f64.powf(1.0 / ERROR_BANDS_PER_DECADE);
+        let mut k = 1;
+        let mut lo_edge = 0.5 * df;
+        out.edges_hz.push(lo_edge);
+        while k < per_bin.len() {
+            let hi_edge = (lo_edge * ratio).max(lo_edge + df);
+            let mut sum = [0.0; 3];
+            let mut count = 0.0;
+            while k < per_bin.len() && (k as f64) * df < hi_edge {
+                for a in 0..3 {
+                    sum[a] += per_bin[k][a];
+                }
+                count += 1.0;
+                k += 1;
+            }
+            if count > 0.0 {
+                out.frequency_hz.push((lo_edge * hi_edge).sqrt());
+                out.psd.push(sum.map(|v| v / count));
+                out.edges_hz.push(hi_edge);
+            } else if let Some(last) = out.edges_hz.last_mut() {
+                *last = hi_edge;
+            }
+            lo_edge = hi_edge;
+        }
+        out
+    }
 }
 
 /// Why the observer refused its input.
@@ -156,7 +211,15 @@ pub fn observe(
         None => (estimate_noise(&spectra, effective_len), NoiseSource::Estimated),
     };
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
-    let mut estimate = wiener_gain_apply(&spectra, &smoothed, noise_var);
+    let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, noise_var);
+    let density = 2.0 / sample_rate_hz;
+    let error_psd = ErrorPsd::from_bins(
+        &error_per_bin
+            .iter()
+            .map(|e| e.map(|v| v * density))
+            .collect::<Vec<_>>(),
+        sample_rate_hz / fft.len() as f64,
+    );
 
     let last = fft.n_bins() - 1;
     if fft.len().is_multiple_of(2) {
@@ -190,6 +253,7 @@ pub fn observe(
         euler,
         angle_noise_rad: noise_var.map(f64::sqrt),
         noise_source,
+        error_psd,
     })
 }
 
@@ -307,12 +371,13 @@ fn smoothed_cross_periodogram(
         .collect()
 }
 
-/// Applies `H = N^1/2 V diag((1 - 1/l)_+) V^H N^-1/2` per bin to the measured spectra.
+/// Applies `H = N^1/2 V diag((1 - 1/l)_+) V^H N^-1/2` per bin to the measured spectra; also
+/// returns the diagonal of the error covariance `H N` per bin (per-sample variance units).
 fn wiener_gain_apply(
     spectra: &[Vec<Complex64>; 3],
     smoothed: &[Matrix3<Complex64>],
     noise_var: [f64; 3],
-) -> [Vec<Complex64>; 3] {
+) -> ([Vec<Complex64>; 3], Vec<[f64; 3]>) {
     let floor = smoothed.iter().map(|s| s.trace().re).fold(0.0, f64::max) * 1e-30;
     let sd = noise_var.map(|v| v.max(floor).max(f64::MIN_POSITIVE).sqrt());
     let n_half = Matrix3::from_diagonal(&Vector3::from(sd).map(Complex64::from));
@@ -321,6 +386,8 @@ fn wiener_gain_apply(
     for o in &mut out {
         o.reserve(smoothed.len());
     }
+    let mut error = Vec::with_capacity(smoothed.len());
+    let n_diag = Matrix3::from_diagonal(&Vector3::from(sd.map(|v| v * v)).map(Complex64::from));
     for (k, s) in smoothed.iter().enumerate() {
         let whitened = n_half_inv * s * n_half_inv;
         let eig = whitened.symmetric_eigen();
@@ -340,8 +407,10 @@ fn wiener_gain_apply(
         for axis in 0..3 {
             out[axis].push(x[axis]);
         }
+        let e = h * n_diag;
+        error.push([e[(0, 0)].re, e[(1, 1)].re, e[(2, 2)].re]);
     }
-    out
+    (out, error)
 }
 
 #[cfg(test)]

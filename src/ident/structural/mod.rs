@@ -191,6 +191,35 @@ pub struct OrderCandidate {
     pub rejected: Option<admissible::Rejection>,
 }
 
+/// `N(s) / d(s) e^(-tau s)` at `s = j 2 pi f_hz`, with `N(s) = sum_m N_m s^m` and
+/// `d(s) = 1 + d_1 s + ...` (s in rad/s). Non-finite only at a pole on the imaginary axis or for
+/// a non-finite `f_hz`.
+#[must_use]
+pub fn rational_response(
+    numerator: &[[[f64; 3]; 3]],
+    denominator: &[f64],
+    tau_s: f64,
+    f_hz: f64,
+) -> Matrix3<Complex64> {
+    let s = Complex64::new(0.0, 2.0 * std::f64::consts::PI * f_hz);
+    let mut d = Complex64::new(1.0, 0.0);
+    let mut p = s;
+    for dm in denominator {
+        d += p * dm;
+        p *= s;
+    }
+    let delay = (-s * tau_s).exp() / d;
+    Matrix3::from_fn(|i, j| {
+        let mut n = Complex64::new(0.0, 0.0);
+        let mut p = Complex64::new(1.0, 0.0);
+        for nm in numerator {
+            n += p * nm[i][j];
+            p *= s;
+        }
+        n * delay
+    })
+}
+
 /// The result of a structural fit. All coefficients use `s` in rad/s.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StructuralFit {
@@ -241,23 +270,7 @@ impl StructuralFit {
     /// Non-finite only at a pole on the imaginary axis or for a non-finite `f_hz`.
     #[must_use]
     pub fn response(&self, f_hz: f64) -> Matrix3<Complex64> {
-        let s = Complex64::new(0.0, 2.0 * std::f64::consts::PI * f_hz);
-        let mut d = Complex64::new(1.0, 0.0);
-        let mut p = s;
-        for dm in &self.denominator {
-            d += p * dm;
-            p *= s;
-        }
-        let delay = (-s * self.tau_s).exp() / d;
-        Matrix3::from_fn(|i, j| {
-            let mut n = Complex64::new(0.0, 0.0);
-            let mut p = Complex64::new(1.0, 0.0);
-            for nm in &self.numerator {
-                n += p * nm[i][j];
-                p *= s;
-            }
-            n * delay
-        })
+        rational_response(&self.numerator, &self.denominator, self.tau_s, f_hz)
     }
 }
 

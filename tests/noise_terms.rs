@@ -1,0 +1,96 @@
+//! Noise terms on simulated runs whose sensor noise has a closed form: white rate noise of known
+//! density (`simulate --sensor-noise white`) gives the angle random walk `N = asd / sqrt(2)`,
+//! and a rate random walk (`--random-walk K`) gives `K`, each within its stated interval, over
+//! several seeds and regimes. The truth is read from the simulator's sidecar by the test only.
+
+use std::sync::Arc;
+
+use imu_attest::ident::session::{Session, Start};
+use imu_attest::ident::settings::Settings;
+use imu_attest::model::Model;
+use imu_attest::noise::of_model::attach_noise;
+use imu_attest::noise::terms::NoiseTerm;
+use imu_attest::run::{LoadOptions, load};
+use imu_attest::sim::regime::Regime;
+use imu_attest::sim::write::write_run;
+use imu_attest::sim::{SimConfig, simulate};
+
+/// Normalised error of `value` with one-sigma interval `[lo, hi]`: the half-width on the
+/// truth's side.
+fn z(value: f64, interval: [f64; 2], truth: f64) -> f64 {
+    if truth >= value {
+        (truth - value) / (interval[1] - value)
+    } else {
+        (value - truth) / (value - interval[0])
+    }
+}
+
+/// Identifies a simulated run and returns its model (noise attached) with the sidecar's truth.
+fn identified(regime: Regime, seed: u64, random_walk: f64) -> (Model, serde_json::Value) {
+    let mut config = SimConfig::new(regime);
+    config.seed = seed;
+    config.duration_s = 300.0;
+    config.sensor_noise.white_only = true;
+    config.sensor_noise.random_walk = random_walk;
+    let sim = simulate(&config).expect("simulated");
+    let truth = serde_json::to_value(&sim.sidecar.truth).expect("truth serialises");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("run.csv");
+    write_run(&sim, &path).expect("written");
+    let run = Arc::new(load(&path, &LoadOptions::default()).expect("loads"));
+    let settings = Settings::default();
+    let mut session = Session::new(run.clone());
+    let id = session.identify(&settings, Start::Cold, &mut |_| {}).expect("identified");
+    let mut model = Model::from_identification(&run, &settings, &id);
+    attach_noise(&mut model, &mut session, &settings).expect("noise");
+    (model, truth)
+}
+
+fn truth_of(truth: &serde_json::Value, block: &str, field: &str, channel: usize) -> f64 {
+    truth[block]["noise"][field][channel].as_f64().expect("a number")
+}
+
+#[test]
+fn white_gyro_noise_gives_its_angle_random_walk_within_the_stated_interval() {
+    let mut zs = Vec::new();
+    for (regime, seed) in [
+        (Regime::Cruise, 1),
+        (Regime::Approach, 2),
+        (Regime::TurbulentCruise, 3),
+        (Regime::Cruise, 4),
+    ] {
+        let (model, truth) = identified(regime, seed, 0.0);
+        let noise = model.blocks["gyro"].noise.as_ref().expect("noise figures");
+        for (i, ch) in noise.channels.iter().enumerate() {
+            let arw = ch.term(NoiseTerm::RandomWalk).expect("white noise is seen");
+            let n = truth_of(&truth, "gyro", "white_asd", i) / 2.0_f64.sqrt();
+            let scale = arw.value / arw.value_si;
+            let e = z(arw.value, arw.interval, n * scale);
+            assert!(e.abs() < 3.0, "{regime:?} seed {seed} {}: N {} vs {n} (z {e})", ch.channel, arw.value_si);
+            zs.push(e);
+        }
+    }
+    let rms = (zs.iter().map(|v| v * v).sum::<f64>() / zs.len() as f64).sqrt();
+    eprintln!("ARW normalised errors over {} channels: rms {rms:.2}", zs.len());
+    assert!((0.2..1.4).contains(&rms), "ARW normalised errors rms {rms}: {zs:?}");
+}
+
+#[test]
+fn a_rate_random_walk_is_found_with_its_strength() {
+    let k = 2e-5;
+    let mut zs = Vec::new();
+    for (regime, seed) in [(Regime::Cruise, 11), (Regime::Approach, 12)] {
+        let (model, _) = identified(regime, seed, k);
+        let noise = model.blocks["gyro"].noise.as_ref().expect("noise figures");
+        for ch in &noise.channels {
+            let rrw = ch.term(NoiseTerm::RateRandomWalk).expect("the walk is seen");
+            let scale = rrw.value / rrw.value_si;
+            let e = z(rrw.value, rrw.interval, k * scale);
+            assert!(e.abs() < 3.0, "{regime:?} seed {seed} {}: K {} vs {k} (z {e})", ch.channel, rrw.value_si);
+            zs.push(e);
+        }
+    }
+    let rms = (zs.iter().map(|v| v * v).sum::<f64>() / zs.len() as f64).sqrt();
+    eprintln!("RRW normalised errors over {} channels: rms {rms:.2}", zs.len());
+    assert!(rms < 1.5, "RRW normalised errors rms {rms}: {zs:?}");
+}

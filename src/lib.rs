@@ -21,6 +21,7 @@ pub mod model;
 pub mod noise;
 pub mod output;
 mod procfs;
+pub mod report;
 pub mod rng;
 pub mod run;
 pub mod sim;

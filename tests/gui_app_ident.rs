@@ -178,8 +178,17 @@ fn an_exported_model_reads_back_and_an_input_is_never_overwritten() {
         .push_command(Command::ExportModel(Some(out.clone())));
     harness.run_steps(2);
     let text = std::fs::read_to_string(&out).expect("written");
-    let model: Model = serde_json::from_str(&text).expect("a model file");
+    let mut model: Model = serde_json::from_str(&text).expect("a model file");
     assert_eq!(model.schema, MODEL_SCHEMA);
+    // The file has the noise terms (computed on the worker at export, as `identify` does);
+    // everything else is the model shown.
+    assert!(
+        model.blocks.values().all(|b| b.noise.is_some()),
+        "noise terms exported"
+    );
+    for b in model.blocks.values_mut() {
+        b.noise = None;
+    }
     let shown = &harness.state().runs()[0]
         .identification
         .value

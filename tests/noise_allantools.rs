@@ -15,7 +15,7 @@ struct Series {
 }
 
 #[derive(Deserialize)]
-struct Edf {
+struct EdfRef {
     n: usize,
     m: usize,
     alpha: i32,
@@ -40,7 +40,7 @@ struct Quantile {
 #[derive(Deserialize)]
 struct Refs {
     series: Vec<Series>,
-    edf: Vec<Edf>,
+    edf: Vec<EdfRef>,
     ci: Vec<Interval>,
     chi2_quantiles: Vec<Quantile>,
 }

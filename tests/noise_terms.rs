@@ -40,7 +40,9 @@ fn identified(regime: Regime, seed: u64, random_walk: f64) -> (Model, serde_json
     let run = Arc::new(load(&path, &LoadOptions::default()).expect("loads"));
     let settings = Settings::default();
     let mut session = Session::new(run.clone());
-    let id = session.identify(&settings, Start::Cold, &mut |_| {}).expect("identified");
+    let id = session
+        .identify(&settings, Start::Cold, &mut |_| {})
+        .expect("identified");
     let mut model = Model::from_identification(&run, &settings, &id);
     attach_noise(&mut model, &mut session, &settings).expect("noise");
     (model, truth)
@@ -66,13 +68,21 @@ fn white_gyro_noise_gives_its_angle_random_walk_within_the_stated_interval() {
             let n = truth_of(&truth, "gyro", "white_asd", i) / 2.0_f64.sqrt();
             let scale = arw.value / arw.value_si;
             let e = z(arw.value, arw.interval, n * scale);
-            assert!(e.abs() < 3.0, "{regime:?} seed {seed} {}: N {} vs {n} (z {e})", ch.channel, arw.value_si);
+            assert!(
+                e.abs() < 3.0,
+                "{regime:?} seed {seed} {}: N {} vs {n} (z {e})",
+                ch.channel,
+                arw.value_si
+            );
             zs.push(e);
         }
     }
     let rms = (zs.iter().map(|v| v * v).sum::<f64>() / zs.len() as f64).sqrt();
     eprintln!("ARW normalised errors over {} channels: rms {rms:.2}", zs.len());
-    assert!((0.2..1.4).contains(&rms), "ARW normalised errors rms {rms}: {zs:?}");
+    assert!(
+        (0.2..1.4).contains(&rms),
+        "ARW normalised errors rms {rms}: {zs:?}"
+    );
 }
 
 #[test]
@@ -86,7 +96,12 @@ fn a_rate_random_walk_is_found_with_its_strength() {
             let rrw = ch.term(NoiseTerm::RateRandomWalk).expect("the walk is seen");
             let scale = rrw.value / rrw.value_si;
             let e = z(rrw.value, rrw.interval, k * scale);
-            assert!(e.abs() < 3.0, "{regime:?} seed {seed} {}: K {} vs {k} (z {e})", ch.channel, rrw.value_si);
+            assert!(
+                e.abs() < 3.0,
+                "{regime:?} seed {seed} {}: K {} vs {k} (z {e})",
+                ch.channel,
+                rrw.value_si
+            );
             zs.push(e);
         }
     }

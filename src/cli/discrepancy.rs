@@ -16,7 +16,7 @@ use crate::model::{MODEL_SCHEMA, Model};
 use crate::output::{ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
 
-fn read_model(path: &Path) -> Result<Model, CliError> {
+pub(super) fn read_model(path: &Path) -> Result<Model, CliError> {
     let shown = path.display();
     let bytes = std::fs::read(path).map_err(|e| CliError::Input(format!("{shown}: cannot read: {e}")))?;
     let de = &mut serde_json::Deserializer::from_slice(&bytes);

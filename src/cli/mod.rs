@@ -9,6 +9,7 @@ mod discrepancy;
 mod identify;
 mod inspect;
 mod progress;
+mod report;
 mod simulate;
 
 use std::process::ExitCode;
@@ -55,6 +56,9 @@ usage:
   imu-attest identify RUN [--settings S.json] --out MODEL.json
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
   imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json
+  imu-attest report RUN... [--settings S.json] [--model MODEL.json] [--spec SPEC.json]
+                      --out REPORT.html           the certificate: model, noise terms (Allan),
+                                                  diagnosis, pass/fail against SPEC
   imu-attest inspect RUN...                       check runs against the format, summarise them
   imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]
                                                   time the identifier's stages (default: a
@@ -90,6 +94,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "identify" => identify::run(&Args::parse(rest)?),
         "discrepancy" => discrepancy::run(&Args::parse(rest)?),
         "compare" => compare::run(&Args::parse(rest)?),
+        "report" => report::run(&Args::parse(rest)?),
         "bench" => bench::run(rest),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {

@@ -54,7 +54,7 @@ pub fn averaging_factors(len: usize, per_octave: u32) -> Vec<usize> {
     let step = 2.0_f64.powf(1.0 / f64::from(per_octave.max(1)));
     let mut m = 1.0_f64;
     while m.round() <= max as f64 {
-        #[allow(
+        #[expect(
             clippy::cast_possible_truncation,
             clippy::cast_sign_loss,
             reason = "m >= 1, below len"
@@ -142,7 +142,10 @@ pub fn overlapping_adev(
     ms: &[usize],
     law: impl Fn(usize) -> PowerLaw,
 ) -> Vec<AllanPoint> {
-    if rate.is_empty() || !rate.iter().all(|v| v.is_finite()) || !(sample_rate_hz > 0.0) {
+    if rate.is_empty()
+        || !rate.iter().all(|v| v.is_finite())
+        || sample_rate_hz.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
         return Vec::new();
     }
     let tau0 = 1.0 / sample_rate_hz;

@@ -117,7 +117,10 @@ pub fn block_noise(
     reference: Option<&[ReferencePsd; 3]>,
 ) -> Option<BlockNoise> {
     let len = residual.iter().map(Vec::len).min().unwrap_or(0);
-    if len < MIN_SAMPLES || !residual.iter().flatten().all(|v| v.is_finite()) || !(sample_rate_hz > 0.0) {
+    if len < MIN_SAMPLES
+        || !residual.iter().flatten().all(|v| v.is_finite())
+        || sample_rate_hz.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
         return None;
     }
     let ms = averaging_factors(len, TAUS_PER_OCTAVE);

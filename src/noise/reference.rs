@@ -152,7 +152,7 @@ fn kernel_integral(a: f64, b: f64, tau: f64) -> f64 {
         // 2 (3/8) / (pi tau)^2 int f^-2 df
         return 0.75 / (pi_tau * pi_tau) * (1.0 / a - 1.0 / b);
     }
-    #[allow(
+    #[expect(
         clippy::cast_possible_truncation,
         clippy::cast_sign_loss,
         reason = "periods <= 8 here"

@@ -31,7 +31,7 @@ pub fn settle_samples(tau_s: f64, poles: &[[f64; 2]], sample_rate_hz: f64, len: 
     let seconds = tau_s.abs() + 5.0 * time_constant;
     let wanted = (seconds * sample_rate_hz).ceil() + 8.0;
     let cap = (len as f64 * MAX_SETTLE_FRACTION).floor();
-    #[allow(
+    #[expect(
         clippy::cast_possible_truncation,
         clippy::cast_sign_loss,
         reason = "clamped to [0, len]"
@@ -77,7 +77,9 @@ pub fn residual(
             .map(|(x, m)| x - m)
             .collect();
         let mean = r.iter().sum::<f64>() / r.len() as f64;
-        r.iter_mut().for_each(|v| *v -= mean);
+        for v in &mut r {
+            *v -= mean;
+        }
         r
     })
 }

@@ -24,7 +24,7 @@ use super::chi2::chi2_quantile;
 use crate::block::Block;
 
 /// One power-law noise term.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum NoiseTerm {
     /// Quantisation `Q` (`sigma^2 = 3 Q^2 / tau^2`).

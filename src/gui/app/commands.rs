@@ -32,6 +32,8 @@ pub enum Command {
     ExportModel(Option<PathBuf>),
     /// Write the current view as PNG here (`None`: ask with a save dialog).
     ExportPng(Option<PathBuf>),
+    /// Write the selected run's certificate (HTML) here (`None`: ask with a dialog).
+    ExportReport(Option<PathBuf>),
     /// Add a run to, or remove it from, the comparison.
     ToggleCompare(RunId),
     /// Find the missing effects of this run.
@@ -107,6 +109,12 @@ impl App {
                 let path = path.or_else(|| self.save_dialog("model JSON", "json", "_model.json"));
                 if let Some(path) = path {
                     self.export_model(&path);
+                }
+            }
+            Command::ExportReport(path) => {
+                let path = path.or_else(|| self.save_dialog("HTML report", "html", "_report.html"));
+                if let Some(path) = path {
+                    self.export_report(path);
                 }
             }
             Command::ExportPng(path) => {

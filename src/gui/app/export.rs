@@ -68,31 +68,67 @@ impl App {
     pub(super) fn export_model(&mut self, path: &Path) {
         let outcome = self.try_export_model(path);
         match outcome {
-            Ok(()) => self.status = Some(format!("model written to {}", path.display())),
+            Ok(()) => self.status = Some(format!("writing the model to {}…", path.display())),
             Err(e) => self.errors.push(ErrorTopic::Export, format!("export: {e}")),
         }
     }
 
-    fn try_export_model(&self, path: &Path) -> Result<(), String> {
+    /// Checks the export and sends it to the worker, which adds the noise terms (they need the
+    /// whole record's residual) and writes the file as `identify` does.
+    fn try_export_model(&mut self, path: &Path) -> Result<(), String> {
         let run = self.selected().ok_or("no run selected")?;
         let id = run
             .identification
             .as_ref()
             .ok_or_else(|| format!("{} is not identified yet", run.name()))?;
+        id.model
+            .check_finite()
+            .map_err(|e| format!("model not written: {e}"))?;
+        let run_id = run.id;
         let inputs: Vec<PathBuf> = self
             .runs
             .iter()
             .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
             .collect();
         ensure_not_input(path, &inputs).map_err(|e| e.to_string())?;
-        id.model
-            .check_finite()
-            .map_err(|e| format!("model not written: {e}"))?;
-        write_atomic(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, &id.model).map_err(std::io::Error::other)?;
-            w.write_all(b"\n")
-        })
-        .map_err(|e| e.to_string())
+        let generation = self.next_generation();
+        self.worker.submit(crate::gui::pipeline::Job {
+            run: run_id,
+            generation,
+            kind: crate::gui::pipeline::JobKind::ExportModel {
+                path: path.to_path_buf(),
+            },
+        });
+        Ok(())
+    }
+
+    /// Asks the worker for the selected run's certificate at `path` (it identifies, computes the
+    /// noise terms and diagnoses on its cached session: seconds on a long run).
+    pub(super) fn export_report(&mut self, path: PathBuf) {
+        let inputs: Vec<PathBuf> = self
+            .runs
+            .iter()
+            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
+            .collect();
+        if let Err(e) = ensure_not_input(&path, &inputs) {
+            self.errors.push(ErrorTopic::Export, format!("export: {e}"));
+            return;
+        }
+        let Some(id) = self.selected().filter(|r| r.summary.is_some()).map(|r| r.id) else {
+            self.errors
+                .push(ErrorTopic::Export, "export: no loaded run selected".to_owned());
+            return;
+        };
+        let generation = self.next_generation();
+        self.status = Some(format!("writing the report to {}…", path.display()));
+        self.worker.submit(crate::gui::pipeline::Job {
+            run: id,
+            generation,
+            kind: crate::gui::pipeline::JobKind::Report {
+                settings: Box::new(self.prefs.settings.clone()),
+                path,
+            },
+        });
     }
 
     /// Sends a pending screenshot request to egui and writes the images it has returned.

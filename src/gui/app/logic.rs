@@ -156,6 +156,21 @@ impl App {
                     self.errors.clear(ErrorTopic::Diagnosis(run));
                 }
             }
+            Event::Written { what, path, .. } => {
+                self.status = Some(format!("{what} written to {}", path.display()));
+            }
+            Event::Failed {
+                stage: Stage::Export,
+                message,
+                kind,
+                ..
+            } => {
+                self.status = None;
+                self.errors.push(
+                    ErrorTopic::Export,
+                    format!("export: {}", described(&message, kind)),
+                );
+            }
             Event::Failed {
                 stage: Stage::Diagnose,
                 run,

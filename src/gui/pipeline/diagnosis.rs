@@ -1,6 +1,7 @@
 //! The missing-effect diagnosis of a loaded run on the worker: the core's diagnosis on the run's
 //! session, so the observer, spectra and factorisations the app already holds are used as they
-//! are (only the order-0 fit over the diagnosis's band is new).
+//! are (only the order-0 fit over the diagnosis's band is new). The certificate is made the same
+//! way.
 
 use super::analyse::RunCache;
 use crate::block::Block;
@@ -22,4 +23,44 @@ pub(super) fn diagnose(
         rejected: rejected.to_vec(),
     };
     diagnose_session(&mut cache.session, settings, &options)
+}
+
+/// Writes the cached run's model file to `path` with its noise terms (as `identify` does).
+///
+/// # Errors
+/// The message, and whether it is the user's input.
+pub(super) fn export_model(cache: &mut RunCache, path: &std::path::Path) -> Result<(), (String, bool)> {
+    let identification = cache
+        .identification
+        .clone()
+        .ok_or_else(|| ("the run is not identified yet".to_owned(), true))?;
+    let mut model = identification.model.clone();
+    let settings = model.settings.clone();
+    crate::noise::of_model::attach_noise(&mut model, &mut cache.session, &settings)
+        .map_err(|e| (e.to_string(), e.is_input_error()))?;
+    model.write_file(path).map_err(|e| {
+        let input = !matches!(e, crate::output::OutputError::NonFinite { .. });
+        (e.to_string(), input)
+    })
+}
+
+/// Writes the cached run's certificate to `path` (`crate::report`).
+///
+/// # Errors
+/// The message, and whether it is the user's input (bad settings for the run, a path that
+/// cannot be written) rather than our fault.
+pub(super) fn report(
+    cache: &mut RunCache,
+    settings: &Settings,
+    path: &std::path::Path,
+) -> Result<(), (String, bool)> {
+    let run = cache.session.run().clone();
+    let settings = Settings {
+        blocks: settings.blocks_for(&run.blocks()),
+        ..settings.clone()
+    };
+    let report = crate::report::run_report(&mut cache.session, &settings, None)
+        .map_err(|e| (e.to_string(), e.is_input_error()))?;
+    let (page, _) = crate::report::render(&[report], None, &crate::report::utc_now());
+    crate::report::write_page(path, &page).map_err(|e| (e.to_string(), true))
 }

@@ -81,6 +81,20 @@ pub enum JobKind {
         /// Effects the engineer rejected, never offered again.
         rejected: Vec<(Block, Effect)>,
     },
+    /// Write the run's model file to `path`, its noise terms computed on the worker's cached
+    /// session (as `identify` writes it).
+    ExportModel {
+        /// Where the JSON goes.
+        path: PathBuf,
+    },
+    /// Write the run's certificate (`crate::report`) to `path`: the identification, noise
+    /// terms and diagnosis on the worker's cached session.
+    Report {
+        /// The identifier settings.
+        settings: Box<Settings>,
+        /// Where the HTML goes.
+        path: PathBuf,
+    },
     /// Drop the run's cached stages.
     Forget,
     /// Fault injection: panics inside the worker as a bug in `stage` would (tests of the panic
@@ -106,6 +120,8 @@ pub enum Stage {
     Identify,
     /// The missing-effect diagnosis.
     Diagnose,
+    /// Writing a model file or the certificate.
+    Export,
 }
 
 impl Stage {
@@ -119,6 +135,7 @@ impl Stage {
             Stage::Factorisation => "factorisation",
             Stage::Identify => "identification",
             Stage::Diagnose => "diagnosis",
+            Stage::Export => "export",
         }
     }
 }
@@ -207,6 +224,15 @@ pub enum Event {
         generation: u64,
         /// The report.
         report: Arc<Report>,
+    },
+    /// A file was written (a model file or the certificate).
+    Written {
+        /// The run.
+        run: RunId,
+        /// What (`model`, `report`).
+        what: &'static str,
+        /// Where.
+        path: PathBuf,
     },
     /// A stage failed (error or caught panic); earlier results stay valid.
     Failed {

@@ -271,6 +271,34 @@ impl Pipeline {
                 };
                 self.send(event);
             }
+            JobKind::Report { .. } | JobKind::ExportModel { .. } => {
+                *stage = Stage::Export;
+                let Some(cache) = self.runs.get_mut(&run) else {
+                    return;
+                };
+                let (what, path, outcome) = match job.kind {
+                    JobKind::Report { settings, path } => {
+                        let outcome = super::diagnosis::report(cache, &settings, &path);
+                        ("report", path, outcome)
+                    }
+                    JobKind::ExportModel { path } => {
+                        let outcome = super::diagnosis::export_model(cache, &path);
+                        ("model", path, outcome)
+                    }
+                    _ => return,
+                };
+                let event = match outcome {
+                    Ok(()) => Event::Written { run, what, path },
+                    Err((message, input)) => Event::Failed {
+                        run,
+                        generation,
+                        stage: Stage::Export,
+                        message,
+                        kind: FailureKind::of(input),
+                    },
+                };
+                self.send(event);
+            }
             JobKind::Forget => {
                 self.runs.remove(&run);
                 self.unpolished.remove(&run);
@@ -343,7 +371,7 @@ impl Pipeline {
     }
 }
 
-/// Keeps every load and forget job in order, and of the analysis jobs and of the diagnosis jobs
+/// Keeps every load, report and forget job in order, and of the analysis jobs and of the diagnosis jobs
 /// only the newest of each kind per run (a diagnosis takes seconds: one queued behind another is
 /// stale before it starts).
 fn newest_only(batch: Vec<Job>) -> Vec<Job> {

@@ -257,3 +257,60 @@ fn a_run_too_large_for_memory_is_refused_in_the_error_panel() {
     );
     harness.get_by_label_contains("only 1 MB available");
 }
+
+/// File > Export report: the menu offers it, and the certificate of the selected run is written
+/// by the threaded worker (identification, noise terms and diagnosis on its cached session)
+/// while the app keeps drawing; the status line says where it went.
+#[test]
+fn the_report_is_exported_from_the_app_by_the_worker_thread() {
+    let mut harness = app(options(
+        vec![sample_run_path().expect("sample run")],
+        WorkerMode::Thread,
+    ));
+    harness.get_by_label("File").click();
+    harness.run_steps(2);
+    harness.get_by_label("Export report (HTML)…");
+    harness.key_press(eframe::egui::Key::Escape);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
+    while harness.state().runs()[0].identification.value.is_none() {
+        assert!(std::time::Instant::now() < deadline, "identified in time");
+        harness.run_steps(1);
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cruise_report.html");
+    harness
+        .state_mut()
+        .push_command(Command::ExportReport(Some(out.clone())));
+    while harness
+        .state()
+        .status()
+        .is_none_or(|s| !s.contains("report written to"))
+    {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "report written in time: {:?}",
+            harness.state().errors()
+        );
+        harness.run_steps(1);
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let html = std::fs::read_to_string(&out).expect("written");
+    for section in [
+        "id=\"block-gyro\"",
+        "class=\"noise\"",
+        "id=\"diagnosis\"",
+        "overlapping Allan deviation",
+    ] {
+        assert!(html.contains(section), "{section}");
+    }
+    // Over an input: refused, in the error panel, nothing written.
+    let input = harness.state().runs()[0].path.clone();
+    let size = std::fs::metadata(&input).expect("input").len();
+    harness
+        .state_mut()
+        .push_command(Command::ExportReport(Some(input.clone())));
+    harness.run_steps(2);
+    assert!(harness.state().errors().iter().any(|e| e.contains("refusing")));
+    assert_eq!(std::fs::metadata(&input).expect("input").len(), size);
+}

@@ -109,3 +109,48 @@ fn a_rate_random_walk_is_found_with_its_strength() {
     eprintln!("RRW normalised errors over {} channels: rms {rms:.2}", zs.len());
     assert!(rms < 1.5, "RRW normalised errors rms {rms}: {zs:?}");
 }
+
+/// A model that does not explain the data (a real run whose reference misses part of the hand
+/// motion) marks its noise terms as upper bounds; a clean simulated run does not.
+#[test]
+fn noise_terms_of_a_misfitting_model_are_marked_as_upper_bounds() {
+    use imu_attest::ident::warnings::IdentWarning;
+    use imu_attest::noise::NoiseWarning;
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad07_fast_rotation.csv.gz");
+    let run = Arc::new(load(&path, &LoadOptions::default()).expect("loads"));
+    let settings = Settings {
+        blocks: Settings::default().blocks_for(&run.blocks()),
+        ..Settings::default()
+    };
+    let mut session = Session::new(run.clone());
+    let id = session
+        .identify(&settings, Start::Cold, &mut |_| {})
+        .expect("identified");
+    let mut model = Model::from_identification(&run, &settings, &id);
+    attach_noise(&mut model, &mut session, &settings).expect("noise");
+    let gyro = &model.blocks["gyro"];
+    assert!(
+        gyro.fit
+            .warnings
+            .iter()
+            .any(|w| matches!(w, IdentWarning::PoorFit { .. }))
+    );
+    let noise = gyro.noise.as_ref().expect("noise figures");
+    assert!(
+        matches!(noise.warnings.first(), Some(NoiseWarning::ModelMisfit { chi2_per_dof }) if *chi2_per_dof > 1.5),
+        "{:?}",
+        noise.warnings
+    );
+    let (clean, _) = identified(Regime::Cruise, 21, 0.0);
+    for b in clean.blocks.values() {
+        let n = b.noise.as_ref().expect("noise figures");
+        assert!(
+            !n.warnings
+                .iter()
+                .any(|w| matches!(w, NoiseWarning::ModelMisfit { .. })),
+            "{:?}",
+            n.warnings
+        );
+    }
+}

@@ -92,6 +92,41 @@ impl ChannelNoise {
     }
 }
 
+/// Why a block's noise figures are not simply the sensor's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum NoiseWarning {
+    /// The identified model does not explain the data: the residual holds a misfit besides the
+    /// sensor's noise, so the terms are upper bounds.
+    ModelMisfit {
+        /// chi2 per degree of freedom of the model.
+        chi2_per_dof: f64,
+    },
+    /// Up to this averaging time the reference's angle noise dominates the residual in some
+    /// channel: those points are left out, and terms seen only there are not measured.
+    ReferenceDominated {
+        /// The longest averaging time left out, s.
+        up_to_tau_s: f64,
+    },
+}
+
+impl std::fmt::Display for NoiseWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NoiseWarning::ModelMisfit { chi2_per_dof } => write!(
+                f,
+                "the model does not explain the data (chi2/dof {chi2_per_dof:.2}): the residual holds \
+                 more than the sensor's noise, so these noise terms are upper bounds"
+            ),
+            NoiseWarning::ReferenceDominated { up_to_tau_s } => write!(
+                f,
+                "up to tau = {up_to_tau_s:.3} s the stand's angle noise (through the observer) dominates \
+                 the residual: those averaging times are left out of the fit"
+            ),
+        }
+    }
+}
+
 /// A block's noise figures.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BlockNoise {
@@ -103,6 +138,9 @@ pub struct BlockNoise {
     pub channels: [ChannelNoise; 3],
     /// Correlation coefficients of the channels' residuals.
     pub correlation: [[f64; 3]; 3],
+    /// Why the figures are not simply the sensor's (empty when nothing is in the way).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<NoiseWarning>,
 }
 
 /// Noise figures of `block` from its `residual` channels (see [`residual::residual`]) named
@@ -135,11 +173,29 @@ pub fn block_noise(
             reference,
         )
     });
+    let excluded = channels
+        .iter()
+        .flat_map(|c: &ChannelNoise| {
+            c.allan
+                .iter()
+                .zip(&c.reference_adev)
+                .filter(|(p, r)| r.powi(2) > MAX_REFERENCE_SHARE * p.adev.powi(2))
+                .map(|(p, _)| p.tau_s)
+        })
+        .fold(0.0, f64::max);
+    let warnings = if excluded > 0.0 {
+        vec![NoiseWarning::ReferenceDominated {
+            up_to_tau_s: excluded,
+        }]
+    } else {
+        Vec::new()
+    };
     Some(BlockNoise {
         samples: len,
         sample_rate_hz,
         channels,
         correlation: correlation(residual, len),
+        warnings,
     })
 }
 

@@ -3,13 +3,14 @@
 
 use std::ops::Range;
 
-use super::{BlockNoise, block_noise};
+use super::{BlockNoise, NoiseWarning, block_noise};
 use crate::block::Block;
 use crate::ident::IdentError;
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::ident::signals::{BlockSignals, channel_names};
 use crate::ident::structural::rational_response;
+use crate::ident::warnings::IdentWarning;
 use crate::model::{BlockModel, Model};
 
 use super::reference::{AccelGeometry, ReferencePsd, reference_psd};
@@ -35,13 +36,27 @@ pub fn model_block_noise(
     let r = residual(&input, &output, sample_rate_hz, settle, |f| {
         rational_response(&model.numerator, &model.denominator, model.tau_s, f)
     });
-    block_noise(
+    let mut noise = block_noise(
         signals.block,
         channel_names(signals.block).1,
         &r,
         sample_rate_hz,
         reference,
-    )
+    )?;
+    let misfit = model
+        .fit
+        .warnings
+        .iter()
+        .any(|w| matches!(w, IdentWarning::PoorFit { .. }));
+    if misfit {
+        noise.warnings.insert(
+            0,
+            NoiseWarning::ModelMisfit {
+                chi2_per_dof: model.fit.chi2_per_dof,
+            },
+        );
+    }
+    Some(noise)
 }
 
 /// Fills `noise` of every block of `model` (identified from `session`'s run under `settings`).

@@ -212,3 +212,43 @@ mod tests {
         assert!((sampled / averaged - 1.0).abs() < 0.01, "{sampled} vs {averaged}");
     }
 }
+
+#[cfg(test)]
+mod warning_tests {
+    use super::ReferencePsd;
+    use crate::block::Block;
+    use crate::noise::{NoiseWarning, block_noise};
+    use crate::rng::Rng;
+
+    #[test]
+    fn a_dominating_reference_is_named_and_a_negligible_one_is_not() {
+        let fs = 100.0;
+        let mut rng = Rng::new(9);
+        let r: [Vec<f64>; 3] = std::array::from_fn(|_| (0..20_000).map(|_| 1e-3 * rng.normal()).collect());
+        let names = ["gx", "gy", "gz"];
+        let band = |density: f64| {
+            std::array::from_fn(|_| ReferencePsd {
+                edges_hz: vec![20.0, 50.0],
+                psd: vec![density],
+            })
+        };
+        // White residual of one-sided density 2e-6 / 100 = 2e-8: a reference of 1e-6 above 20 Hz
+        // dominates the shortest averaging times; one of 1e-12 does not.
+        let strong = block_noise(Block::Gyro, names, &r, fs, Some(&band(1e-6))).expect("figures");
+        assert!(
+            matches!(strong.warnings[..], [NoiseWarning::ReferenceDominated { up_to_tau_s }] if up_to_tau_s < 1.0)
+        );
+        let weak = block_noise(Block::Gyro, names, &r, fs, Some(&band(1e-12))).expect("figures");
+        assert!(weak.warnings.is_empty(), "{:?}", weak.warnings);
+        assert!(
+            block_noise(
+                Block::Gyro,
+                names,
+                &[vec![0.0; 10], vec![0.0; 10], vec![0.0; 10]],
+                fs,
+                None
+            )
+            .is_none()
+        );
+    }
+}

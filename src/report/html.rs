@@ -349,7 +349,11 @@ fn noise_section(h: &mut String, block: Block, noise: &BlockNoise) {
             );
         }
     }
-    h.push_str("</table><p>A term whose share is below one half is barely visible in this record. The reference's part (the stand's angle noise through the observer and the model) is shown dashed and is subtracted before the fit.</p><div class=\"grid allan\">");
+    h.push_str("</table>");
+    for w in &noise.warnings {
+        let _ = write!(h, "<p class=\"warn\">{}</p>", esc(&w.to_string()));
+    }
+    h.push_str("<p>A term whose share is below one half is barely visible in this record. The reference's part (the stand's angle noise through the observer and the model) is shown dashed and is subtracted before the fit.</p><div class=\"grid allan\">");
     let mut series = Vec::new();
     for (i, ch) in noise.channels.iter().enumerate() {
         series.push(Series {

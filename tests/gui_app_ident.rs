@@ -271,7 +271,7 @@ fn the_report_is_exported_from_the_app_by_the_worker_thread() {
     harness.run_steps(2);
     harness.get_by_label("Export report (HTML)…");
     harness.key_press(eframe::egui::Key::Escape);
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_mins(5);
     while harness.state().runs()[0].identification.value.is_none() {
         assert!(std::time::Instant::now() < deadline, "identified in time");
         harness.run_steps(1);

@@ -59,7 +59,11 @@ fn the_sample_runs_certificate_holds_every_section_and_nothing_external() {
     let sha = {
         use sha2::Digest as _;
         let digest = sha2::Sha256::digest(std::fs::read(&run).unwrap());
-        digest.iter().map(|b| format!("{b:02x}")).collect::<String>()
+        digest.iter().fold(String::new(), |mut s, b| {
+            use std::fmt::Write as _;
+            let _ = write!(s, "{b:02x}");
+            s
+        })
     };
     assert!(html.contains(&sha), "the run's sha256");
     // Self-contained: no script, no stylesheet or image fetched, no link anywhere.
@@ -206,7 +210,8 @@ fn one_failing_limit_fails_that_figure_and_nothing_else() {
     );
     // Loose limits on figures with a known band all pass.
     let passes = html.matches("<tr class=\"pass\">").count();
-    assert!(passes >= 2 * 3 + 6 + 1, "{passes} passes");
+    let delay_and_gyro_gains = 1 + 3 + 6;
+    assert!(passes >= delay_and_gyro_gains + 3, "{passes} passes");
     assert!(html.contains("id=\"spec-summary\""));
 }
 

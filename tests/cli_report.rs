@@ -210,8 +210,9 @@ fn one_failing_limit_fails_that_figure_and_nothing_else() {
     );
     // Loose limits on figures with a known band all pass.
     let passes = html.matches("<tr class=\"pass\">").count();
-    let delay_and_gyro_gains = 1 + 3 + 6;
-    assert!(passes >= delay_and_gyro_gains + 3, "{passes} passes");
+    // Gyro scale factors and misalignments, the accelerometer's delay and scale factors.
+    let loose = 3 + 6 + 1 + 3;
+    assert!(passes >= loose, "{passes} passes");
     assert!(html.contains("id=\"spec-summary\""));
 }
 

@@ -67,8 +67,12 @@ pub struct ChannelNoise {
     /// of the variance are left out of the fit.
     #[serde(default)]
     pub reference_adev: Vec<f64>,
-    /// Fitted Allan-variance coefficients of `tau^-2 .. tau^2` (SI).
-    pub coefficients: [f64; 5],
+    /// Fitted Allan-variance coefficients of `tau^-2 .. tau^2` and of the correlated noise
+    /// (SI; `terms::NoiseTerm::shape`).
+    pub coefficients: [f64; 6],
+    /// Correlation time of the correlated noise, s (0 when absent).
+    #[serde(default)]
+    pub correlation_time_s: f64,
     /// The terms present (non-zero in the fit).
     pub terms: Vec<TermEstimate>,
 }
@@ -85,6 +89,7 @@ impl ChannelNoise {
     pub fn fitted_adev(&self, tau_s: f64) -> f64 {
         PowerLawFit {
             coefficients: self.coefficients,
+            correlation_time_s: self.correlation_time_s,
             terms: Vec::new(),
         }
         .avar(tau_s)
@@ -259,7 +264,7 @@ fn channel_noise(
     let first = fit_terms(&sensor, n_phase, 0.0);
     let error = reference_error(&measured, &first);
     let fit = fit_terms(&sensor, n_phase, error);
-    let allan = overlapping_adev(r, fs, ms, |m| fit.dominant(m as f64 * tau0).law());
+    let allan = overlapping_adev(r, fs, ms, |m| fit.law_at(m as f64 * tau0));
     let terms = fit
         .terms
         .iter()
@@ -285,6 +290,7 @@ fn channel_noise(
         allan,
         reference_adev: measured.iter().map(|p| p.reference.sqrt()).collect(),
         coefficients: fit.coefficients,
+        correlation_time_s: fit.correlation_time_s,
         terms,
     }
 }

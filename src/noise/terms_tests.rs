@@ -109,12 +109,12 @@ fn a_rate_random_walk_gives_its_strength_within_its_interval() {
 #[test]
 fn each_term_alone_is_recovered_from_its_exact_curve() {
     // Exact variances (no estimation noise): the fit returns the coefficient it was given.
-    for (k, term) in NoiseTerm::ALL.iter().enumerate() {
-        let mut coefficients = [0.0; 5];
+    for (k, term) in NoiseTerm::ALL.iter().take(5).enumerate() {
+        let mut coefficients = [0.0; 6];
         coefficients[k] = 1e-6;
         let truth = PowerLawFit {
             coefficients,
-            terms: Vec::new(),
+            ..PowerLawFit::default()
         };
         let points: Vec<AvarPoint> = averaging_factors(1 << 20, 2)
             .into_iter()
@@ -154,4 +154,56 @@ fn display_units_follow_ieee_usage() {
     // Bias instability: the flat Allan deviation is 0.664 B.
     let c = (0.664_f64 * 2.0).powi(2);
     assert!((NoiseTerm::BiasInstability.value_of(c) / 2.0 - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn correlated_noise_has_its_closed_form_limits() {
+    // Well below T_c a rate random walk K^2 tau / 3 with K^2 = 2 sigma_c^2 / T_c; well above,
+    // a white rate N^2 / tau with N^2 = 2 sigma_c^2 T_c.
+    let tc = 2.0;
+    let t = NoiseTerm::Correlated;
+    for tau in [1e-5, 1e-3, 0.01] {
+        let want = 2.0 / tc * tau / 3.0;
+        assert!((t.shape(tau, tc) / want - 1.0).abs() < 0.01, "{tau}");
+    }
+    let far = 2000.0;
+    assert!((t.shape(far, tc) / (2.0 * tc / far) - 1.0).abs() < 2e-3);
+    // Continuous across the series switch.
+    let (a, b) = (t.shape(0.999e-3 * tc, tc), t.shape(1.001e-3 * tc, tc));
+    // Nearly linear there (g ~ 2x/3 (1 - 3x/4)): the ratio of the two sides is the ratio of x.
+    assert!((a / b - 0.999 / 1.001).abs() < 1e-5, "{a} {b}");
+    assert!(t.shape(1.0, 0.0).abs() < f64::MIN_POSITIVE);
+}
+
+#[test]
+fn a_first_order_markov_process_is_found_with_its_correlation_time() {
+    // sigma_c = 1e-3, T_c = 0.5 s, on white noise of density 1e-4, at 100 Hz for 2000 s.
+    let (fs, sigma, tc, n) = (100.0_f64, 1e-3, 0.5, 1e-4);
+    let a = (-1.0 / (fs * tc)).exp();
+    for seed in 0..4 {
+        let mut rng = Rng::new(300 + seed);
+        let mut x = 0.0;
+        let y: Vec<f64> = (0..200_000)
+            .map(|_| {
+                x = a * x + sigma * (1.0 - a * a).sqrt() * rng.normal();
+                x + n * fs.sqrt() * rng.normal()
+            })
+            .collect();
+        let fit = fit_terms(&points_of(&y, fs), y.len() + 1, 0.0);
+        let c = fit
+            .terms
+            .iter()
+            .find(|t| t.term == NoiseTerm::Correlated)
+            .expect("the Markov process is found");
+        assert!(
+            (c.value / sigma - 1.0).abs() < 0.3,
+            "seed {seed}: sigma {} vs {sigma}",
+            c.value
+        );
+        assert!(
+            (fit.correlation_time_s / tc).ln().abs() < 1.8_f64.ln(),
+            "seed {seed}: T_c {}",
+            fit.correlation_time_s
+        );
+    }
 }

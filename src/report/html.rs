@@ -339,7 +339,14 @@ fn noise_section(h: &mut String, block: Block, noise: &BlockNoise) {
                 h,
                 "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{} &ndash; {}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td></tr>",
                 esc(&ch.channel),
-                t.term.name_on(block),
+                if t.term == crate::noise::terms::NoiseTerm::Correlated {
+                    format!(
+                        "correlated noise (T<sub>c</sub> {} s)",
+                        sig(ch.correlation_time_s, 2)
+                    )
+                } else {
+                    t.term.name_on(block)
+                },
                 sig(t.value, 3),
                 sig(t.interval[0], 2),
                 sig(t.interval[1], 2),

@@ -5,6 +5,7 @@
 //! `Result<T, Error>` out, and never depend on the GUI. Units are SI throughout (s, rad, rad/s,
 //! m/s^2, m); axes and angle conventions follow `../shared/contract.md` section 1.
 
+pub mod batch;
 pub mod bench;
 pub mod block;
 pub mod cli;

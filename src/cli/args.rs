@@ -20,12 +20,22 @@ impl Args {
     /// # Errors
     /// An option without a value.
     pub fn parse(argv: &[String]) -> Result<Self, CliError> {
+        Self::parse_with_flags(argv, &[])
+    }
+
+    /// [`Args::parse`], where the options named in `flags` take no value (`--diagnose`).
+    ///
+    /// # Errors
+    /// An option without a value.
+    pub fn parse_with_flags(argv: &[String], flags: &[&str]) -> Result<Self, CliError> {
         let mut args = Args::default();
         let mut it = argv.iter();
         while let Some(a) = it.next() {
             if let Some(name) = a.strip_prefix("--") {
                 let (name, value) = if let Some((n, v)) = name.split_once('=') {
                     (n.to_owned(), v.to_owned())
+                } else if flags.contains(&name) {
+                    (name.to_owned(), "true".to_owned())
                 } else {
                     let v = it
                         .next()
@@ -57,6 +67,12 @@ impl Args {
     /// None today; kept fallible so commands treat every option alike.
     pub fn get(&self, name: &str) -> Option<&str> {
         self.all(name).last().copied()
+    }
+
+    /// Whether the flag `--name` was given (see [`Args::parse_with_flags`]).
+    #[must_use]
+    pub fn flag(&self, name: &str) -> bool {
+        self.get(name).is_some_and(|v| v != "false")
     }
 
     /// The value of `--name` parsed as `T`, or `default`.

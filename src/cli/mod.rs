@@ -3,6 +3,7 @@
 //! Exit status: 0 done; 2 bad input or bad arguments (one clear line on stderr); 1 internal error.
 
 mod args;
+mod batch;
 mod bench;
 mod compare;
 mod discrepancy;
@@ -59,6 +60,9 @@ usage:
   imu-attest report RUN... [--settings S.json] [--model MODEL.json] [--spec SPEC.json]
                       --out REPORT.html           the certificate: model, noise terms (Allan),
                                                   diagnosis, pass/fail against SPEC
+  imu-attest batch DIR|RUN... [--settings S.json] [--diagnose] --out TABLE.csv|.json
+                                                  a campaign: every run identified (two at a
+                                                  time), one row per run and block
   imu-attest inspect RUN...                       check runs against the format, summarise them
   imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]
                                                   time the identifier's stages (default: a
@@ -95,6 +99,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "discrepancy" => discrepancy::run(&Args::parse(rest)?),
         "compare" => compare::run(&Args::parse(rest)?),
         "report" => report::run(&Args::parse(rest)?),
+        "batch" => batch::run(&Args::parse_with_flags(rest, &["diagnose"])?),
         "bench" => bench::run(rest),
         "gui" => gui(rest),
         "help" | "--help" | "-h" => {
@@ -110,11 +115,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
 
 /// A bare argument naming a run file opens the GUI with it (`imu-attest cruise.csv`).
 fn looks_like_run(arg: &str) -> bool {
-    use std::path::Path;
-    let has_ext = |p: &Path, e: &str| p.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
-    let path = Path::new(arg);
-    has_ext(path, "csv")
-        || (has_ext(path, "gz") && path.file_stem().is_some_and(|s| has_ext(Path::new(s), "csv")))
+    crate::batch::is_run_file(std::path::Path::new(arg))
 }
 
 /// `imu-attest [gui] [RUN...]`: opens the app with these runs, or the bundled sample run.

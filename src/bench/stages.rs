@@ -14,6 +14,7 @@
 //! | `retune_order` | a change of the model order (cycling through `0..=4` and `auto`) on unchanged data, from the previous fit |
 //! | `retune_cold` | `retune` with the structural fit from scratch (what `identify` does) |
 //! | `retune_order0` | `retune_cold` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
+//! | `noise` | the noise terms of every block of the latest identification ([`crate::noise::of_model::attach_noise`]: residual of the model over the record, Allan deviations, term fits), as `identify` and the app's model export add them |
 //! | `diagnose` | the missing-effect workflow on the session ([`crate::diagnose::diagnose_session`]): the observer, spectra and factorisations are the session's; its order-0 fit over the search band is timed |
 //! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6), as the app shows it at once: spectra, factorisation (Wilson started from the previous factors), Wiener and structural fit (from the previous fit) of every block from the cached observer inputs |
 //! | `spectra_bare` | the lower bound of `spectra`: [`super::bare`]'s loop of the same FFTs and cross products |
@@ -254,6 +255,22 @@ fn rewelch_stage(state: &mut BenchState) -> Result<(), BenchError> {
     reidentify(state, &settings, Start::Warm)
 }
 
+/// The noise terms of the session's latest identification.
+fn noise_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    let session = state.session("noise")?;
+    let Some((settings, id)) = session.identification().map(|(s, i)| (s.clone(), i.clone())) else {
+        return Err(BenchError::Missing {
+            stage: "noise",
+            needs: "retune_cold",
+        });
+    };
+    let run = session.run().clone();
+    let mut model = crate::model::Model::from_identification(&run, &settings, &id);
+    crate::noise::of_model::attach_noise(&mut model, session, &settings)?;
+    std::hint::black_box(model);
+    Ok(())
+}
+
 /// The whole missing-effect workflow on the session.
 fn diagnose_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let settings = state.settings.clone();
@@ -288,6 +305,7 @@ pub fn standard_stages() -> Vec<Stage<'static>> {
         Stage::repeated("retune_order", RETUNES, retune_order_stage),
         Stage::repeated("retune_cold", RETUNES, retune_cold_stage),
         Stage::repeated("retune_order0", RETUNES, retune_order0_stage),
+        Stage::once("noise", noise_stage),
         Stage::once("diagnose", diagnose_stage),
         Stage::once("rewelch", rewelch_stage),
         Stage::once("spectra_bare", bare_stage),

@@ -151,19 +151,24 @@ pub fn overlapping_adev(
     let tau0 = 1.0 / sample_rate_hz;
     let x = phase(rate, sample_rate_hz);
     ms.iter()
-        .filter_map(|&m| {
-            let adev = overlapping_avar(&x, m, tau0)?.sqrt();
-            let edf = edf(x.len(), m, law(m));
-            let (lo, hi) = confidence_interval(adev, edf, ONE_SIGMA);
-            Some(AllanPoint {
-                tau_s: m as f64 * tau0,
-                adev,
-                edf,
-                lo,
-                hi,
-            })
-        })
+        .filter_map(|&m| Some(point(overlapping_avar(&x, m, tau0)?, m, tau0, x.len(), law(m))))
         .collect()
+}
+
+/// The point of an Allan variance `avar` measured at factor `m` on `n_phase` phase points, with
+/// its interval for the noise type `law`.
+#[must_use]
+pub fn point(avar: f64, m: usize, tau0: f64, n_phase: usize, law: PowerLaw) -> AllanPoint {
+    let adev = avar.sqrt();
+    let edf = edf(n_phase, m, law);
+    let (lo, hi) = confidence_interval(adev, edf, ONE_SIGMA);
+    AllanPoint {
+        tau_s: m as f64 * tau0,
+        adev,
+        edf,
+        lo,
+        hi,
+    }
 }
 
 #[cfg(test)]

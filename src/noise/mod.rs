@@ -22,7 +22,8 @@ pub mod terms;
 use serde::{Deserialize, Serialize};
 
 use crate::block::Block;
-use allan::{AllanPoint, averaging_factors, overlapping_adev};
+use allan::{AllanPoint, averaging_factors};
+use rayon::prelude::*;
 use reference::ReferencePsd;
 use terms::{AvarPoint, NoiseTerm, PowerLawFit, fit_terms};
 
@@ -167,17 +168,22 @@ pub fn block_noise(
         return None;
     }
     let ms = averaging_factors(len, TAUS_PER_OCTAVE);
-    let channels = std::array::from_fn(|i| {
-        let reference = reference.map(|r| &r[i]);
-        channel_noise(
-            block,
-            names[i],
-            &residual[i][..len],
-            sample_rate_hz,
-            &ms,
-            reference,
-        )
-    });
+    // The channels in parallel (each is a pass over the record per averaging time, and a fit).
+    let mut channels: Vec<ChannelNoise> = (0..3)
+        .into_par_iter()
+        .map(|i| {
+            let reference = reference.map(|r| &r[i]);
+            channel_noise(
+                block,
+                names[i],
+                &residual[i][..len],
+                sample_rate_hz,
+                &ms,
+                reference,
+            )
+        })
+        .collect();
+    let channels: [ChannelNoise; 3] = std::array::from_fn(|_| channels.remove(0));
     let excluded = channels
         .iter()
         .flat_map(|c: &ChannelNoise| {
@@ -264,7 +270,11 @@ fn channel_noise(
     let first = fit_terms(&sensor, n_phase, 0.0);
     let error = reference_error(&measured, &first);
     let fit = fit_terms(&sensor, n_phase, error);
-    let allan = overlapping_adev(r, fs, ms, |m| fit.law_at(m as f64 * tau0));
+    // The curve from the variances already measured (one pass over the record per factor).
+    let allan: Vec<AllanPoint> = measured
+        .iter()
+        .map(|p| allan::point(p.avar, p.m, tau0, n_phase, fit.law_at(p.tau_s)))
+        .collect();
     let terms = fit
         .terms
         .iter()

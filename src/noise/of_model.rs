@@ -3,6 +3,8 @@
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use super::{BlockNoise, NoiseWarning, block_noise};
 use crate::block::Block;
 use crate::ident::IdentError;
@@ -71,19 +73,29 @@ pub fn attach_noise(model: &mut Model, session: &mut Session, settings: &Setting
         g_mps2: run.sidecar.g_mps2,
         lever_arm_m: run.sidecar.accel_lever_arm_m,
     };
+    let mut jobs = Vec::new();
     for block in Block::BOTH {
-        let Some(entry) = model.blocks.get_mut(block.name()) else {
-            continue;
-        };
-        let signals = session.signals(block)?;
-        let reference = reference_psd(block, &entry.k, &motion.euler, &motion.error_psd, geometry);
-        entry.noise = model_block_noise(
-            entry,
-            &signals,
-            span.clone(),
-            run.sample_rate_hz,
-            Some(&reference),
-        );
+        if model.blocks.contains_key(block.name()) {
+            jobs.push((block, session.signals(block)?));
+        }
+    }
+    // The blocks in parallel: each is a whole-record residual and its Allan curves.
+    let blocks = &model.blocks;
+    let results: Vec<(Block, Option<BlockNoise>)> = jobs
+        .par_iter()
+        .filter_map(|(block, signals)| {
+            let entry = blocks.get(block.name())?;
+            let reference = reference_psd(*block, &entry.k, &motion.euler, &motion.error_psd, geometry);
+            Some((
+                *block,
+                model_block_noise(entry, signals, span.clone(), run.sample_rate_hz, Some(&reference)),
+            ))
+        })
+        .collect();
+    for (block, noise) in results {
+        if let Some(entry) = model.blocks.get_mut(block.name()) {
+            entry.noise = noise;
+        }
     }
     Ok(())
 }

@@ -41,6 +41,8 @@ fn tiny_run_gives_one_json_line_with_every_key() {
         "retune_order0",
         "rewelch",
         "diagnose",
+        "noise",
+        "open_to_model",
     ] {
         let t = stages.get(name).and_then(serde_json::Value::as_f64);
         assert!(
@@ -52,6 +54,17 @@ fn tiny_run_gives_one_json_line_with_every_key() {
         if cfg!(target_os = "linux") {
             let mb = v[key].as_f64();
             assert!(mb.is_some_and(|m| m.is_finite() && m > 0.0), "{key}: {mb:?}");
+        }
+    }
+    // Whole commands in child processes: wall time and their own peak memory.
+    for command in ["identify", "discrepancy"] {
+        let c = &v["commands"][command];
+        assert!(c["wall_s"].as_f64().is_some_and(|t| t > 0.0), "{command}: {v}");
+        if cfg!(target_os = "linux") {
+            assert!(
+                c["peak_rss_mb"].as_f64().is_some_and(|m| m > 1.0),
+                "{command}: {v}"
+            );
         }
     }
 }

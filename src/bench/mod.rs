@@ -23,7 +23,7 @@ pub mod stages;
 
 use std::time::Instant;
 
-pub use report::{BenchReport, StageTime};
+pub use report::{BenchReport, CommandFigure, StageTime};
 pub use stages::{BenchState, standard_stages};
 
 use crate::ident::IdentError;
@@ -180,6 +180,7 @@ pub fn run_bench(
         peak_rss_mb: memory::peak_rss_bytes().map(mb),
         load_peak_rss_mb,
         decoded_mb: (samples * columns * 8) as f64 / 1e6,
+        commands: Vec::new(),
     })
 }
 

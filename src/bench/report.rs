@@ -40,6 +40,30 @@ pub struct BenchReport {
     pub load_peak_rss_mb: Option<f64>,
     /// Size of the loaded columns (rows x columns x 8 bytes), MB.
     pub decoded_mb: f64,
+    /// Whole commands run on the same file in child processes (`identify`, `discrepancy`):
+    /// wall time and peak resident memory of each.
+    #[serde(serialize_with = "commands_as_map", skip_serializing_if = "Vec::is_empty")]
+    pub commands: Vec<CommandFigure>,
+}
+
+/// A whole command's figures.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CommandFigure {
+    /// The command (`identify`, `discrepancy`).
+    #[serde(skip)]
+    pub name: &'static str,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Peak resident memory (`VmHWM` at its exit), MB; `None` where not reported.
+    pub peak_rss_mb: Option<f64>,
+}
+
+fn commands_as_map<S: serde::Serializer>(commands: &[CommandFigure], s: S) -> Result<S::Ok, S::Error> {
+    let mut map = s.serialize_map(Some(commands.len()))?;
+    for c in commands {
+        map.serialize_entry(c.name, c)?;
+    }
+    map.end()
 }
 
 fn stages_as_map<S: serde::Serializer>(stages: &[StageTime], s: S) -> Result<S::Ok, S::Error> {
@@ -98,6 +122,15 @@ impl BenchReport {
             let _ = writeln!(out, "{:<16} {:>10.4} {cpu:>10}{note}", s.name, s.seconds);
         }
         let mb = |v: Option<f64>| v.map_or_else(|| "n/a".to_owned(), |v| format!("{v:.0} MB"));
+        for c in &self.commands {
+            let _ = writeln!(
+                out,
+                "command {:<10} {:>8.3} s   peak {}",
+                c.name,
+                c.wall_s,
+                mb(c.peak_rss_mb)
+            );
+        }
         let _ = writeln!(
             out,
             "{} samples at {} Hz, {} channels, segment {}; decoded {:.0} MB; peak memory {} (load {})",
@@ -141,6 +174,11 @@ mod tests {
             peak_rss_mb: None,
             load_peak_rss_mb: Some(3.0),
             decoded_mb: 0.1,
+            commands: vec![CommandFigure {
+                name: "identify",
+                wall_s: 1.5,
+                peak_rss_mb: Some(42.0),
+            }],
         };
         let json = report.to_json();
         assert!(!json.contains('\n'));
@@ -150,6 +188,11 @@ mod tests {
             json.contains(r#""stages_cpu_s":{"load":0.75,"aaa":null}"#),
             "{json}"
         );
+        assert!(
+            json.contains(r#""commands":{"identify":{"wall_s":1.5,"peak_rss_mb":42.0}}"#),
+            "{json}"
+        );
         assert!(report.to_table().contains("(median of 3)"));
+        assert!(report.to_table().contains("command identify"));
     }
 }

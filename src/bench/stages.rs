@@ -18,6 +18,7 @@
 //! | `diagnose` | the missing-effect workflow on the session ([`crate::diagnose::diagnose_session`]): the observer, spectra and factorisations are the session's; its order-0 fit over the search band is timed |
 //! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6), as the app shows it at once: spectra, factorisation (Wilson started from the previous factors), Wiener and structural fit (from the previous fit) of every block from the cached observer inputs |
 //! | `spectra_bare` | the lower bound of `spectra`: [`super::bare`]'s loop of the same FFTs and cross products |
+//! | `open_to_model` | everything from the file to the model, as `identify` and the app do it on opening a run: load, observer, spectra, factorisation, Wiener and structural fit (a fresh session; the earlier stages' caches are dropped first) |
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -291,6 +292,20 @@ fn bare_stage(state: &mut BenchState) -> Result<(), BenchError> {
     Ok(())
 }
 
+/// From the file to the model in one go, on a fresh session.
+fn open_to_model_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    state.session = None;
+    let run = load(&state.path, &LoadOptions::default())?;
+    let settings = Settings {
+        blocks: state.settings.blocks_for(&run.blocks()),
+        ..state.settings.clone()
+    };
+    let mut session = Session::new(Arc::new(run));
+    std::hint::black_box(session.identify(&settings, Start::Cold, &mut |_| {})?);
+    state.session = Some(session);
+    Ok(())
+}
+
 /// The standard stages, in order (see the module docs).
 #[must_use]
 pub fn standard_stages() -> Vec<Stage<'static>> {
@@ -309,5 +324,6 @@ pub fn standard_stages() -> Vec<Stage<'static>> {
         Stage::once("diagnose", diagnose_stage),
         Stage::once("rewelch", rewelch_stage),
         Stage::once("spectra_bare", bare_stage),
+        Stage::once("open_to_model", open_to_model_stage),
     ]
 }

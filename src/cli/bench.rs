@@ -65,6 +65,7 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
         }
     };
     let bar = super::progress::bar(0, "bench {wide_bar} {pos}/{len} {msg} {elapsed}");
+    let command_settings = settings.clone();
     let report = run_bench(&path, settings, &mut |name, count| {
         bar.set_length(count as u64);
         bar.set_message(name);
@@ -73,7 +74,12 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
         }
     });
     bar.finish_and_clear();
-    let report = report.map_err(|e| classify(&path, e))?;
+    let mut report = report.map_err(|e| classify(&path, e))?;
+    for name in ["identify", "discrepancy"] {
+        report
+            .commands
+            .push(time_command(name, &path, &command_settings)?);
+    }
     let text = if json {
         report.to_json() + "\n"
     } else {
@@ -83,6 +89,55 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
         .lock()
         .write_all(text.as_bytes())
         .map_err(|e| CliError::Internal(e.into()))
+}
+
+/// Runs `imu-attest NAME RUN --settings S --out TEMP` in a child process with the bench's
+/// settings: its wall time and the peak memory it reports at exit (`IMU_ATTEST_PEAK_RSS`).
+fn time_command(
+    name: &'static str,
+    run: &Path,
+    settings: &Settings,
+) -> Result<crate::bench::CommandFigure, CliError> {
+    use std::process::{Command, Stdio};
+    let exe = std::env::current_exe().map_err(|e| CliError::Internal(e.into()))?;
+    let dir = std::env::temp_dir().join(format!("imu-attest-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| CliError::Internal(e.into()))?;
+    let out = dir.join(format!("{name}.json"));
+    let settings_path = dir.join("settings.json");
+    let bytes = serde_json::to_vec(settings).map_err(|e| CliError::Internal(e.into()))?;
+    std::fs::write(&settings_path, bytes).map_err(|e| CliError::Internal(e.into()))?;
+    let start = std::time::Instant::now();
+    let output = Command::new(exe)
+        .arg(name)
+        .arg(run)
+        .arg("--settings")
+        .arg(&settings_path)
+        .arg("--out")
+        .arg(&out)
+        .env("IMU_ATTEST_PEAK_RSS", "1")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .output()
+        .map_err(|e| CliError::Internal(e.into()))?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&dir);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if !output.status.success() {
+        return Err(CliError::Internal(anyhow::anyhow!(
+            "bench: {name}: {}",
+            stderr.trim()
+        )));
+    }
+    let peak_rss_mb = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("imu-attest: peak_rss_mb="))
+        .and_then(|v| v.trim().parse().ok());
+    Ok(crate::bench::CommandFigure {
+        name,
+        wall_s,
+        peak_rss_mb,
+    })
 }
 
 /// The segment of a simulated run of `samples` when `--segment` is not given: the settings'

@@ -73,7 +73,14 @@ usage:
 #[must_use]
 pub fn main() -> ExitCode {
     let argv: Vec<String> = std::env::args().skip(1).collect();
-    match run(&argv) {
+    let outcome = run(&argv);
+    // `bench` runs whole commands in child processes and reads their peak memory here.
+    if std::env::var_os("IMU_ATTEST_PEAK_RSS").is_some()
+        && let Some(bytes) = crate::bench::memory::peak_rss_bytes()
+    {
+        eprintln!("imu-attest: peak_rss_mb={:.1}", bytes as f64 / 1e6);
+    }
+    match outcome {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("imu-attest: {e}");

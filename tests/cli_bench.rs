@@ -102,3 +102,24 @@ fn bad_arguments_exit_2_with_one_line() {
         assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn a_campaign_is_timed_on_request() {
+    let out = imu_attest(&[
+        "bench",
+        "--minutes",
+        "0.25",
+        "--rate",
+        "200",
+        "--batch-runs",
+        "2",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let batch = &v["commands"]["batch"];
+    assert!(batch["wall_s"].as_f64().is_some_and(|t| t > 0.0), "{v}");
+    if cfg!(target_os = "linux") {
+        assert!(batch["peak_rss_mb"].as_f64().is_some_and(|m| m > 1.0), "{v}");
+    }
+}

@@ -4,6 +4,10 @@
 //!
 //! `--segment` defaults to the identifier's default (4096); for a simulated run shorter than four
 //! such segments it is halved until four fit (at least 64).
+//!
+//! Whole commands are timed in child processes after the stages: `identify` and `discrepancy` on
+//! the run, and with `--batch-runs N` a campaign: N runs of 300 s at 500 Hz simulated into a
+//! temporary folder (three regimes, seeds 1..N; not timed) and `batch` over it.
 
 use std::io::Write as _;
 use std::path::Path;
@@ -34,6 +38,7 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
         .get("segment")
         .map(|_| args.parsed_or("segment", 0))
         .transpose()?;
+    let batch_runs: usize = args.parsed_or("batch-runs", 0)?;
     args.reject_unknown()?;
     let mut settings = Settings::default();
     let temp;
@@ -76,9 +81,14 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
     bar.finish_and_clear();
     let mut report = report.map_err(|e| classify(&path, e))?;
     for name in ["identify", "discrepancy"] {
-        report
-            .commands
-            .push(time_command(name, &path, &command_settings)?);
+        report.commands.push(time_command(
+            name,
+            std::slice::from_ref(&path),
+            &command_settings,
+        )?);
+    }
+    if batch_runs > 0 {
+        report.commands.push(time_batch(batch_runs)?);
     }
     let text = if json {
         report.to_json() + "\n"
@@ -95,7 +105,7 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
 /// settings: its wall time and the peak memory it reports at exit (`IMU_ATTEST_PEAK_RSS`).
 fn time_command(
     name: &'static str,
-    run: &Path,
+    runs: &[std::path::PathBuf],
     settings: &Settings,
 ) -> Result<crate::bench::CommandFigure, CliError> {
     use std::process::{Command, Stdio};
@@ -109,7 +119,7 @@ fn time_command(
     let start = std::time::Instant::now();
     let output = Command::new(exe)
         .arg(name)
-        .arg(run)
+        .args(runs)
         .arg("--settings")
         .arg(&settings_path)
         .arg("--out")
@@ -138,6 +148,45 @@ fn time_command(
         wall_s,
         peak_rss_mb,
     })
+}
+
+/// Simulates `n` runs of 300 s at 500 Hz (three regimes, seeds `1..=n`) into a temporary folder
+/// and times `batch` over it.
+fn time_batch(n: usize) -> Result<crate::bench::CommandFigure, CliError> {
+    use std::process::{Command, Stdio};
+    let exe = std::env::current_exe().map_err(|e| CliError::Internal(e.into()))?;
+    let dir = std::env::temp_dir().join(format!("imu-attest-bench-batch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| CliError::Internal(e.into()))?;
+    let regimes = ["cruise", "approach", "turbulent_cruise"];
+    for seed in 1..=n {
+        let path = dir.join(format!("run{seed:04}.csv"));
+        let status = Command::new(&exe)
+            .args([
+                "simulate",
+                "--regime",
+                regimes[seed % 3],
+                "--duration",
+                "300",
+                "--rate",
+                "500",
+            ])
+            .args(["--seed", &seed.to_string(), "--out"])
+            .arg(&path)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .map_err(|e| CliError::Internal(e.into()))?;
+        if !status.success() {
+            let _ = std::fs::remove_dir_all(&dir);
+            return Err(CliError::Internal(anyhow::anyhow!(
+                "bench: simulating campaign run {seed} failed"
+            )));
+        }
+    }
+    let figure = time_command("batch", std::slice::from_ref(&dir), &Settings::default());
+    let _ = std::fs::remove_dir_all(&dir);
+    figure
 }
 
 /// The segment of a simulated run of `samples` when `--segment` is not given: the settings'

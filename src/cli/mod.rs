@@ -64,7 +64,7 @@ usage:
                                                   a campaign: every run identified (two at a
                                                   time), one row per run and block
   imu-attest inspect RUN...                       check runs against the format, summarise them
-  imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--json]
+  imu-attest bench [RUN] [--minutes M] [--rate HZ] [--segment L] [--batch-runs N] [--json]
                                                   time the identifier's stages (default: a
                                                   simulated 30-minute run at 1 kHz)
 ";

@@ -314,3 +314,51 @@ fn the_report_is_exported_from_the_app_by_the_worker_thread() {
     assert!(harness.state().errors().iter().any(|e| e.contains("refusing")));
     assert_eq!(std::fs::metadata(&input).expect("input").len(), size);
 }
+
+/// File > Export results table: every loaded run's rows (one per block) with the numbers the app
+/// shows, the noise terms added on the worker; over an input it is refused.
+#[test]
+fn the_results_table_holds_every_loaded_run_with_the_shown_numbers() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs");
+    let mut harness = app(options(
+        vec![root.join("cruise.csv.gz"), root.join("approach.csv.gz")],
+        WorkerMode::Synchronous,
+    ));
+    harness.get_by_label("File").click();
+    harness.run_steps(2);
+    harness.get_by_label("Export results table (CSV)…");
+    harness.key_press(eframe::egui::Key::Escape);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("results.csv");
+    harness
+        .state_mut()
+        .push_command(Command::ExportResults(Some(out.clone())));
+    harness.run_steps(2);
+    harness.get_by_label_contains("results table written to");
+    let text = std::fs::read_to_string(&out).expect("written");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4, "two runs, two blocks each");
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    for run in harness.state().runs() {
+        let model = &run.identification.value.as_ref().expect("identified").model;
+        for (block, b) in &model.blocks {
+            let row = rows
+                .iter()
+                .find(|r| r[col("run")] == model.source.file && r[col("block")] == block)
+                .expect("a row per run and block");
+            let k11: f64 = row[col("K_11")].parse().expect("a number");
+            assert_eq!(k11.to_bits(), b.k[0][0].to_bits());
+            let tau: f64 = row[col("tau_s")].parse().expect("a number");
+            assert_eq!(tau.to_bits(), b.tau_s.to_bits());
+            assert!(!row[col("random_walk_1")].is_empty(), "noise terms on the worker");
+        }
+    }
+    let input = harness.state().runs()[0].path.clone();
+    harness
+        .state_mut()
+        .push_command(Command::ExportResults(Some(input)));
+    harness.run_steps(2);
+    assert!(harness.state().errors().iter().any(|e| e.contains("refusing")));
+}

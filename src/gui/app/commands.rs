@@ -34,6 +34,8 @@ pub enum Command {
     ExportPng(Option<PathBuf>),
     /// Write the selected run's certificate (HTML) here (`None`: ask with a dialog).
     ExportReport(Option<PathBuf>),
+    /// Write every loaded run's results table (CSV, or JSON by the name) here (`None`: ask).
+    ExportResults(Option<PathBuf>),
     /// Add a run to, or remove it from, the comparison.
     ToggleCompare(RunId),
     /// Find the missing effects of this run.
@@ -109,6 +111,12 @@ impl App {
                 let path = path.or_else(|| self.save_dialog("model JSON", "json", "_model.json"));
                 if let Some(path) = path {
                     self.export_model(&path);
+                }
+            }
+            Command::ExportResults(path) => {
+                let path = path.or_else(|| self.save_dialog("CSV table", "csv", "_results.csv"));
+                if let Some(path) = path {
+                    self.export_results(path);
                 }
             }
             Command::ExportReport(path) => {

@@ -102,6 +102,38 @@ impl App {
         Ok(())
     }
 
+    /// Asks the worker for the results table of every loaded run (one row per run and block: K,
+    /// sigmas, ppm, mrad, delay, noise terms, warnings), as `batch` writes it.
+    pub(super) fn export_results(&mut self, path: PathBuf) {
+        let inputs: Vec<PathBuf> = self
+            .runs
+            .iter()
+            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
+            .collect();
+        if let Err(e) = ensure_not_input(&path, &inputs) {
+            self.errors.push(ErrorTopic::Export, format!("export: {e}"));
+            return;
+        }
+        let runs: Vec<_> = self
+            .runs
+            .iter()
+            .filter(|r| r.summary.is_some())
+            .map(|r| r.id)
+            .collect();
+        let Some(&first) = runs.first() else {
+            self.errors
+                .push(ErrorTopic::Export, "export: no loaded run".to_owned());
+            return;
+        };
+        let generation = self.next_generation();
+        self.status = Some(format!("writing the results table to {}…", path.display()));
+        self.worker.submit(crate::gui::pipeline::Job {
+            run: first,
+            generation,
+            kind: crate::gui::pipeline::JobKind::ExportResults { runs, path },
+        });
+    }
+
     /// Asks the worker for the selected run's certificate at `path` (it identifies, computes the
     /// noise terms and diagnoses on its cached session: seconds on a long run).
     pub(super) fn export_report(&mut self, path: PathBuf) {

@@ -19,6 +19,9 @@ impl App {
                     if ui.button("Export model JSON…").clicked() {
                         commands.push(Command::ExportModel(None));
                     }
+                    if ui.button("Export results table (CSV)…").clicked() {
+                        commands.push(Command::ExportResults(None));
+                    }
                     if ui.button("Export report (HTML)…").clicked() {
                         commands.push(Command::ExportReport(None));
                     }

@@ -30,6 +30,18 @@ pub(super) fn diagnose(
 /// # Errors
 /// The message, and whether it is the user's input.
 pub(super) fn export_model(cache: &mut RunCache, path: &std::path::Path) -> Result<(), (String, bool)> {
+    let model = model_with_noise(cache)?;
+    model.write_file(path).map_err(|e| {
+        let input = !matches!(e, crate::output::OutputError::NonFinite { .. });
+        (e.to_string(), input)
+    })
+}
+
+/// The cached run's current model with its noise terms (as `identify` writes it).
+///
+/// # Errors
+/// The message, and whether it is the user's input.
+pub(super) fn model_with_noise(cache: &mut RunCache) -> Result<crate::model::Model, (String, bool)> {
     let identification = cache
         .identification
         .clone()
@@ -38,10 +50,7 @@ pub(super) fn export_model(cache: &mut RunCache, path: &std::path::Path) -> Resu
     let settings = model.settings.clone();
     crate::noise::of_model::attach_noise(&mut model, &mut cache.session, &settings)
         .map_err(|e| (e.to_string(), e.is_input_error()))?;
-    model.write_file(path).map_err(|e| {
-        let input = !matches!(e, crate::output::OutputError::NonFinite { .. });
-        (e.to_string(), input)
-    })
+    Ok(model)
 }
 
 /// Writes the cached run's certificate to `path` (`crate::report`).

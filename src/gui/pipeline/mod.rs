@@ -87,6 +87,14 @@ pub enum JobKind {
         /// Where the JSON goes.
         path: PathBuf,
     },
+    /// Write the results table of `runs` (`crate::batch::table`: one row per run and block, the
+    /// noise terms computed on the worker) to `path`, CSV or JSON by its extension.
+    ExportResults {
+        /// The runs, in the table's order.
+        runs: Vec<RunId>,
+        /// Where the table goes.
+        path: PathBuf,
+    },
     /// Write the run's certificate (`crate::report`) to `path`: the identification, noise
     /// terms and diagnosis on the worker's cached session.
     Report {

@@ -271,6 +271,37 @@ impl Pipeline {
                 };
                 self.send(event);
             }
+            JobKind::ExportResults { runs, path } => {
+                *stage = Stage::Export;
+                let mut rows = Vec::new();
+                for id in &runs {
+                    let Some(cache) = self.runs.get_mut(id) else {
+                        continue;
+                    };
+                    match super::diagnosis::model_with_noise(cache) {
+                        Ok(model) => rows.extend(crate::batch::table::rows_of(&model, None)),
+                        Err((message, _)) => {
+                            let name = cache.session.run().source.file_name.clone();
+                            rows.push(crate::batch::BatchRow::failed(&name, &message));
+                        }
+                    }
+                }
+                let event = match crate::batch::write_table(&path, &rows) {
+                    Ok(()) => Event::Written {
+                        run,
+                        what: "results table",
+                        path,
+                    },
+                    Err(e) => Event::Failed {
+                        run,
+                        generation,
+                        stage: Stage::Export,
+                        message: e.to_string(),
+                        kind: FailureKind::Input,
+                    },
+                };
+                self.send(event);
+            }
             JobKind::Report { .. } | JobKind::ExportModel { .. } => {
                 *stage = Stage::Export;
                 let Some(cache) = self.runs.get_mut(&run) else {

@@ -362,3 +362,52 @@ fn the_results_table_holds_every_loaded_run_with_the_shown_numbers() {
     harness.run_steps(2);
     assert!(harness.state().errors().iter().any(|e| e.contains("refusing")));
 }
+
+/// Without a usable file dialog a path can be typed: File > Open by typing a path loads the run,
+/// and the same window writes an export.
+#[test]
+fn a_typed_path_opens_a_run_and_writes_an_export() {
+    use imu_attest::gui::PathPurpose;
+    let mut harness = app(options(Vec::new(), WorkerMode::Synchronous));
+    harness.get_by_label("File").click();
+    harness.run_steps(2);
+    harness.get_by_label("Open by typing a path…").click();
+    harness.run_steps(4);
+    let sample = sample_run_path().expect("sample run");
+    harness.get_by_label("path").focus();
+    harness.run_steps(1);
+    harness
+        .get_by_label("path")
+        .type_text(&sample.display().to_string());
+    harness.run_steps(2);
+    harness.get_by_label("OK").click();
+    harness.run_steps(4);
+    assert_eq!(harness.state().runs().len(), 1, "{:?}", harness.state().errors());
+    assert!(harness.query_by_label("OK").is_none(), "the window closes");
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("typed.csv");
+    harness
+        .state_mut()
+        .push_command(Command::PromptPath(PathPurpose::ExportResults));
+    harness.run_steps(2);
+    harness.get_by_label("path").focus();
+    harness.run_steps(1);
+    harness.get_by_label("path").type_text(&out.display().to_string());
+    harness.run_steps(2);
+    harness.get_by_label("OK").click();
+    harness.run_steps(4);
+    assert!(
+        std::fs::read_to_string(&out)
+            .expect("written")
+            .starts_with("run,sha256,")
+    );
+    // Cancel closes it without doing anything.
+    harness
+        .state_mut()
+        .push_command(Command::PromptPath(PathPurpose::ExportModel));
+    harness.run_steps(2);
+    harness.get_by_label("Cancel").click();
+    harness.run_steps(2);
+    assert!(harness.query_by_label("Cancel").is_none());
+}

@@ -11,7 +11,7 @@ pub mod view;
 
 use std::path::PathBuf;
 
-pub use app::{App, AppOptions, Command};
+pub use app::{App, AppOptions, Command, PathPurpose};
 pub use pipeline::WorkerMode;
 pub use sample::sample_run_path;
 

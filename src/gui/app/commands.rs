@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use super::prompt::{self, PathPurpose};
 use super::{App, RunEntry, RunState};
 use crate::block::Block;
 use crate::effect::Effect;
@@ -46,6 +47,10 @@ pub enum Command {
     RejectEffect(RunId, Block, Effect),
     /// Forget the run's rejections and diagnose again.
     ClearRejected(RunId),
+    /// Ask for a typed path for `purpose` (instead of the system's dialog).
+    PromptPath(PathPurpose),
+    /// Close the typed-path window.
+    ClosePrompt,
     /// Fault injection: make the worker panic in `stage` of this run's analysis, as a bug would.
     InjectPanic(RunId, Stage),
 }
@@ -59,14 +64,24 @@ impl App {
     pub(super) fn apply(&mut self, command: Command) {
         match command {
             Command::OpenDialog => {
+                if prompt::dialogs_disabled() {
+                    self.prompt_path(PathPurpose::Open, None);
+                    return;
+                }
+                let start = std::time::Instant::now();
                 let picked = rfd::FileDialog::new()
                     .set_title("Open stand runs")
                     .add_filter("stand run (.csv, .csv.gz)", &["csv", "gz"])
                     .pick_files();
+                if prompt::dialog_never_shown(picked.is_none(), start.elapsed()) {
+                    self.prompt_path(PathPurpose::Open, Some(prompt::NO_DIALOG_NOTE));
+                }
                 for path in picked.unwrap_or_default() {
                     self.open(path);
                 }
             }
+            Command::PromptPath(purpose) => self.prompt_path(purpose, None),
+            Command::ClosePrompt => self.prompt = None,
             Command::Open(paths) => paths.into_iter().for_each(|p| self.open(p)),
             Command::CancelLoad(id) => {
                 if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
@@ -108,25 +123,27 @@ impl App {
                 }
             }
             Command::ExportModel(path) => {
-                let path = path.or_else(|| self.save_dialog("model JSON", "json", "_model.json"));
+                let path = path.or_else(|| self.save_dialog(PathPurpose::ExportModel, "json", "_model.json"));
                 if let Some(path) = path {
                     self.export_model(&path);
                 }
             }
             Command::ExportResults(path) => {
-                let path = path.or_else(|| self.save_dialog("CSV table", "csv", "_results.csv"));
+                let path =
+                    path.or_else(|| self.save_dialog(PathPurpose::ExportResults, "csv", "_results.csv"));
                 if let Some(path) = path {
                     self.export_results(path);
                 }
             }
             Command::ExportReport(path) => {
-                let path = path.or_else(|| self.save_dialog("HTML report", "html", "_report.html"));
+                let path =
+                    path.or_else(|| self.save_dialog(PathPurpose::ExportReport, "html", "_report.html"));
                 if let Some(path) = path {
                     self.export_report(path);
                 }
             }
             Command::ExportPng(path) => {
-                let path = path.or_else(|| self.save_dialog("PNG image", "png", "_view.png"));
+                let path = path.or_else(|| self.save_dialog(PathPurpose::ExportPng, "png", "_view.png"));
                 self.screenshots.pending = path;
             }
             Command::ToggleCompare(id) => {

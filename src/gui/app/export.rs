@@ -10,6 +10,7 @@ use eframe::egui::{self, ColorImage};
 
 use super::App;
 use super::ErrorTopic;
+use super::PathPurpose;
 use crate::output::{OutputError, ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
 
@@ -52,16 +53,49 @@ pub fn write_png(path: &Path, image: &ColorImage) -> Result<(), OutputError> {
 }
 
 impl App {
-    pub(super) fn save_dialog(&self, what: &str, extension: &str, suffix: &str) -> Option<PathBuf> {
+    /// The system's save dialog for `purpose`; where none can be shown (or
+    /// [`super::prompt::NO_DIALOG_VAR`] is set) the typed-path window opens instead, its field
+    /// holding the proposed file name, and `None` is returned.
+    pub(super) fn save_dialog(
+        &mut self,
+        purpose: PathPurpose,
+        extension: &str,
+        suffix: &str,
+    ) -> Option<PathBuf> {
         let stem = self
             .selected()
             .and_then(|r| r.summary.as_ref())
             .map_or_else(|| "imu-attest".to_owned(), |s| crate::run::run_stem(&s.path));
-        rfd::FileDialog::new()
-            .set_title(format!("Save {what}"))
-            .add_filter(what, &[extension])
-            .set_file_name(format!("{stem}{suffix}"))
-            .save_file()
+        let name = format!("{stem}{suffix}");
+        if super::prompt::dialogs_disabled() {
+            self.prompt_path(purpose, None);
+            if let Some(p) = self.prompt.as_mut() {
+                p.text = name;
+            }
+            return None;
+        }
+        let start = std::time::Instant::now();
+        let picked = rfd::FileDialog::new()
+            .set_title(purpose.title())
+            .add_filter(extension, &[extension])
+            .set_file_name(&name)
+            .save_file();
+        if super::prompt::dialog_never_shown(picked.is_none(), start.elapsed()) {
+            self.prompt_path(purpose, Some(super::prompt::NO_DIALOG_NOTE));
+            if let Some(p) = self.prompt.as_mut() {
+                p.text = name;
+            }
+        }
+        picked
+    }
+
+    /// Opens the typed-path window for `purpose` (with `note` saying why, for a fallback).
+    pub(super) fn prompt_path(&mut self, purpose: PathPurpose, note: Option<&str>) {
+        self.prompt = Some(super::prompt::PathPrompt {
+            purpose,
+            text: String::new(),
+            note: note.map(str::to_owned),
+        });
     }
 
     /// Writes the selected run's model to `path`.

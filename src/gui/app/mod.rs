@@ -9,6 +9,7 @@ mod commands;
 mod errors;
 mod export;
 mod logic;
+pub mod prompt;
 mod record;
 mod ui;
 
@@ -20,6 +21,7 @@ use eframe::egui;
 use serde::{Deserialize, Serialize};
 
 pub use commands::Command;
+pub use prompt::PathPurpose;
 
 use crate::block::Block;
 use crate::compare::Comparison;
@@ -228,6 +230,8 @@ pub struct App {
     comparison: Option<(logic::ComparisonKey, Arc<Comparison>)>,
     status: Option<String>,
     screenshots: export::Screenshots,
+    /// The typed-path window, when open (File > Type a path, or no file dialog available).
+    prompt: Option<prompt::PathPrompt>,
     /// CPU time of the previous frame (the app's `ui` and rendering), s.
     frame_cpu_s: Option<f32>,
     /// Print every frame's CPU time to stderr (environment variable [`FRAME_LOG_VAR`] set).
@@ -269,6 +273,7 @@ impl App {
             comparison: None,
             status: None,
             screenshots: export::Screenshots::default(),
+            prompt: None,
             frame_cpu_s: None,
             frame_log: std::env::var_os(FRAME_LOG_VAR).is_some(),
         };

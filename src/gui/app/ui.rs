@@ -16,6 +16,9 @@ impl App {
                     if ui.button("Open…").clicked() {
                         commands.push(Command::OpenDialog);
                     }
+                    if ui.button("Open by typing a path…").clicked() {
+                        commands.push(Command::PromptPath(super::PathPurpose::Open));
+                    }
                     if ui.button("Export model JSON…").clicked() {
                         commands.push(Command::ExportModel(None));
                     }
@@ -92,6 +95,9 @@ impl App {
                 Tab::Compare => {}
             }
         });
+        if let Some(prompt) = self.prompt.as_mut() {
+            super::prompt::show(ui.ctx(), prompt, &mut commands);
+        }
         self.commands.extend(commands);
     }
 }

@@ -163,7 +163,7 @@ mod tests {
         assert!(PathPurpose::Open.command("  ").is_none());
         assert!(matches!(
             PathPurpose::ExportResults.command("/tmp/t.csv"),
-            Some(Command::ExportResults(Some(p))) if p == PathBuf::from("/tmp/t.csv")
+            Some(Command::ExportResults(Some(p))) if p == std::path::Path::new("/tmp/t.csv")
         ));
     }
 }

@@ -98,6 +98,12 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
         .clone()
         .expect("identified");
     assert_eq!(id.model.blocks["gyro"].order, other);
+    // The richer model's poles are shown with their time constants or frequency and damping.
+    let poles = imu_attest::gui::view::results::pole_lines("gyro", &id.model.blocks["gyro"]);
+    assert_eq!(poles.len(), other);
+    for line in &poles {
+        harness.get_by_label(line);
+    }
     let shown = harness
         .get_all_by_label_contains(&format!("order {other} (fixed)"))
         .count();

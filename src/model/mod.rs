@@ -198,6 +198,23 @@ fn finite(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
+/// A pole `[re, im]` (rad/s) in words: a real pole with its time constant, a complex pair
+/// with its natural frequency and damping.
+#[must_use]
+pub fn describe_pole([re, im]: [f64; 2]) -> String {
+    if im.abs() < 1e-12 {
+        format!("{re:.4} rad/s (time constant {:.3} ms)", -1e3 / re)
+    } else {
+        let w = re.hypot(im);
+        format!(
+            "{re:.4} ± {:.4}j rad/s ({:.3} Hz, damping {:.2})",
+            im.abs(),
+            w / std::f64::consts::TAU,
+            -re / w
+        )
+    }
+}
+
 impl BlockModel {
     /// The model of one identified block.
     #[must_use]
@@ -341,6 +358,16 @@ mod tests {
             blocks: BTreeMap::new(),
             recording_faults: Vec::new(),
         }
+    }
+
+    #[test]
+    fn poles_are_described_by_time_constant_or_frequency_and_damping() {
+        assert_eq!(describe_pole([-100.0, 0.0]), "-100.0000 rad/s (time constant 10.000 ms)");
+        // -10 +- 100j: |p| = 100.499 rad/s = 15.995 Hz, damping 10 / 100.499 = 0.0995.
+        assert_eq!(
+            describe_pole([-10.0, -100.0]),
+            "-10.0000 ± 100.0000j rad/s (15.995 Hz, damping 0.10)"
+        );
     }
 
     #[test]

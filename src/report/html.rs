@@ -199,20 +199,7 @@ fn equation(h: &mut String, b: &BlockModel) {
         let parts: Vec<String> = b
             .poles
             .iter()
-            .map(|[re, im]| {
-                if im.abs() < 1e-12 {
-                    format!("{} rad/s (time constant {} ms)", sig(*re, 4), sig(-1e3 / re, 3))
-                } else {
-                    let w = re.hypot(*im);
-                    format!(
-                        "{} &plusmn; {}j rad/s ({} Hz, damping {})",
-                        sig(*re, 4),
-                        sig(im.abs(), 4),
-                        sig(w / std::f64::consts::TAU, 3),
-                        sig(-re / w, 2)
-                    )
-                }
-            })
+            .map(|p| esc(&crate::model::describe_pole(*p)))
             .collect();
         let _ = write!(h, "{}.</p>", parts.join("; "));
     }

@@ -118,11 +118,25 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         for i in 0..3 {
             ui.monospace(k_row_label(name, m, i));
         }
+        for line in pole_lines(name, m) {
+            ui.monospace(line);
+        }
         figures(ui, name, m);
         super::stationarity::show(ui, name, m);
         candidates(ui, name, m);
         fit(ui, m, id.settings.lambda == LambdaSetting::Auto);
     }
+}
+
+/// The lines of the model's poles (order 1 and above): each with its time constant, or natural
+/// frequency and damping; none at order 0.
+#[must_use]
+pub fn pole_lines(block: &str, m: &BlockModel) -> Vec<String> {
+    m.poles
+        .iter()
+        .enumerate()
+        .map(|(k, p)| format!("{block} pole {}: {}", k + 1, crate::model::describe_pole(*p)))
+        .collect()
 }
 
 fn figures(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
@@ -139,6 +153,11 @@ fn figures(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     egui::Grid::new(("misalignment", name))
         .striped(true)
         .show(ui, |ui| {
+            ui.label("");
+            for input in &m.inputs {
+                ui.strong(input.as_str());
+            }
+            ui.end_row();
             for i in 0..3 {
                 ui.monospace(m.outputs[i].as_str());
                 for j in 0..3 {

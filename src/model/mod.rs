@@ -362,7 +362,10 @@ mod tests {
 
     #[test]
     fn poles_are_described_by_time_constant_or_frequency_and_damping() {
-        assert_eq!(describe_pole([-100.0, 0.0]), "-100.0000 rad/s (time constant 10.000 ms)");
+        assert_eq!(
+            describe_pole([-100.0, 0.0]),
+            "-100.0000 rad/s (time constant 10.000 ms)"
+        );
         // -10 +- 100j: |p| = 100.499 rad/s = 15.995 Hz, damping 10 / 100.499 = 0.0995.
         assert_eq!(
             describe_pole([-10.0, -100.0]),

@@ -172,6 +172,13 @@ fn two_runs_are_compared_side_by_side() {
     }
     harness.get_by_label(&significance_label(&c, "gyro"));
     harness.get_by_label("approach - cruise");
+    // K elements named as everywhere else; no order note for models of one order.
+    harness.get_by_label("K gx/wy");
+    assert!(
+        harness
+            .query_by_label(imu_attest::gui::view::compare::ORDERS_DIFFER)
+            .is_none()
+    );
 }
 
 #[test]

@@ -36,6 +36,20 @@ pub struct Comparison {
     pub differences: Vec<Difference>,
 }
 
+impl Comparison {
+    /// Whether the runs' models of `block` have different structural orders (their `K` are then
+    /// static gains of different structures, which the engineer should be told).
+    #[must_use]
+    pub fn orders_differ(&self, block: &str) -> bool {
+        let mut orders = self
+            .runs
+            .iter()
+            .filter_map(|r| r.blocks.get(block))
+            .map(|b| b.order);
+        orders.next().is_some_and(|first| orders.any(|o| o != first))
+    }
+}
+
 /// One run's figures.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ComparedRun {

@@ -100,6 +100,20 @@ fn differences_and_significance_follow_the_combined_std() {
     assert!((d.tau_s.diff - 0.001).abs() < 1e-15);
     assert_eq!(d.tau_s.significant, Some(true));
     assert!(d.significant);
+    assert!(!c.orders_differ("gyro"), "both order 0");
+    let mut richer = block(1.0, Some(0.001), 0.004, Some(1e-4));
+    richer.order = 1;
+    let e = model("approach", vec![("gyro", richer)]);
+    let c = compare(&[
+        model(
+            "cruise",
+            vec![("gyro", block(1.0, Some(0.001), 0.004, Some(1e-4)))],
+        ),
+        e,
+    ])
+    .expect("two runs");
+    assert!(c.orders_differ("gyro"));
+    assert!(!c.orders_differ("accel"), "no such block: nothing differs");
 }
 
 #[test]

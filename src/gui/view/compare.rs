@@ -10,6 +10,10 @@ use crate::compare::{Comparison, Delta, SIGNIFICANCE_SIGMAS};
 use crate::gui::app::{Command, RunEntry, ViewState};
 use crate::gui::pipeline::RunId;
 
+/// The note under the comparison when the runs' models of the block have different orders.
+pub const ORDERS_DIFFER: &str = "the compared models have different orders: their K are static \
+    gains of different structures (fix the order in the settings to compare like with like)";
+
 /// The line counting a block's significant differences, e.g. `gyro: 2 significant differences`.
 #[must_use]
 pub fn significance_label(comparison: &Comparison, block: &str) -> String {
@@ -76,6 +80,9 @@ pub fn show(
     });
     let block = view.bode_block.name();
     ui.label(significance_label(c, block));
+    if c.orders_differ(block) {
+        ui.colored_label(ui.visuals().warn_fg_color, ORDERS_DIFFER);
+    }
     egui::ScrollArea::vertical().show(ui, |ui| {
         egui::Grid::new("compare-figures").striped(true).show(ui, |ui| {
             ui.strong("figure");
@@ -95,9 +102,16 @@ pub fn show(
                 ui.monospace(delta_text(&d.tau_s, 1e3));
             }
             ui.end_row();
+            ui.label("order");
+            for r in &c.runs {
+                let f = r.blocks.get(block);
+                ui.monospace(f.map_or_else(String::new, |f| f.order.to_string()));
+            }
+            ui.end_row();
+            let (inputs, outputs) = crate::ident::signals::channel_names(view.bode_block);
             for i in 0..3 {
                 for j in 0..3 {
-                    ui.label(format!("K[{}][{}]", i + 1, j + 1));
+                    ui.label(format!("K {}/{}", outputs[i], inputs[j]));
                     for r in &c.runs {
                         let f = r.blocks.get(block);
                         ui.monospace(f.map_or_else(String::new, |f| format!("{:+.6}", f.k[i][j])));

@@ -5,10 +5,11 @@
 
 use std::sync::Arc;
 
-use imu_attest::ident::session::{Session, Start};
+use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
 use imu_attest::model::Model;
-use imu_attest::noise::of_model::attach_noise;
+use imu_attest::noise::TermEstimate;
+use imu_attest::noise::of_model::identified_model;
 use imu_attest::noise::terms::NoiseTerm;
 use imu_attest::run::{LoadOptions, load};
 use imu_attest::sim::regime::Regime;
@@ -37,15 +38,26 @@ fn identified(regime: Regime, seed: u64, random_walk: f64) -> (Model, serde_json
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("run.csv");
     write_run(&sim, &path).expect("written");
-    let run = Arc::new(load(&path, &LoadOptions::default()).expect("loads"));
-    let settings = Settings::default();
-    let mut session = Session::new(run.clone());
-    let id = session
-        .identify(&settings, Start::Cold, &mut |_| {})
-        .expect("identified");
-    let mut model = Model::from_identification(&run, &settings, &id);
-    attach_noise(&mut model, &mut session, &settings).expect("noise");
-    (model, truth)
+    (model_of(&path), truth)
+}
+
+/// The run at `path` identified with the default settings, noise attached (as `identify`).
+fn model_of(path: &std::path::Path) -> Model {
+    let run = Arc::new(load(path, &LoadOptions::default()).expect("loads"));
+    let settings = Settings {
+        blocks: Settings::default().blocks_for(&run.blocks()),
+        ..Settings::default()
+    };
+    identified_model(&mut Session::new(run), &settings, &mut |_| {}).expect("identified")
+}
+
+/// The normalised error of `term` against the truth `truth_si` (SI units).
+fn z_of(term: &TermEstimate, truth_si: f64) -> f64 {
+    z(term.value, term.interval, truth_si * term.value / term.value_si)
+}
+
+fn rms(zs: &[f64]) -> f64 {
+    (zs.iter().map(|v| v * v).sum::<f64>() / zs.len() as f64).sqrt()
 }
 
 fn truth_of(truth: &serde_json::Value, block: &str, field: &str, channel: usize) -> f64 {
@@ -66,8 +78,7 @@ fn white_gyro_noise_gives_its_angle_random_walk_within_the_stated_interval() {
         for (i, ch) in noise.channels.iter().enumerate() {
             let arw = ch.term(NoiseTerm::RandomWalk).expect("white noise is seen");
             let n = truth_of(&truth, "gyro", "white_asd", i) / 2.0_f64.sqrt();
-            let scale = arw.value / arw.value_si;
-            let e = z(arw.value, arw.interval, n * scale);
+            let e = z_of(arw, n);
             assert!(
                 e.abs() < 3.0,
                 "{regime:?} seed {seed} {}: N {} vs {n} (z {e})",
@@ -77,7 +88,7 @@ fn white_gyro_noise_gives_its_angle_random_walk_within_the_stated_interval() {
             zs.push(e);
         }
     }
-    let rms = (zs.iter().map(|v| v * v).sum::<f64>() / zs.len() as f64).sqrt();
+    let rms = rms(&zs);
     eprintln!("ARW normalised errors over {} channels: rms {rms:.2}", zs.len());
     assert!(
         (0.2..1.4).contains(&rms),
@@ -94,8 +105,7 @@ fn a_rate_random_walk_is_found_with_its_strength() {
         let noise = model.blocks["gyro"].noise.as_ref().expect("noise figures");
         for ch in &noise.channels {
             let rrw = ch.term(NoiseTerm::RateRandomWalk).expect("the walk is seen");
-            let scale = rrw.value / rrw.value_si;
-            let e = z(rrw.value, rrw.interval, k * scale);
+            let e = z_of(rrw, k);
             assert!(
                 e.abs() < 3.0,
                 "{regime:?} seed {seed} {}: K {} vs {k} (z {e})",
@@ -105,7 +115,7 @@ fn a_rate_random_walk_is_found_with_its_strength() {
             zs.push(e);
         }
     }
-    let rms = (zs.iter().map(|v| v * v).sum::<f64>() / zs.len() as f64).sqrt();
+    let rms = rms(&zs);
     eprintln!("RRW normalised errors over {} channels: rms {rms:.2}", zs.len());
     assert!(rms < 1.5, "RRW normalised errors rms {rms}: {zs:?}");
 }
@@ -118,17 +128,7 @@ fn noise_terms_of_a_misfitting_model_are_marked_as_upper_bounds() {
     use imu_attest::noise::NoiseWarning;
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad07_fast_rotation.csv.gz");
-    let run = Arc::new(load(&path, &LoadOptions::default()).expect("loads"));
-    let settings = Settings {
-        blocks: Settings::default().blocks_for(&run.blocks()),
-        ..Settings::default()
-    };
-    let mut session = Session::new(run.clone());
-    let id = session
-        .identify(&settings, Start::Cold, &mut |_| {})
-        .expect("identified");
-    let mut model = Model::from_identification(&run, &settings, &id);
-    attach_noise(&mut model, &mut session, &settings).expect("noise");
+    let model = model_of(&path);
     let gyro = &model.blocks["gyro"];
     assert!(
         gyro.fit

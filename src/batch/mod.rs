@@ -15,10 +15,9 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::diagnose::{DiagnoseOptions, diagnose_session};
-use crate::ident::session::{Session, Start};
+use crate::ident::session::Session;
 use crate::ident::settings::Settings;
-use crate::model::Model;
-use crate::noise::of_model::attach_noise;
+use crate::noise::of_model::identified_model;
 use crate::run::{LoadOptions, load};
 
 /// Runs decoded at once: each holds its columns, the observer's estimate and the spectra.
@@ -61,15 +60,11 @@ pub fn run_rows(path: &Path, settings: &Settings, diagnose: bool) -> Vec<BatchRo
         blocks: settings.blocks_for(&run.blocks()),
         ..settings.clone()
     };
-    let mut session = Session::new(run.clone());
-    let id = match session.identify(&settings, Start::Cold, &mut |_| {}) {
-        Ok(id) => id,
+    let mut session = Session::new(run);
+    let model = match identified_model(&mut session, &settings, &mut |_| {}) {
+        Ok(model) => model,
         Err(e) => return vec![BatchRow::failed(&file, &e.to_string())],
     };
-    let mut model = Model::from_identification(&run, &settings, &id);
-    if let Err(e) = attach_noise(&mut model, &mut session, &settings) {
-        return vec![BatchRow::failed(&file, &format!("noise terms: {e}"))];
-    }
     let verdict =
         diagnose.then(
             || match diagnose_session(&mut session, &settings, &DiagnoseOptions::default()) {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use super::{Args, CliError};
 use std::sync::Arc;
 
-use crate::ident::session::{Session, Start};
+use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::model::Model;
 use crate::output::{OutputError, ensure_not_input};
@@ -57,7 +57,7 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
     // Settings that do not fit this run are the user's input; anything else is ours.
     let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
     let mut session = Session::new(run.clone());
-    let id = session.identify(&settings, Start::Cold, &mut |step| {
+    let model = crate::noise::of_model::identified_model(&mut session, &settings, &mut |step| {
         bar.set_length(step.total as u64);
         bar.set_position(step.done as u64);
         bar.set_message(match step.block {
@@ -66,21 +66,18 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
         });
     });
     bar.finish_and_clear();
-    let id = id.map_err(|e| {
+    let model = model.map_err(|e| {
         if e.is_input_error() {
             CliError::Input(format!("{}: {e}", run_path.display()))
         } else {
             CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
         }
     })?;
-    for block in &id.blocks {
-        for warning in &block.warnings {
-            eprintln!("imu-attest: warning: {} block: {warning}", block.block.name());
+    for (name, block) in &model.blocks {
+        for warning in &block.fit.warnings {
+            eprintln!("imu-attest: warning: {name} block: {warning}");
         }
     }
-    let mut model = Model::from_identification(&run, &settings, &id);
-    crate::noise::of_model::attach_noise(&mut model, &mut session, &settings)
-        .map_err(|e| CliError::Internal(anyhow::anyhow!("{}: noise terms: {e}", run_path.display())))?;
     for fault in &model.recording_faults {
         eprintln!("imu-attest: warning: {fault}");
     }

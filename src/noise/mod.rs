@@ -267,9 +267,9 @@ fn channel_noise(
             ..*p
         })
         .collect();
-    let first = fit_terms(&sensor, n_phase, 0.0);
-    let error = reference_error(&measured, &first);
-    let fit = fit_terms(&sensor, n_phase, error);
+    let mut fit = fit_terms(&sensor, n_phase, 0.0);
+    let error = reference_error(&measured, &fit);
+    fit.set_intervals(&sensor, n_phase, error);
     // The curve from the variances already measured (one pass over the record per factor).
     let allan: Vec<AllanPoint> = measured
         .iter()

@@ -8,7 +8,8 @@ use rayon::prelude::*;
 use super::{BlockNoise, NoiseWarning, block_noise};
 use crate::block::Block;
 use crate::ident::IdentError;
-use crate::ident::session::Session;
+use crate::ident::identify::IdentStep;
+use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
 use crate::ident::signals::{BlockSignals, channel_names};
 use crate::ident::structural::rational_response;
@@ -59,6 +60,24 @@ pub fn model_block_noise(
         );
     }
     Some(noise)
+}
+
+/// The model file of `session`'s run under `settings` as `identify` writes it: identified from
+/// scratch (`progress` before each stage), its noise terms attached. The one path of `identify`,
+/// `batch` and `report`.
+///
+/// # Errors
+/// The identification's errors.
+pub fn identified_model(
+    session: &mut Session,
+    settings: &Settings,
+    progress: &mut dyn FnMut(IdentStep),
+) -> Result<Model, IdentError> {
+    let run = session.run().clone();
+    let id = session.identify(settings, Start::Cold, progress)?;
+    let mut model = Model::from_identification(&run, settings, &id);
+    attach_noise(&mut model, session, settings)?;
+    Ok(model)
 }
 
 /// Fills `noise` of every block of `model` (identified from `session`'s run under `settings`).

@@ -242,11 +242,7 @@ const CORRELATED_PENALTY: f64 = 25.0;
 /// reference parts, added to each term's interval.
 #[must_use]
 pub fn fit_terms(points: &[AvarPoint], n_phase: usize, reference_error: f64) -> PowerLawFit {
-    let usable: Vec<AvarPoint> = points
-        .iter()
-        .copied()
-        .filter(|p| p.avar.is_finite() && p.avar > 0.0 && p.tau_s > 0.0)
-        .collect();
+    let usable = usable(points);
     if usable.len() < 2 {
         return PowerLawFit::default();
     }
@@ -293,13 +289,37 @@ pub fn fit_terms(points: &[AvarPoint], n_phase: usize, reference_error: f64) -> 
     if fit.coefficients[5] == 0.0 {
         fit.correlation_time_s = 0.0;
     }
-    fit.terms = NoiseTerm::ALL
-        .iter()
-        .zip(fit.coefficients)
-        .filter(|(_, c)| *c > 0.0)
-        .map(|(&term, c)| term_interval(&fit, &usable, n_phase, term, c, reference_error))
-        .collect();
+    fit.set_intervals(points, n_phase, reference_error);
     fit
+}
+
+/// The points a fit uses: finite, positive variance at a positive averaging time.
+fn usable(points: &[AvarPoint]) -> Vec<AvarPoint> {
+    points
+        .iter()
+        .copied()
+        .filter(|p| p.avar.is_finite() && p.avar > 0.0 && p.tau_s > 0.0)
+        .collect()
+}
+
+impl PowerLawFit {
+    /// The present terms with their intervals (see the module docs) for the fitted coefficients
+    /// on `points`, with `reference_error` the relative uncertainty of the subtracted reference
+    /// parts: the fit itself does not depend on it, so a caller that learns it from a first fit
+    /// sets the intervals again instead of fitting twice.
+    pub fn set_intervals(&mut self, points: &[AvarPoint], n_phase: usize, reference_error: f64) {
+        let usable = usable(points);
+        if usable.is_empty() {
+            self.terms.clear();
+            return;
+        }
+        self.terms = NoiseTerm::ALL
+            .iter()
+            .zip(self.coefficients)
+            .filter(|(_, c)| *c > 0.0)
+            .map(|(&term, c)| term_interval(self, &usable, n_phase, term, c, reference_error))
+            .collect();
+    }
 }
 
 /// Reweighted fits (weights `edf / (2 sigma^4)` from the model itself) at a fixed correlation

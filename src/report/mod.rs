@@ -18,10 +18,10 @@ use std::path::Path;
 
 use crate::diagnose::{DiagnoseError, DiagnoseOptions, Report as Diagnosis, diagnose_session};
 use crate::ident::IdentError;
-use crate::ident::session::{Session, Start};
+use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::model::Model;
-use crate::noise::of_model::attach_noise;
+use crate::noise::of_model::{attach_noise, identified_model};
 use crate::output::{OutputError, write_atomic};
 
 /// What the report shows of one run.
@@ -50,14 +50,14 @@ pub fn run_report(
     given: Option<Model>,
 ) -> Result<RunReport, IdentError> {
     let run = session.run().clone();
-    let mut model = if let Some(m) = given {
+    let model = if let Some(mut m) = given {
+        let model_settings = m.settings.clone();
+        attach_noise(&mut m, session, &model_settings)?;
         m
     } else {
-        let id = session.identify(settings, Start::Cold, &mut |_| {})?;
-        Model::from_identification(&run, settings, &id)
+        identified_model(session, settings, &mut |_| {})?
     };
     let model_settings = model.settings.clone();
-    attach_noise(&mut model, session, &model_settings)?;
     let span = session.span(&model_settings)?;
     let diagnosis = diagnose_session(session, &model_settings, &DiagnoseOptions::default())
         .map_err(|e: DiagnoseError| e.to_string());

@@ -89,6 +89,14 @@ impl App {
         picked
     }
 
+    /// Every file the loaded runs were read from (runs and sidecars): no export goes over one.
+    fn input_files(&self) -> Vec<PathBuf> {
+        self.runs
+            .iter()
+            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
+            .collect()
+    }
+
     /// Opens the typed-path window for `purpose` (with `note` saying why, for a fallback).
     pub(super) fn prompt_path(&mut self, purpose: PathPurpose, note: Option<&str>) {
         self.prompt = Some(super::prompt::PathPrompt {
@@ -119,12 +127,7 @@ impl App {
             .check_finite()
             .map_err(|e| format!("model not written: {e}"))?;
         let run_id = run.id;
-        let inputs: Vec<PathBuf> = self
-            .runs
-            .iter()
-            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
-            .collect();
-        ensure_not_input(path, &inputs).map_err(|e| e.to_string())?;
+        ensure_not_input(path, &self.input_files()).map_err(|e| e.to_string())?;
         let generation = self.next_generation();
         self.worker.submit(crate::gui::pipeline::Job {
             run: run_id,
@@ -139,12 +142,7 @@ impl App {
     /// Asks the worker for the results table of every loaded run (one row per run and block: K,
     /// sigmas, ppm, mrad, delay, noise terms, warnings), as `batch` writes it.
     pub(super) fn export_results(&mut self, path: PathBuf) {
-        let inputs: Vec<PathBuf> = self
-            .runs
-            .iter()
-            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
-            .collect();
-        if let Err(e) = ensure_not_input(&path, &inputs) {
+        if let Err(e) = ensure_not_input(&path, &self.input_files()) {
             self.errors.push(ErrorTopic::Export, format!("export: {e}"));
             return;
         }
@@ -171,12 +169,7 @@ impl App {
     /// Asks the worker for the selected run's certificate at `path` (it identifies, computes the
     /// noise terms and diagnoses on its cached session: seconds on a long run).
     pub(super) fn export_report(&mut self, path: PathBuf) {
-        let inputs: Vec<PathBuf> = self
-            .runs
-            .iter()
-            .flat_map(|r| [r.path.clone(), sidecar_path(&r.path)])
-            .collect();
-        if let Err(e) = ensure_not_input(&path, &inputs) {
+        if let Err(e) = ensure_not_input(&path, &self.input_files()) {
             self.errors.push(ErrorTopic::Export, format!("export: {e}"));
             return;
         }
@@ -209,8 +202,7 @@ impl App {
             });
         }
         while let Ok((path, image)) = self.screenshots.rx.try_recv() {
-            let inputs: Vec<PathBuf> = self.runs.iter().map(|r| r.path.clone()).collect();
-            match ensure_not_input(&path, &inputs).and_then(|()| write_png(&path, &image)) {
+            match ensure_not_input(&path, &self.input_files()).and_then(|()| write_png(&path, &image)) {
                 Ok(()) => self.status = Some(format!("view written to {}", path.display())),
                 Err(e) => self.errors.push(ErrorTopic::Export, format!("export: {e}")),
             }

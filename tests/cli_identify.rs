@@ -171,3 +171,86 @@ fn bad_settings_and_inputs_exit_2_with_one_line() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists(), "no partial output");
 }
+
+#[test]
+fn effects_accepted_from_a_list_or_a_discrepancy_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("lagged.csv");
+    let o = imu_attest(&[
+        "simulate",
+        "--regime",
+        "approach",
+        "--duration",
+        "60",
+        "--seed",
+        "5",
+        "--effect",
+        "sensor_lag:gyro",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let identify = |effects: &Path, out: &Path| {
+        imu_attest(&[
+            "identify",
+            run.to_str().unwrap(),
+            "--effects",
+            effects.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    // A list.
+    let list = dir.path().join("effects.json");
+    std::fs::write(
+        &list,
+        r#"{"effects": [{"block": "gyro", "effect": "sensor_lag"}]}"#,
+    )
+    .unwrap();
+    let from_list = dir.path().join("from_list.json");
+    let o = identify(&list, &from_list);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let model: Model = serde_json::from_str(&std::fs::read_to_string(&from_list).unwrap()).unwrap();
+    let effects = model.blocks["gyro"]
+        .effects
+        .as_ref()
+        .expect("the gyro's model has the lag");
+    assert_eq!(effects.accepted[0].effect, imu_attest::effect::Effect::SensorLag);
+    assert!(effects.accepted[0].parameter_std["T_s"].as_f64().unwrap() > 0.0);
+    assert!(model.blocks["accel"].effects.is_none());
+    // The discrepancy report of the same run names the lag: as an effects file it gives the same model.
+    let report = dir.path().join("report.json");
+    let o = imu_attest(&[
+        "discrepancy",
+        run.to_str().unwrap(),
+        "--out",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let from_report = dir.path().join("from_report.json");
+    let o = identify(&report, &from_report);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(&from_list).unwrap(),
+        std::fs::read_to_string(&from_report).unwrap()
+    );
+    // A bad file: exit 2, one line naming the file, line and column; nothing written.
+    std::fs::write(
+        &list,
+        "{\"effects\": [\n  {\"block\": \"gyro\", \"effect\": \"lagg\"}]}",
+    )
+    .unwrap();
+    let bad = dir.path().join("bad.json");
+    let o = identify(&list, &bad);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("effects.json: line 2, column") && err.contains("effects[0].effect"),
+        "{err}"
+    );
+    assert!(!bad.exists());
+    // The effects file is an input: never written over.
+    let o = identify(&list, &list);
+    assert_eq!(o.status.code(), Some(2));
+}

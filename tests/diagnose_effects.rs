@@ -7,14 +7,17 @@
 //! sees the CSV and the sidecar's declared fields, as it would from a real stand.
 #![expect(clippy::unwrap_used, reason = "tests")]
 
+#[path = "common/sim.rs"]
+mod sim_common;
+use sim_common::simulated_run_of;
+
 use imu_attest::diagnose::DiagnoseOptions;
 use imu_attest::diagnose::{Report, Verdict, diagnose_run};
 use imu_attest::ident::settings::Settings;
-use imu_attest::run::{LoadOptions, Run, load};
+use imu_attest::run::Run;
+use imu_attest::sim::SimulatedRun;
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::truth::{BlockTruth, EffectTruth};
-use imu_attest::sim::write::write_run;
-use imu_attest::sim::{SimConfig, SimulatedRun, simulate};
 use serde_json::Value;
 
 const DURATION_S: f64 = 120.0;
@@ -22,19 +25,6 @@ const DURATION_S: f64 = 120.0;
 /// A simulated run with `effects` hidden, loaded from its CSV as a stand run would be.
 fn simulated_run(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Run) {
     simulated_run_of(DURATION_S, regime, seed, effects)
-}
-
-fn simulated_run_of(duration_s: f64, regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Run) {
-    let mut config = SimConfig::new(regime);
-    config.seed = seed;
-    config.duration_s = duration_s;
-    config.effects = effects.iter().map(|e| e.parse().unwrap()).collect();
-    let sim = simulate(&config).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("run.csv");
-    write_run(&sim, &path).unwrap();
-    let run = load(&path, &LoadOptions::default()).unwrap();
-    (sim, run)
 }
 
 fn diagnose(regime: Regime, seed: u64, effects: &[&str]) -> (SimulatedRun, Report) {

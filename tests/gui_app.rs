@@ -181,6 +181,7 @@ fn a_cancelled_load_reports_cancelled_and_loads_nothing() {
         generation: 2,
         kind: JobKind::Analyse {
             settings: Box::default(),
+            accepted: Vec::new(),
         },
     });
     assert_eq!(worker.events.try_iter().count(), 0);
@@ -209,6 +210,7 @@ fn the_worker_thread_delivers_the_newest_analysis() {
         generation: 2,
         kind: JobKind::Analyse {
             settings: Box::new(short),
+            accepted: Vec::new(),
         },
     });
     worker.submit(Job {
@@ -216,6 +218,7 @@ fn the_worker_thread_delivers_the_newest_analysis() {
         generation: 3,
         kind: JobKind::Analyse {
             settings: Box::default(),
+            accepted: Vec::new(),
         },
     });
     loop {

@@ -1,12 +1,20 @@
 //! The app's missing-effect view through AccessKit (`egui_kittest`, no GPU): the diagnosis runs
 //! on the worker (synchronously here), the verdict and findings appear in the tab, and rejecting a
-//! named effect diagnoses again without it.
+//! named effect diagnoses again without it (from the cached fits: no new identification);
+//! accepting one puts it in the model shown, plotted and exported.
 
 use std::path::PathBuf;
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
-use imu_attest::gui::{App, WorkerMode, sample_run_path};
+use std::sync::Arc;
+
+use imu_attest::block::Block;
+use imu_attest::diagnose::extend::extended_model;
+use imu_attest::effect::Effect;
+use imu_attest::gui::{App, Command, WorkerMode, sample_run_path};
+use imu_attest::ident::session::Session;
+use imu_attest::run::{LoadOptions, load};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, simulate};
@@ -44,16 +52,112 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("lagged.csv");
     write_run(&simulate(&config).unwrap(), &path).unwrap();
-    let mut harness = app(vec![path]);
+    let mut harness = app(vec![path.clone()]);
     diagnose(&mut harness);
     harness.get_by_label("verdict: effect found");
     harness.get_by_label("gyro first-order lag");
+    let identified = harness
+        .state()
+        .selected()
+        .unwrap()
+        .identification
+        .as_ref()
+        .unwrap()
+        .clone();
+    assert!(identified.model.blocks["gyro"].effects.is_none());
     harness.get_by_label("Accept").click();
-    harness.run_steps(2);
+    harness.run_steps(3);
     harness.get_by_label("accepted");
     assert_eq!(harness.state().selected().unwrap().accepted.len(), 1);
+    // Accept means accept: the model shown (Results), plotted (Bode) and exported is extended.
+    let extended = harness
+        .state()
+        .selected()
+        .unwrap()
+        .identification
+        .as_ref()
+        .unwrap()
+        .clone();
+    let gyro = &extended.model.blocks["gyro"];
+    let effects = gyro.effects.as_ref().expect("the lag is in the gyro's model");
+    assert_eq!(effects.accepted[0].effect, Effect::SensorLag);
+    let lag = effects.lag_s.expect("a lag time constant");
+    assert!(lag > 1e-4, "{lag}");
+    assert_ne!(
+        gyro.k, identified.model.blocks["gyro"].k,
+        "K refitted with the lag"
+    );
+    assert_eq!(
+        extended.model.blocks["accel"], identified.model.blocks["accel"],
+        "the other block is as identified"
+    );
+    assert!(
+        Arc::ptr_eq(&extended.core, &identified.core),
+        "not identified again"
+    );
+    harness.get_by_label("accepted: gyro first-order lag");
+    harness.get_by_label_contains("gyro model: K e^(-tau s) with 1 accepted effect");
+    // The Bode overlay is the extended model's response: the lag's droop at the band top.
+    let bode = extended.bode.iter().find(|b| b.block == Block::Gyro).unwrap();
+    let last = bode.elements[0].model_magnitude_db.last().unwrap();
+    let f = 10f64.powf(last.x);
+    let want = 20.0 * (gyro.k[0][0] / (1.0 + (std::f64::consts::TAU * f * lag).powi(2)).sqrt()).log10();
+    assert!((last.y - want).abs() < 1e-9, "{} vs {want}", last.y);
+    // The exported model is what `identify --effects` writes for the same effect.
+    let dir_out = tempfile::tempdir().unwrap();
+    let exported = dir_out.path().join("model.json");
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(exported.clone())));
+    harness.run_steps(2);
+    let run = load(&path, &LoadOptions::default()).unwrap();
+    // As `identify` does: the blocks resolved for the run.
+    let settings = harness.state().settings().clone();
+    let settings = imu_attest::ident::settings::Settings {
+        blocks: settings.blocks_for(&run.blocks()),
+        ..settings
+    };
+    let mut session = Session::new(Arc::new(run));
+    let reference = extended_model(
+        &mut session,
+        &settings,
+        &[(Block::Gyro, Effect::SensorLag)],
+        &mut |_| {},
+    )
+    .unwrap();
+    let written = dir_out.path().join("reference.json");
+    reference.write_file(&written).unwrap();
+    let (app_file, cli_file) = (
+        std::fs::read_to_string(&exported).unwrap(),
+        std::fs::read_to_string(&written).unwrap(),
+    );
+    let first_difference = app_file
+        .lines()
+        .zip(cli_file.lines())
+        .enumerate()
+        .find(|(_, (a, b))| a != b);
+    assert!(
+        first_difference.is_none() && app_file.len() == cli_file.len(),
+        "the app's export is identify --effects's file; first difference: {first_difference:?}"
+    );
     harness.get_by_label("Reject").click();
     harness.run_steps(4);
+    let after = harness
+        .state()
+        .selected()
+        .unwrap()
+        .identification
+        .as_ref()
+        .unwrap()
+        .clone();
+    assert!(
+        after.model.blocks["gyro"].effects.is_none(),
+        "a rejected effect leaves the model"
+    );
+    assert!(
+        Arc::ptr_eq(&after.core, &identified.core),
+        "a rejection does not identify again"
+    );
     let run = harness.state().selected().unwrap();
     let report = run.diagnosis.as_ref().unwrap();
     assert!(

@@ -30,7 +30,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
     let models = runs
         .iter()
-        .map(|r| identify_model(r, &settings))
+        .map(|r| identify_model(r, &settings, &[]))
         .collect::<Result<Vec<_>, _>>()?;
     let comparison = compare(&models).map_err(|e| CliError::Input(e.to_string()))?;
     write_atomic(&out, |w| {

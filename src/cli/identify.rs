@@ -5,6 +5,10 @@ use std::path::{Path, PathBuf};
 use super::{Args, CliError};
 use std::sync::Arc;
 
+use crate::block::Block;
+use crate::diagnose::accepted::read_accepted;
+use crate::diagnose::extend::extended_model;
+use crate::effect::Effect;
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::model::Model;
@@ -25,8 +29,23 @@ pub(super) fn read_settings(args: &Args) -> Result<(Settings, Option<PathBuf>), 
     }
 }
 
+/// Reads `--effects` (none when absent).
+/// Accepted effects and the file they came from.
+type EffectsArg = (Vec<(Block, Effect)>, Option<PathBuf>);
+
+fn read_effects(args: &Args) -> Result<EffectsArg, CliError> {
+    let Some(p) = args.get("effects") else {
+        return Ok((Vec::new(), None));
+    };
+    let path = PathBuf::from(p);
+    let bytes = std::fs::read(&path).map_err(|e| CliError::Input(format!("{p}: cannot read: {e}")))?;
+    let accepted = read_accepted(&bytes, &path).map_err(|e| CliError::Input(e.to_string()))?;
+    Ok((accepted, Some(path)))
+}
+
 pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let (settings, settings_path) = read_settings(args)?;
+    let (accepted, effects_path) = read_effects(args)?;
     let out = PathBuf::from(args.required("out")?);
     args.reject_unknown()?;
     let [run_path] = args.positional.as_slice() else {
@@ -38,17 +57,23 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let run_path = Path::new(run_path);
     let mut inputs = vec![run_path.to_path_buf(), sidecar_path(run_path)];
     inputs.extend(settings_path);
+    inputs.extend(effects_path);
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
 
-    let model = identify_model(run_path, &settings)?;
+    let model = identify_model(run_path, &settings, &accepted)?;
     model.write_file(&out).map_err(|e| match e {
         OutputError::NonFinite { .. } => CliError::Internal(anyhow::anyhow!("model not written: {e}")),
         other => CliError::Input(other.to_string()),
     })
 }
 
-/// Loads and identifies one run into its checked model (shared with `compare`).
-pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Model, CliError> {
+/// Loads and identifies one run into its checked model (shared with `compare`), the `accepted`
+/// effects in its blocks' models.
+pub(super) fn identify_model(
+    run_path: &Path,
+    settings: &Settings,
+    accepted: &[(Block, Effect)],
+) -> Result<Model, CliError> {
     let run = Arc::new(super::progress::load_run(run_path)?);
     let settings = Settings {
         blocks: settings.blocks_for(&run.blocks()),
@@ -57,7 +82,7 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
     // Settings that do not fit this run are the user's input; anything else is ours.
     let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
     let mut session = Session::new(run.clone());
-    let model = crate::noise::of_model::identified_model(&mut session, &settings, &mut |step| {
+    let model = extended_model(&mut session, &settings, accepted, &mut |step| {
         bar.set_length(step.total as u64);
         bar.set_position(step.done as u64);
         bar.set_message(match step.block {
@@ -76,6 +101,12 @@ pub(super) fn identify_model(run_path: &Path, settings: &Settings) -> Result<Mod
     for (name, block) in &model.blocks {
         for warning in &block.fit.warnings {
             eprintln!("imu-attest: warning: {name} block: {warning}");
+        }
+        for n in block.effects.iter().flat_map(|e| &e.not_added) {
+            eprintln!(
+                "imu-attest: warning: {name} block: {} not added: {}",
+                n.effect, n.reason
+            );
         }
     }
     for fault in &model.recording_faults {

@@ -54,7 +54,9 @@ usage:
                       [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
                       [--sensor-noise default|white] [--random-walk K]
                       [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv
-  imu-attest identify RUN [--settings S.json] --out MODEL.json
+  imu-attest identify RUN [--settings S.json] [--effects E.json] --out MODEL.json
+                                                  E.json: accepted effects ({\"effects\": [{block,
+                                                  effect}]}, or a discrepancy report's findings)
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
   imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json
   imu-attest report RUN... [--settings S.json] [--model MODEL.json] [--spec SPEC.json]

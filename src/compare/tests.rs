@@ -31,6 +31,7 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
         band_hz: [0.1, 40.0],
         stationarity: None,
         noise: None,
+        effects: None,
         fit: Fit {
             k_std: [[k_std; 3]; 3],
             tau_std_s,

@@ -61,6 +61,12 @@ fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) -> Option<C
 /// Every candidate for the block that the current model does not already hold.
 #[must_use]
 pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
+    candidates_among(state, band_hz, &|_| true)
+}
+
+/// The candidates of the effects `wanted` accepts (the others are not fitted at all).
+#[must_use]
+pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect) -> bool) -> Vec<Candidate> {
     let design = &state.design;
     let current = &state.fitted;
     let s0 = &current.structure;
@@ -81,11 +87,11 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
     ];
     for (effect, applies, switch) in switches {
         let mut s = s0.clone();
-        if applies && !std::mem::replace(switch(&mut s), true) {
+        if applies && wanted(effect) && !std::mem::replace(switch(&mut s), true) {
             out.extend(structural(effect, state, run_fit(&s, &current.theta)));
         }
     }
-    if !s0.lag {
+    if wanted(Effect::SensorLag) && !s0.lag {
         let mut s = s0.clone();
         s.lag = true;
         let best = [0.5e-3, 2e-3, 6e-3, 15e-3]
@@ -100,7 +106,7 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
         out.extend(structural(Effect::SensorLag, state, best));
     }
     for axis in 0..3 {
-        if s0.resonance_axes.contains(&axis) {
+        if !wanted(Effect::PlatformResonance) || s0.resonance_axes.contains(&axis) {
             continue;
         }
         let mut s = s0.clone();
@@ -112,8 +118,12 @@ pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
             start.and_then(|t| run_fit(&s, &t)),
         ));
     }
-    out.extend(super::clock::clock_candidate(state, band_hz));
-    if let Some(tone) = strongest_line(design, &state.residual) {
+    if wanted(Effect::ClockDrift) {
+        out.extend(super::clock::clock_candidate(state, band_hz));
+    }
+    if wanted(Effect::VibrationTone)
+        && let Some(tone) = strongest_line(design, &state.residual)
+    {
         out.push(Candidate {
             effect: Effect::VibrationTone,
             delta_chi2: tone.delta_chi2,

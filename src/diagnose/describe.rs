@@ -18,12 +18,25 @@ fn three(v: &Value) -> Option<[f64; 3]> {
     Some([num(a.first()?)?, num(a.get(1)?)?, num(a.get(2)?)?])
 }
 
-/// `gx +1.20, gy -0.80, gz +0.00` with `scale` and `decimals`.
-fn per_channel(names: [&str; 3], v: [f64; 3], scale: f64, decimals: usize) -> String {
+/// ` ± 0.05` (the standard deviation, scaled), or nothing when it is unknown.
+fn pm(sd: Option<f64>, scale: f64, decimals: usize) -> String {
+    sd.filter(|v| v.is_finite())
+        .map_or_else(String::new, |v| format!(" ± {:.decimals$}", v * scale))
+}
+
+/// Three standard deviations, each possibly unknown.
+fn three_std(v: Option<&Value>) -> [Option<f64>; 3] {
+    let a = v.and_then(Value::as_array);
+    [0, 1, 2].map(|i| a.and_then(|a| a.get(i)).and_then(num))
+}
+
+/// `gx +1.20 ± 0.05, gy -0.80 ± 0.05, gz +0.00 ± 0.05` with `scale` and `decimals`.
+fn per_channel(names: [&str; 3], v: [f64; 3], sd: [Option<f64>; 3], scale: f64, decimals: usize) -> String {
     names
         .iter()
         .zip(v)
-        .map(|(n, x)| format!("{n} {:+.decimals$}", x * scale))
+        .zip(sd)
+        .map(|((n, x), sd)| format!("{n} {:+.decimals$}{}", x * scale, pm(sd, scale, decimals)))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -31,13 +44,21 @@ fn per_channel(names: [&str; 3], v: [f64; 3], scale: f64, decimals: usize) -> St
 /// The finding's size as lines of text with units (empty when the parameters cannot be read).
 #[must_use]
 pub fn describe(f: &Finding) -> Vec<String> {
-    let p = &f.parameters;
-    let (inputs, outputs) = channel_names(f.block);
-    let unit = match f.block {
+    describe_size(f.block, f.effect, &f.parameters, &f.parameter_std)
+}
+
+/// An effect's size (`parameters`, with `parameter_std` under the same keys) as lines of text
+/// with units: a finding's, or an effect accepted into a model.
+#[must_use]
+pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std: &Value) -> Vec<String> {
+    let sd = |key: &str| std.get(key);
+    let sd1 = |key: &str| sd(key).and_then(num);
+    let (inputs, outputs) = channel_names(block);
+    let unit = match block {
         crate::block::Block::Gyro => "rad/s",
         crate::block::Block::Accel => "m/s²",
     };
-    let lines = match f.effect {
+    let lines = match effect {
         Effect::GSensitivity => p.get("G").and_then(Value::as_array).map(|rows| {
             let mut out = vec![format!("G, {unit} per m/s² (rows: outputs; columns: fx fy fz):")];
             for (name, row) in outputs.iter().zip(rows) {
@@ -47,20 +68,23 @@ pub fn describe(f: &Finding) -> Vec<String> {
             }
             out
         }),
-        Effect::SensorLag => p
-            .get("T_s")
-            .and_then(num)
-            .map(|t| vec![format!("first-order lag, time constant T = {:.3} ms", t * 1e3)]),
+        Effect::SensorLag => p.get("T_s").and_then(num).map(|t| {
+            vec![format!(
+                "first-order lag, time constant T = {:.3}{} ms",
+                t * 1e3,
+                pm(sd1("T_s"), 1e3, 3)
+            )]
+        }),
         Effect::AxisTimeSkew => p.get("skew_s").and_then(three).map(|s| {
             vec![format!(
                 "channel delays relative to their mean, ms: {}",
-                per_channel(outputs, s, 1e3, 3)
+                per_channel(outputs, s, three_std(sd("skew_s")), 1e3, 3)
             )]
         }),
         Effect::ScaleNonlinearity => p.get("k2").and_then(three).map(|k| {
             vec![format!(
                 "quadratic scale factor k2 (x += k2 u|u|), per {unit}: {}",
-                per_channel(outputs, k, 1.0, 5)
+                per_channel(outputs, k, three_std(sd("k2")), 1.0, 5)
             )]
         }),
         Effect::VibrationTone => {
@@ -68,15 +92,16 @@ pub fn describe(f: &Finding) -> Vec<String> {
             let a = p.get("amplitude").and_then(three);
             fr.zip(a).map(|(fr, a)| {
                 vec![format!(
-                    "tone at {fr:.3} Hz; amplitude, {unit}: {}",
-                    per_channel(outputs, a, 1.0, 6)
+                    "tone at {fr:.3}{} Hz; amplitude, {unit}: {}",
+                    pm(sd1("frequency_hz"), 1.0, 3),
+                    per_channel(outputs, a, three_std(sd("amplitude")), 1.0, 6)
                 )]
             })
         }
         Effect::LeverArmError => p.get("offset_m").and_then(three).map(|o| {
             vec![format!(
                 "lever arm off by (true minus declared), cm: {}",
-                per_channel(["x", "y", "z"], o, 100.0, 2)
+                per_channel(["x", "y", "z"], o, three_std(sd("offset_m")), 100.0, 2)
             )]
         }),
         Effect::PlatformResonance => {
@@ -85,8 +110,10 @@ pub fn describe(f: &Finding) -> Vec<String> {
             let z = p.get("damping").and_then(num);
             match (axis, fr, z) {
                 (Some(a), Some(fr), Some(z)) if a < 3 => Some(vec![format!(
-                    "mount resonance on input {}: {fr:.2} Hz, damping ratio {z:.3}",
-                    inputs[a]
+                    "mount resonance on input {}: {fr:.2}{} Hz, damping ratio {z:.3}{}",
+                    inputs[a],
+                    pm(sd1("frequency_hz"), 1.0, 2),
+                    pm(sd1("damping"), 1.0, 3)
                 )]),
                 _ => None,
             }
@@ -120,6 +147,7 @@ mod tests {
             effect,
             name: effect.name_on(block),
             parameters,
+            parameter_std: Value::Null,
             gap_before_db: -20.0,
             gap_after_db: -30.0,
             evidence: String::new(),
@@ -159,6 +187,28 @@ mod tests {
         assert_eq!(
             describe(&f),
             vec!["mount resonance on input wy: 24.13 Hz, damping ratio 0.051"]
+        );
+    }
+
+    #[test]
+    fn sizes_carry_their_standard_deviations_where_known() {
+        let mut f = finding(Block::Gyro, Effect::SensorLag, json!({"T_s": 0.004_02}));
+        f.parameter_std = json!({"T_s": 0.000_031});
+        assert_eq!(
+            describe(&f),
+            vec!["first-order lag, time constant T = 4.020 ± 0.031 ms"]
+        );
+        let mut f = finding(
+            Block::Accel,
+            Effect::ScaleNonlinearity,
+            json!({"k2": [0.001, -0.002, 0.0]}),
+        );
+        f.parameter_std = json!({"k2": [0.000_2, null, 0.000_1]});
+        assert_eq!(
+            describe(&f),
+            vec![
+                "quadratic scale factor k2 (x += k2 u|u|), per m/s²: ax +0.00100 ± 0.00020, ay -0.00200, az +0.00000 ± 0.00010"
+            ]
         );
     }
 

@@ -38,7 +38,9 @@ impl Fitted {
     }
 }
 
-fn pack(structure: &Structure, theta: &Theta) -> (Vec<f64>, Vec<f64>) {
+/// The nonlinear parameters in the search's scaled units (delays and the lag in ms, resonance
+/// frequency in Hz, log damping), and the search's first steps.
+pub(super) fn pack(structure: &Structure, theta: &Theta) -> (Vec<f64>, Vec<f64>) {
     let mut x = vec![theta.tau_s * 1e3];
     let mut step = vec![0.2];
     if structure.skew {
@@ -56,7 +58,8 @@ fn pack(structure: &Structure, theta: &Theta) -> (Vec<f64>, Vec<f64>) {
     (x, step)
 }
 
-fn unpack(structure: &Structure, x: &[f64], band_hz: [f64; 2]) -> Option<Theta> {
+/// [`pack`]'s inverse; `None` outside the physical range.
+pub(super) fn unpack(structure: &Structure, x: &[f64], band_hz: [f64; 2]) -> Option<Theta> {
     let mut it = x.iter().copied();
     let mut next = || it.next().unwrap_or(0.0);
     let tau_s = next() * 1e-3;

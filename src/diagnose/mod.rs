@@ -17,10 +17,12 @@
 //! units of the expected disturbance. Empty or too-short records are refused with
 //! [`DiagnoseError::TooShort`]; non-finite samples cannot reach here (the loader refuses them).
 
+pub mod accepted;
 pub mod candidates;
 pub mod clock;
 pub mod describe;
 pub mod design;
+pub mod extend;
 pub mod fit;
 pub mod map;
 pub mod profile;
@@ -29,10 +31,13 @@ pub mod simplex;
 pub mod state;
 pub mod structure;
 pub mod tone;
+pub mod uncertainty;
 mod workflow;
 
 pub use report::{DISCREPANCY_SCHEMA, Finding, Report, Verdict};
-pub use workflow::{DiagnoseOptions, diagnose_run, diagnose_session};
+pub use workflow::{
+    DiagnoseOptions, Prepared, PreparedBlock, diagnose_prepared, diagnose_run, diagnose_session, prepare,
+};
 
 /// Why a diagnosis could not be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -21,16 +21,17 @@ pub struct Profile {
     pub beta: Vec<f64>,
 }
 
-/// Solves the linear parameters for `theta`. `None` when the normal equations are singular or
-/// not finite (a degenerate `theta`).
+/// The weighted normal equations of the linear parameters at `theta`: `N`, `r` and the
+/// outputs' weighted power `c0`, so that the cost of any linear parameters `b` is
+/// `c0 - 2 r.b + b' N b`. `None` when they are not finite or all zero (a degenerate `theta`).
 #[must_use]
-pub fn project(
+pub fn normal_equations(
     design: &Design,
     grams: &[DMatrix<Complex64>],
     structure: &Structure,
     layout: &Layout,
     theta: &Theta,
-) -> Option<Profile> {
+) -> Option<(DMatrix<f64>, DVector<f64>, f64)> {
     let p = layout.n_params;
     let mut normal = DMatrix::<f64>::zeros(p, p);
     let mut rhs = DVector::<f64>::zeros(p);
@@ -62,17 +63,30 @@ pub fn project(
         }
     }
     let scale = (0..p).map(|k| normal[(k, k)]).fold(0.0_f64, f64::max);
-    if !(scale.is_finite() && scale > 0.0) {
-        return None;
-    }
+    (scale.is_finite() && scale > 0.0).then(|| (normal, rhs, c0.iter().sum()))
+}
+
+/// Solves the linear parameters for `theta`. `None` when the normal equations are singular or
+/// not finite (a degenerate `theta`).
+#[must_use]
+pub fn project(
+    design: &Design,
+    grams: &[DMatrix<Complex64>],
+    structure: &Structure,
+    layout: &Layout,
+    theta: &Theta,
+) -> Option<Profile> {
+    let (mut normal, rhs, c0) = normal_equations(design, grams, structure, layout, theta)?;
+    let p = layout.n_params;
+    let scale = (0..p).map(|k| normal[(k, k)]).fold(0.0_f64, f64::max);
     for k in 0..p {
         normal[(k, k)] += 1e-13 * scale;
     }
-    let beta = normal.clone().cholesky()?.solve(&rhs);
+    let beta = normal.cholesky()?.solve(&rhs);
     if beta.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    let total = c0.iter().sum::<f64>() - rhs.dot(&beta);
+    let total = c0 - rhs.dot(&beta);
     Some(Profile {
         cost: total,
         beta: beta.iter().copied().collect(),

@@ -70,6 +70,10 @@ pub struct Finding {
     pub name: String,
     /// Estimated size, re-identified with every finding of the block in the model.
     pub parameters: Value,
+    /// The standard deviations of `parameters`' figures, under the same keys (`null` where the
+    /// data do not determine one; `diagnose::uncertainty`).
+    #[serde(default, skip_serializing_if = "Value::is_null")]
+    pub parameter_std: Value,
     /// Worst channel's gap before adding it, dB.
     pub gap_before_db: f64,
     /// Worst channel's gap after, dB.

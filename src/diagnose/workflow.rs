@@ -12,6 +12,7 @@ use super::report::{
     BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
 };
 use super::state::State;
+use super::uncertainty::{covariance, parameter_std};
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::ident::identify::BlockIdentification;
@@ -62,6 +63,42 @@ pub fn diagnose_session(
     settings: &Settings,
     options: &DiagnoseOptions<'_>,
 ) -> Result<Report, DiagnoseError> {
+    Ok(diagnose_prepared(&prepare(session, settings)?, options))
+}
+
+/// What every diagnosis of a run under one set of settings starts from, computed once: the
+/// order-0 identification over the diagnosis's band, each block's whole-record design and the
+/// paper's model fitted on it. A rejection (the app) or an accepted effect ([`super::extend`])
+/// starts from here again instead of redoing the identification and the record's spectra.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The identifier settings used (order 0, the band fixed, blocks resolved).
+    pub settings: Settings,
+    /// The run.
+    pub source: Source,
+    /// One entry per block, in the order of the settings.
+    pub blocks: Vec<PreparedBlock>,
+}
+
+/// One block's starting point.
+#[derive(Clone, Debug)]
+pub struct PreparedBlock {
+    /// The block.
+    pub block: Block,
+    /// The diagnosis's band, Hz.
+    pub band_hz: [f64; 2],
+    /// The paper's model `K e^(-tau s)` fitted on the whole-record design (with the stretches'
+    /// delay trend as the clock-drift hint).
+    pub base: State,
+    /// Real degrees of freedom of the band (all three channels): BIC's `n`.
+    pub dof: f64,
+}
+
+/// [`Prepared`] for `session`'s run under `settings`.
+///
+/// # Errors
+/// As [`diagnose_run`].
+pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, DiagnoseError> {
     let run = session.run().clone();
     let run = run.as_ref();
     // The diagnosis searches the whole band asked for (with "auto", the auto band's search
@@ -76,30 +113,57 @@ pub fn diagnose_session(
     };
     let id = session.identify_aside(&settings)?;
     let span = session.span(&settings)?;
-    let mut findings = Vec::new();
-    let mut blocks = BTreeMap::new();
-    let mut penalty = 0.0;
+    let mut blocks = Vec::new();
     for b in &id.blocks {
         let band = b.band_hz;
+        let name = b.block.name();
         let design = block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
-            block: b.block.name(),
+            block: name,
             low: band[0],
             high: band[1],
         })?;
-        let given = options.given.and_then(|m| m.blocks.get(b.block.name()));
+        let dof = 3.0 * design.dof_per_channel();
+        let mut base =
+            State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
+        base.drift_hint = b
+            .stationarity
+            .as_deref()
+            .map(|st| [st.tau_trend, st.tau_trend_std]);
+        blocks.push(PreparedBlock {
+            block: b.block,
+            band_hz: band,
+            base,
+            dof,
+        });
+    }
+    Ok(Prepared {
+        settings,
+        source: Source::of(run),
+        blocks,
+    })
+}
+
+/// The diagnosis from a [`Prepared`] run: only the rounds of the search are done here.
+#[must_use]
+pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Report {
+    let mut findings = Vec::new();
+    let mut blocks = BTreeMap::new();
+    let mut penalty = 0.0;
+    for pb in &prep.blocks {
+        let given = options.given.and_then(|m| m.blocks.get(pb.block.name()));
         let rejected: Vec<Effect> = options
             .rejected
             .iter()
-            .filter(|(block, _)| *block == b.block)
+            .filter(|(block, _)| *block == pb.block)
             .map(|&(_, e)| e)
             .collect();
-        let (report, mut found, p) = diagnose_block(design, b, band, given, &rejected)?;
-        penalty = p;
+        let (report, mut found) = diagnose_block(pb, given, &rejected);
+        penalty = pb.dof.ln();
         findings.append(&mut found);
-        blocks.insert(b.block.name().to_owned(), report);
+        blocks.insert(pb.block.name().to_owned(), report);
     }
     findings.sort_by(|a: &Finding, b: &Finding| b.criterion_gain.total_cmp(&a.criterion_gain));
-    Ok(Report {
+    Report {
         schema: DISCREPANCY_SCHEMA.to_owned(),
         verdict: if findings.is_empty() {
             Verdict::NoMissingEffect
@@ -107,15 +171,15 @@ pub fn diagnose_session(
             Verdict::EffectFound
         },
         findings,
-        source: Source::of(run),
-        settings,
+        source: prep.source.clone(),
+        settings: prep.settings.clone(),
         criterion: Criterion {
             name: "BIC with a look-elsewhere term".to_owned(),
             penalty_per_parameter: penalty,
             look_elsewhere: "2 ln(m), m the candidates tried in the round".to_owned(),
         },
         blocks,
-    })
+    }
 }
 
 /// The block's whole-record design, its expected disturbance level taken from the
@@ -229,24 +293,15 @@ fn summary(c: &Candidate, rule: Rule) -> CandidateSummary {
     }
 }
 
-type BlockOutcome = (BlockReport, Vec<Finding>, f64);
-
-/// Grows one block's model; returns its report, findings and the per-parameter penalty.
+/// Grows one block's model; returns its report and findings.
 fn diagnose_block(
-    design: Design,
-    b: &BlockIdentification,
-    band: [f64; 2],
+    pb: &PreparedBlock,
     given: Option<&BlockModel>,
     rejected: &[Effect],
-) -> Result<BlockOutcome, DiagnoseError> {
-    let name = b.block.name();
-    let dof = 3.0 * design.dof_per_channel();
+) -> (BlockReport, Vec<Finding>) {
+    let (b, band, dof) = (pb, pb.band_hz, pb.dof);
     let (input_names, _) = channel_names(b.block);
-    let mut base = State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
-    base.drift_hint = b
-        .stationarity
-        .as_deref()
-        .map(|st| [st.tau_trend, st.tau_trend_std]);
+    let base = &pb.base;
     let mut state = base.clone();
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
@@ -291,6 +346,7 @@ fn diagnose_block(
             name: best.effect.name_on(b.block),
             // Filled from the final model: every finding's size is re-identified with the others.
             parameters: serde_json::Value::Null,
+            parameter_std: serde_json::Value::Null,
             gap_before_db: before,
             gap_after_db: after,
             evidence: format!(
@@ -304,16 +360,23 @@ fn diagnose_block(
         accepted.push((best.effect, index, finding));
         state = next;
     }
+    let chi2_per_dof = state.fitted.chi2() / dof;
+    let cov = if accepted.is_empty() {
+        None
+    } else {
+        covariance(&state, band, chi2_per_dof)
+    };
     let findings = accepted
         .into_iter()
         .map(|(effect, index, mut finding)| {
             finding.parameters = parameters(effect, &state, index, input_names);
+            finding.parameter_std = parameter_std(effect, &state, index, cov.as_ref(), chi2_per_dof);
             finding
         })
         .collect();
-    let mut report = block_report(&base, &state, first_round, dof);
+    let mut report = block_report(base, &state, first_round, dof);
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
-    Ok((report, findings, dof.ln()))
+    (report, findings)
 }
 
 /// Highest damping ratio of a resonance reported as a finding: a mode damped more has no peak

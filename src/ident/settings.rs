@@ -173,6 +173,24 @@ pub enum SettingsError {
     NoBlocks,
 }
 
+/// A JSON input file's problem: the line and column `serde_json` reports and what is wrong,
+/// prefixed by the JSON path (`serde_path_to_error`'s; `"."` is the document itself).
+#[must_use]
+pub fn json_problem(path: &str, inner: &serde_json::Error) -> (usize, usize, String) {
+    let what = inner
+        .to_string()
+        .split(" at line ")
+        .next()
+        .unwrap_or_default()
+        .to_owned();
+    let detail = if path == "." {
+        what
+    } else {
+        format!("{path}: {what}")
+    };
+    (inner.line(), inner.column(), detail)
+}
+
 impl Settings {
     /// Reads settings from a JSON file's bytes; `file` names it in errors.
     ///
@@ -180,21 +198,12 @@ impl Settings {
     /// [`SettingsError::Parse`] with the line and column of the first problem.
     pub fn from_json(bytes: &[u8], file: &Path) -> Result<Self, SettingsError> {
         let parse_error = |path: String, inner: &serde_json::Error| {
-            let what = inner
-                .to_string()
-                .split(" at line ")
-                .next()
-                .unwrap_or_default()
-                .to_owned();
+            let (line, column, detail) = json_problem(&path, inner);
             SettingsError::Parse {
                 file: file.display().to_string(),
-                line: inner.line(),
-                column: inner.column(),
-                detail: if path == "." {
-                    what
-                } else {
-                    format!("{path}: {what}")
-                },
+                line,
+                column,
+                detail,
             }
         };
         let mut de = serde_json::Deserializer::from_slice(bytes);

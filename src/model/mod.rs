@@ -17,6 +17,10 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+pub mod effects;
+
+pub use effects::ModelEffects;
+
 use crate::faults::RecordingFault;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
@@ -145,6 +149,11 @@ pub struct BlockModel {
     /// span; `crate::noise`). Absent when not computed or the span is too short.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<crate::noise::BlockNoise>,
+    /// Effects of the catalogue accepted into the model (`identify --effects`, the app's
+    /// Accept): with them `K`, `tau_s` and their deviations are the joint fit's, `order` is 0 and
+    /// `poles` are the effects' ([`effects`]). Absent when none was accepted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effects: Option<ModelEffects>,
     /// Quality figures.
     pub fit: Fit,
 }
@@ -245,6 +254,7 @@ impl BlockModel {
             band_hz: b.band_hz,
             stationarity: b.stationarity.as_deref().cloned(),
             noise: None,
+            effects: None,
             fit: Fit {
                 k_std: s.k_std.map(|r| r.map(finite)),
                 tau_std_s: finite(s.tau_std_s),
@@ -266,6 +276,59 @@ impl BlockModel {
                 warnings: b.warnings.clone(),
             },
         }
+    }
+}
+
+impl BlockModel {
+    /// The model's response at `f_hz` (Hz), `s = j 2 pi f`: `N(s) / d(s) e^(-tau s)`, or with
+    /// accepted effects their extended response ([`ModelEffects::response`]).
+    #[must_use]
+    pub fn response(&self, f_hz: f64) -> Matrix3<Complex64> {
+        match &self.effects {
+            Some(e) => e.response(&self.k, self.tau_s, f_hz),
+            None => crate::ident::structural::rational_response(
+                &self.numerator,
+                &self.denominator,
+                self.tau_s,
+                f_hz,
+            ),
+        }
+    }
+
+    /// Replaces the structural model by the paper's model extended with `effects`, of gain `k`
+    /// (standard deviations `k_std`) and delay `tau_s` (`tau_std_s`): the static figures
+    /// (scale factors, misalignments) follow.
+    pub fn set_effects(
+        &mut self,
+        effects: ModelEffects,
+        k: [[f64; 3]; 3],
+        k_std: [[Option<f64>; 3]; 3],
+        tau_s: f64,
+        tau_std_s: Option<f64>,
+    ) {
+        self.k = k;
+        self.tau_s = tau_s;
+        self.order = 0;
+        self.denominator = Vec::new();
+        self.numerator = vec![k];
+        self.poles = effects.poles();
+        let fit = &mut self.fit;
+        fit.k_std = k_std;
+        fit.tau_std_s = tau_std_s;
+        for i in 0..3 {
+            fit.scale_factor_error_ppm[i] = (k[i][i] - 1.0) * 1e6;
+            fit.scale_factor_error_std_ppm[i] = k_std[i][i].map(|v| v * 1e6);
+            for j in 0..3 {
+                let off = i != j;
+                fit.misalignment_mrad[i][j] = if off { k[i][j] * 1e3 } else { 0.0 };
+                fit.misalignment_std_mrad[i][j] = if off {
+                    k_std[i][j].map(|v| v * 1e3)
+                } else {
+                    Some(0.0)
+                };
+            }
+        }
+        self.effects = Some(effects);
     }
 }
 

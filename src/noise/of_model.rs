@@ -12,7 +12,6 @@ use crate::ident::identify::IdentStep;
 use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
 use crate::ident::signals::{BlockSignals, channel_names};
-use crate::ident::structural::rational_response;
 use crate::ident::warnings::IdentWarning;
 use crate::model::{BlockModel, Model};
 
@@ -36,9 +35,7 @@ pub fn model_block_noise(
     let (input, output) = (cut(&signals.input), cut(&signals.output));
     let len = input[0].len();
     let settle = settle_samples(model.tau_s, &model.poles, sample_rate_hz, len);
-    let r = residual(&input, &output, sample_rate_hz, settle, |f| {
-        rational_response(&model.numerator, &model.denominator, model.tau_s, f)
-    });
+    let r = residual(&input, &output, sample_rate_hz, settle, |f| model.response(f));
     let mut noise = block_noise(
         signals.block,
         channel_names(signals.block).1,
@@ -73,11 +70,23 @@ pub fn identified_model(
     settings: &Settings,
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, IdentError> {
-    let run = session.run().clone();
-    let id = session.identify(settings, Start::Cold, progress)?;
-    let mut model = Model::from_identification(&run, settings, &id);
+    let mut model = bare_model(session, settings, progress)?;
     attach_noise(&mut model, session, settings)?;
     Ok(model)
+}
+
+/// [`identified_model`] before its noise terms are attached.
+///
+/// # Errors
+/// The identification's errors.
+pub fn bare_model(
+    session: &mut Session,
+    settings: &Settings,
+    progress: &mut dyn FnMut(IdentStep),
+) -> Result<Model, IdentError> {
+    let run = session.run().clone();
+    let id = session.identify(settings, Start::Cold, progress)?;
+    Ok(Model::from_identification(&run, settings, &id))
 }
 
 /// Fills `noise` of every block of `model` (identified from `session`'s run under `settings`).

@@ -251,7 +251,7 @@ fn bode(h: &mut String, b: &BlockModel) {
                 let std = b.w_u_std.get(k).map_or(0.0, |s| s[i][j]);
                 data.points.push((f, mag));
                 data.band.push((f, (mag - 2.0 * std).max(0.0), mag + 2.0 * std));
-                let r = crate::ident::structural::rational_response(&b.numerator, &b.denominator, b.tau_s, f);
+                let r = b.response(f);
                 model.points.push((f, r[(i, j)].norm()));
             }
             let y_range = gain_range(&data, &model);

@@ -160,14 +160,20 @@ impl App {
                     && !run.accepted.contains(&pair)
                 {
                     run.accepted.push(pair);
+                    // The model shown and exported becomes the identified one with the effect.
+                    self.analyse(id);
                 }
             }
             Command::RejectEffect(id, block, effect) => {
                 let pair = (block, effect);
                 if let Some(run) = self.run_mut(id) {
+                    let was_accepted = run.accepted.contains(&pair);
                     run.accepted.retain(|p| *p != pair);
                     if !run.rejected.contains(&pair) {
                         run.rejected.push(pair);
+                    }
+                    if was_accepted {
+                        self.analyse(id);
                     }
                     self.diagnose(id);
                 }
@@ -203,7 +209,8 @@ impl App {
     /// Asks the worker to bring a loaded run's stages up to date with the current settings.
     pub(super) fn analyse(&mut self, id: RunId) {
         let settings = Box::new(self.prefs.settings.clone());
-        self.request(id, JobKind::Analyse { settings });
+        let accepted = self.run(id).map(|r| r.accepted.clone()).unwrap_or_default();
+        self.request(id, JobKind::Analyse { settings, accepted });
     }
 
     fn diagnose(&mut self, id: RunId) {

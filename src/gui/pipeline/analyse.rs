@@ -10,6 +10,9 @@ use super::display::Spectra;
 use super::identified::Identification;
 use super::stages::{self, Measured, Motion};
 use super::{Event, FailureKind, RunId, RunSummary, Stage};
+use crate::block::Block;
+use crate::diagnose::{DiagnoseError, Prepared, prepare};
+use crate::effect::Effect;
 use crate::ident::IdentError;
 use crate::ident::identify::RunIdentification;
 use crate::ident::session::{Session, Start};
@@ -26,6 +29,11 @@ pub(super) struct RunCache {
     /// The span of `spectra`.
     pub spectra_span: Option<[f64; 2]>,
     pub identification: Option<Arc<Identification>>,
+    /// Effects accepted into the model (the latest analysis job's).
+    pub accepted: Vec<(Block, Effect)>,
+    /// The diagnosis's starting point under the settings it was made for (blocks resolved):
+    /// reused by a rejection's rerun and by accepted effects.
+    pub prepared: Option<(Settings, Arc<Prepared>)>,
 }
 
 impl RunCache {
@@ -38,7 +46,28 @@ impl RunCache {
             spectra: None,
             spectra_span: None,
             identification: None,
+            accepted: Vec::new(),
+            prepared: None,
         }
+    }
+
+    /// The diagnosis's starting point for `settings`, computed once per settings.
+    ///
+    /// # Errors
+    /// The diagnosis's (the identification's, a record too short for it).
+    pub fn prepared(&mut self, settings: &Settings) -> Result<Arc<Prepared>, DiagnoseError> {
+        let settings = Settings {
+            blocks: settings.blocks_for(&self.session.run().blocks()),
+            ..settings.clone()
+        };
+        if let Some((s, p)) = &self.prepared
+            && *s == settings
+        {
+            return Ok(p.clone());
+        }
+        let p = Arc::new(prepare(&mut self.session, &settings)?);
+        self.prepared = Some((settings, p.clone()));
+        Ok(p)
     }
 }
 
@@ -121,12 +150,13 @@ impl Analysis<'_> {
         }
     }
 
-    /// Sends the identification `core` (the display snapshot kept when it is the same).
+    /// Sends the identification `core` (the display snapshot kept when it is the same), its
+    /// model extended by the accepted effects.
     fn identified(&self, cache: &mut RunCache, core: &Arc<RunIdentification>) {
         let same = cache
             .identification
             .as_ref()
-            .filter(|i| Arc::ptr_eq(&i.core, core))
+            .filter(|i| Arc::ptr_eq(&i.core, core) && i.accepted == cache.accepted)
             .cloned();
         let identification = if let Some(i) = same {
             i
@@ -134,10 +164,29 @@ impl Analysis<'_> {
             let Some((settings, _)) = cache.session.identification() else {
                 return;
             };
-            let i = Arc::new(Identification::new(
+            let settings = settings.clone();
+            let prepared = if cache.accepted.is_empty() {
+                None
+            } else {
+                match cache.prepared(&settings) {
+                    Ok(p) => Some(p),
+                    Err(e) => {
+                        return (self.send)(Event::Failed {
+                            run: self.run,
+                            generation: self.generation,
+                            stage: Stage::Identify,
+                            message: format!("the accepted effects cannot be added: {e}"),
+                            kind: FailureKind::of(e.is_input_error()),
+                        });
+                    }
+                }
+            };
+            let extension = prepared.as_deref().map(|p| (p, cache.accepted.as_slice()));
+            let i = Arc::new(Identification::extended(
                 cache.session.run(),
-                settings.clone(),
+                settings,
                 core.clone(),
+                extension,
             ));
             cache.identification = Some(i.clone());
             i

@@ -5,7 +5,7 @@
 
 use super::analyse::RunCache;
 use crate::block::Block;
-use crate::diagnose::{DiagnoseError, DiagnoseOptions, Report, diagnose_session};
+use crate::diagnose::{DiagnoseError, DiagnoseOptions, Report, diagnose_prepared};
 use crate::effect::Effect;
 use crate::ident::settings::Settings;
 
@@ -22,7 +22,8 @@ pub(super) fn diagnose(
         given: None,
         rejected: rejected.to_vec(),
     };
-    diagnose_session(&mut cache.session, settings, &options)
+    // A rerun after a rejection starts from the cached identification and whole-record fits.
+    Ok(diagnose_prepared(&*cache.prepared(settings)?, &options))
 }
 
 /// Writes the cached run's model file to `path` with its noise terms (as `identify` does).

@@ -14,6 +14,9 @@ use egui_plot::PlotPoint;
 use num_complex::Complex64;
 
 use crate::block::Block;
+use crate::diagnose::Prepared;
+use crate::diagnose::extend::apply_effects;
+use crate::effect::Effect;
 use crate::ident::band::{AUTO_LIMITS_HZ, multiple_coherence, native_bins};
 use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
@@ -75,13 +78,30 @@ pub struct Identification {
     pub model: Model,
     /// Curves, one entry per block of `core`.
     pub bode: Vec<BlockBode>,
+    /// The effects accepted into `model`.
+    pub accepted: Vec<(Block, Effect)>,
 }
 
 impl Identification {
     /// Builds the snapshot from the core's results.
     #[must_use]
     pub fn new(run: &Run, settings: Settings, core: Arc<RunIdentification>) -> Self {
-        let model = Model::from_identification(run, &settings, &core);
+        Self::extended(run, settings, core, None)
+    }
+
+    /// [`Identification::new`] with the model extended by accepted effects, from the diagnosis's
+    /// starting point of the same run and settings (`crate::diagnose::extend`).
+    #[must_use]
+    pub fn extended(
+        run: &Run,
+        settings: Settings,
+        core: Arc<RunIdentification>,
+        extension: Option<(&Prepared, &[(Block, Effect)])>,
+    ) -> Self {
+        let mut model = Model::from_identification(run, &settings, &core);
+        if let Some((prepared, accepted)) = extension {
+            apply_effects(&mut model, prepared, accepted);
+        }
         let bode = core
             .blocks
             .iter()
@@ -92,6 +112,7 @@ impl Identification {
             core,
             model,
             bode,
+            accepted: extension.map(|(_, a)| a.to_vec()).unwrap_or_default(),
         }
     }
 
@@ -126,17 +147,13 @@ fn band_db(w: f64, s: f64) -> (f64, f64) {
     (db20(w - s).max(db20(w) - BAND_FLOOR_DB), db20(w + s))
 }
 
-fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeElement {
+fn element(m: &BlockModel, i: usize, j: usize) -> BodeElement {
     let log_f: Vec<f64> = m.frequency_hz.iter().map(|f| f.log10()).collect();
     let w: Vec<Complex64> = (0..log_f.len())
         .map(|k| Complex64::new(m.w_u.re[k][i][j], m.w_u.im[k][i][j]))
         .collect();
     let std: Vec<f64> = m.w_u_std.iter().map(|s| BAND_SIGMAS * s[i][j]).collect();
-    let fitted: Vec<Complex64> = m
-        .frequency_hz
-        .iter()
-        .map(|&f| b.structural.response(f)[(i, j)])
-        .collect();
+    let fitted: Vec<Complex64> = m.frequency_hz.iter().map(|&f| m.response(f)[(i, j)]).collect();
     let phase: Vec<f64> = w.iter().map(|z| z.arg().to_degrees()).collect();
     let model_phase: Vec<f64> = fitted.iter().map(|z| z.arg().to_degrees()).collect();
     let points = |ys: &[f64]| {
@@ -174,7 +191,7 @@ fn element(m: &BlockModel, b: &BlockIdentification, i: usize, j: usize) -> BodeE
 
 fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
     let log_f: Vec<f64> = m.frequency_hz.iter().map(|f| f.log10()).collect();
-    let elements = (0..9).map(|e| element(m, b, e / 3, e % 3)).collect();
+    let elements = (0..9).map(|e| element(m, e / 3, e % 3)).collect();
     // Coherence over the whole usable range, not only the band, so the band's edges can be
     // judged against it.
     let nyquist = b.spectra.sample_rate_hz / 2.0;

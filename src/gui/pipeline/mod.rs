@@ -73,6 +73,9 @@ pub enum JobKind {
     Analyse {
         /// The identifier settings; each stage uses its own part.
         settings: Box<Settings>,
+        /// Effects the engineer accepted into the model (`diagnose::extend`): the model shown,
+        /// plotted and exported is the identified one extended by them.
+        accepted: Vec<(Block, Effect)>,
     },
     /// Find the missing effects of a loaded run (on request: it takes seconds).
     Diagnose {

@@ -230,7 +230,10 @@ impl Pipeline {
         let (run, generation) = (job.run, job.generation);
         match job.kind {
             JobKind::Load { path, cancel } => self.load(run, generation, &path, &cancel),
-            JobKind::Analyse { settings } => {
+            JobKind::Analyse { settings, accepted } => {
+                if let Some(cache) = self.runs.get_mut(&run) {
+                    cache.accepted = accepted;
+                }
                 self.analyse(run, generation, &settings, stage);
                 // The identification of these settings (blocks resolved), if the job ended with one.
                 let current = self
@@ -440,6 +443,7 @@ mod tests {
             generation,
             kind: JobKind::Analyse {
                 settings: Box::default(),
+                accepted: Vec::new(),
             },
         };
         let batch = vec![
@@ -495,18 +499,19 @@ mod tests {
         assert_eq!(worker.events.try_iter().count(), 1);
     }
 
-    #[test]
-    fn a_retune_is_sent_at_once_then_refitted_from_scratch() {
-        use crate::ident::identify::identify_run;
-        use crate::ident::settings::{LambdaSetting, Settings};
-
-        let path = crate::gui::sample_run_path().expect("sample run");
-        let mut worker = Worker::start(WorkerMode::Synchronous, Arc::new(|| {}));
-        let job = |generation, kind| Job {
+    /// Job `kind` of run 1.
+    fn job(generation: u64, kind: JobKind) -> Job {
+        Job {
             run: 1,
             generation,
             kind,
-        };
+        }
+    }
+
+    /// A synchronous worker with the sample run loaded as run 1 (generation 1), and its path.
+    fn sample_loaded() -> (Worker, std::path::PathBuf) {
+        let path = crate::gui::sample_run_path().expect("sample run");
+        let mut worker = Worker::start(WorkerMode::Synchronous, Arc::new(|| {}));
         let cancel = Arc::new(std::sync::atomic::AtomicBool::new(false));
         worker.submit(job(
             1,
@@ -515,8 +520,63 @@ mod tests {
                 cancel,
             },
         ));
+        (worker, path)
+    }
+
+    #[test]
+    fn a_rejection_rediagnoses_from_the_cached_fits() {
+        use crate::block::Block;
+        use crate::effect::Effect;
+
+        let (mut worker, _) = sample_loaded();
+        let diagnose = |rejected| JobKind::Diagnose {
+            settings: Box::default(),
+            rejected,
+        };
+        worker.submit(job(2, diagnose(Vec::new())));
+        let prepared = |worker: &Worker| {
+            let cache = &worker.inline.as_ref().expect("inline").runs[&1];
+            cache.prepared.as_ref().expect("prepared").1.clone()
+        };
+        let first = prepared(&worker);
+        worker.submit(job(3, diagnose(vec![(Block::Gyro, Effect::SensorLag)])));
+        assert!(
+            Arc::ptr_eq(&first, &prepared(&worker)),
+            "the same identification and fits"
+        );
+        let reports: Vec<_> = worker
+            .events
+            .try_iter()
+            .filter_map(|e| match e {
+                Event::Diagnosed {
+                    generation, report, ..
+                } => Some((generation, report)),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(reports.iter().map(|r| r.0).collect::<Vec<_>>(), vec![2, 3]);
+        // And it is the diagnosis the core makes from scratch.
+        let path = crate::gui::sample_run_path().expect("sample run");
+        let run = crate::run::load(&path, &crate::run::LoadOptions::default()).expect("sample run");
+        let options = crate::diagnose::DiagnoseOptions {
+            given: None,
+            rejected: vec![(Block::Gyro, Effect::SensorLag)],
+        };
+        let cold =
+            crate::diagnose::diagnose_run(&run, &crate::ident::settings::Settings::default(), &options)
+                .expect("diagnosed");
+        assert_eq!(*reports[1].1, cold);
+    }
+
+    #[test]
+    fn a_retune_is_sent_at_once_then_refitted_from_scratch() {
+        use crate::ident::identify::identify_run;
+        use crate::ident::settings::{LambdaSetting, Settings};
+
+        let (mut worker, path) = sample_loaded();
         let analyse = |settings: &Settings| JobKind::Analyse {
             settings: Box::new(settings.clone()),
+            accepted: Vec::new(),
         };
         let identified = |worker: &Worker| -> Vec<(u64, Arc<super::super::Identification>)> {
             worker

@@ -24,6 +24,7 @@ fn analyse(run: u64, generation: u64, settings: &Settings) -> Job {
         generation,
         kind: JobKind::Analyse {
             settings: Box::new(settings.clone()),
+            accepted: Vec::new(),
         },
     }
 }

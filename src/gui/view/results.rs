@@ -1,9 +1,12 @@
 //! The results panel: per block, the self-check's warnings in red, the band used, K with scale-factor errors (ppm) and misalignments (mrad), tau in
-//! ms, the chosen order with every candidate's criterion (BIC), and the fit's figures, each with
+//! ms, the chosen order with every candidate's criterion (BIC) or the effects accepted into the
+//! model with their sizes, and the fit's figures, each with
 //! its standard deviation where the data determine it.
 
 use eframe::egui;
 
+use crate::block::Block;
+use crate::diagnose::describe::describe_size;
 use crate::gui::app::{Command, RunEntry};
 use crate::ident::band::BandSetting;
 use crate::ident::settings::{LambdaSetting, OrderSetting};
@@ -104,16 +107,22 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ));
         }
         ui.label(tau_label(name, m));
-        ui.label(format!(
-            "order {} ({}), {}",
-            m.order,
-            if auto_order {
-                "auto: lowest BIC among the admissible orders"
-            } else {
-                "fixed"
-            },
-            if m.fit.stable { "stable" } else { "UNSTABLE" }
-        ));
+        if m.effects.is_some() {
+            for line in effect_lines(name, m) {
+                ui.label(line);
+            }
+        } else {
+            ui.label(format!(
+                "order {} ({}), {}",
+                m.order,
+                if auto_order {
+                    "auto: lowest BIC among the admissible orders"
+                } else {
+                    "fixed"
+                },
+                if m.fit.stable { "stable" } else { "UNSTABLE" }
+            ));
+        }
         ui.label("K (rows: outputs; columns: inputs)");
         for i in 0..3 {
             ui.monospace(k_row_label(name, m, i));
@@ -126,6 +135,48 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         candidates(ui, name, m);
         fit(ui, m, id.settings.lambda == LambdaSetting::Auto);
     }
+}
+
+/// The accepted effects of a block's model in words: what the model is, each effect's size
+/// with its standard deviation, what could not be added, and the fit with and without them.
+/// Empty without accepted effects.
+#[must_use]
+pub fn effect_lines(block: &str, m: &BlockModel) -> Vec<String> {
+    let Some(e) = &m.effects else { return Vec::new() };
+    let b = if block == "gyro" {
+        Block::Gyro
+    } else {
+        Block::Accel
+    };
+    let mut out = vec![format!(
+        "{block} model: K e^(-tau s) with {} accepted effect{} (identified without them: order {}, tau {:.3} ms)",
+        e.accepted.len(),
+        if e.accepted.len() == 1 { "" } else { "s" },
+        e.identified.order,
+        e.identified.tau_s * 1e3
+    )];
+    for a in &e.accepted {
+        out.push(format!("accepted: {}", a.name));
+        out.extend(
+            describe_size(b, a.effect, &a.parameters, &a.parameter_std)
+                .into_iter()
+                .map(|l| format!("  {l}")),
+        );
+    }
+    for n in &e.not_added {
+        out.push(format!("not added: {} ({})", n.effect.name_on(b), n.reason));
+    }
+    let worst = |g: &[f64; 3]| g.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    out.push(format!(
+        "whole-record fit {:.1}-{:.1} Hz: chi2/dof {:.2} -> {:.2}, worst-channel gap {:.2} -> {:.2} dB",
+        e.band_hz[0],
+        e.band_hz[1],
+        e.chi2_per_dof[0],
+        e.chi2_per_dof[1],
+        worst(&e.gap_db[0]),
+        worst(&e.gap_db[1])
+    ));
+    out
 }
 
 /// The lines of the model's poles (order 1 and above): each with its time constant, or natural

@@ -1,0 +1,222 @@
+//! Accepting effects into a block's model (issue 15, "accept means accept"): the paper's model
+//! fitted on the whole record ([`Prepared`]) is extended by each accepted effect in turn, every
+//! parameter refitted, as the diagnosis's rounds do but without asking the effect to be
+//! significant (the engineer decided). The result replaces the block's structural model in the
+//! model file ([`crate::model::ModelEffects`]): what `identify --effects` writes and what the
+//! app shows and exports after Accept.
+
+use super::DiagnoseError;
+use super::candidates::candidates_among;
+use super::report::{gain, parameters};
+use super::state::State;
+use super::uncertainty::{covariance, parameter_std, tau_std};
+use super::workflow::{Prepared, PreparedBlock, prepare};
+use crate::block::Block;
+use crate::effect::Effect;
+use crate::ident::identify::IdentStep;
+use crate::ident::session::Session;
+use crate::ident::settings::Settings;
+use crate::ident::signals::channel_names;
+use crate::model::effects::{AcceptedEffect, Identified, NotAdded, Resonance};
+use crate::model::{BlockModel, Model, ModelEffects};
+
+/// The model file of `session`'s run under `settings` with the `accepted` effects in its
+/// blocks' models, its noise terms attached: `identify --effects`. With nothing accepted it is
+/// exactly `noise::of_model::identified_model`'s file.
+///
+/// # Errors
+/// The identification's and the diagnosis's (a record too short for the whole-record fit).
+pub fn extended_model(
+    session: &mut Session,
+    settings: &Settings,
+    accepted: &[(Block, Effect)],
+    progress: &mut dyn FnMut(IdentStep),
+) -> Result<Model, DiagnoseError> {
+    let mut model = crate::noise::of_model::bare_model(session, settings, progress)?;
+    if !accepted.is_empty() {
+        let prep = prepare(session, settings)?;
+        apply_effects(&mut model, &prep, accepted);
+    }
+    crate::noise::of_model::attach_noise(&mut model, session, settings)?;
+    Ok(model)
+}
+
+/// Extends every block of `model` that has accepted effects (`prep` from the same run and
+/// settings). Blocks without any are left as identified.
+pub fn apply_effects(model: &mut Model, prep: &Prepared, accepted: &[(Block, Effect)]) {
+    for pb in &prep.blocks {
+        let effects: Vec<Effect> = accepted
+            .iter()
+            .filter(|(b, _)| *b == pb.block)
+            .map(|&(_, e)| e)
+            .collect();
+        if let Some(entry) = model.blocks.get_mut(pb.block.name())
+            && !effects.is_empty()
+        {
+            extend_block(entry, pb, &effects);
+        }
+    }
+}
+
+/// Adds `effects` (in order, each once) to the block's whole-record model and writes the result
+/// into `entry`.
+fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) {
+    let band = pb.band_hz;
+    let mut state = pb.base.clone();
+    let mut added: Vec<(Effect, usize)> = Vec::new();
+    let mut not_added = Vec::new();
+    for &effect in effects {
+        if added.iter().any(|(e, _)| *e == effect) || not_added.iter().any(|n: &NotAdded| n.effect == effect)
+        {
+            continue;
+        }
+        if !effect.blocks().contains(&pb.block) {
+            not_added.push(NotAdded {
+                effect,
+                reason: format!(
+                    "{} is not an effect of the {} block",
+                    effect.what(),
+                    pb.block.name()
+                ),
+            });
+            continue;
+        }
+        let index = index_of(&state, effect);
+        let best = candidates_among(&state, band, &|e| e == effect)
+            .into_iter()
+            .max_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2));
+        match best.and_then(|c| state.with(&c, band)) {
+            Some(next) => {
+                state = next;
+                added.push((effect, index));
+            }
+            None => not_added.push(NotAdded {
+                effect,
+                reason: "it could not be fitted on this record (no candidate, or a degenerate fit)"
+                    .to_owned(),
+            }),
+        }
+    }
+    let (input_names, _) = channel_names(pb.block);
+    let chi2_per_dof = [pb.base.fitted.chi2() / pb.dof, state.fitted.chi2() / pb.dof];
+    let cov = covariance(&state, band, chi2_per_dof[1]);
+    let accepted = added
+        .iter()
+        .map(|&(effect, index)| AcceptedEffect {
+            effect,
+            name: effect.name_on(pb.block),
+            parameters: parameters(effect, &state, index, input_names),
+            parameter_std: parameter_std(effect, &state, index, cov.as_ref(), chi2_per_dof[1]),
+        })
+        .collect();
+    let f = &state.fitted;
+    let effects = ModelEffects {
+        accepted,
+        not_added,
+        lag_s: f.structure.lag.then_some(f.theta.lag_s),
+        channel_skew_s: f.structure.skew.then(|| f.theta.channel_skew_s()),
+        resonances: f
+            .structure
+            .resonance_axes
+            .iter()
+            .zip(&f.theta.resonances)
+            .map(|(&axis, &(frequency_hz, damping))| Resonance {
+                axis,
+                frequency_hz,
+                damping,
+            })
+            .collect(),
+        identified: Identified {
+            k: entry.k,
+            tau_s: entry.tau_s,
+            order: entry.order,
+        },
+        band_hz: band,
+        chi2_per_dof,
+        gap_db: [pb.base.gap_db(), state.gap_db()],
+    };
+    let k_std = [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov.as_ref().and_then(|c| c.linear_std(3 * i + j))));
+    let tau_sd = cov.as_ref().and_then(tau_std);
+    entry.set_effects(effects, gain(&state), k_std, f.theta.tau_s, tau_sd);
+}
+
+/// The index the effect's next instance will have in `state` (tones and resonances are counted).
+fn index_of(state: &State, effect: Effect) -> usize {
+    match effect {
+        Effect::VibrationTone => state.tones.len(),
+        _ => state.fitted.structure.resonance_axes.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::diagnose::structure::{Filters, Structure, Theta};
+    use crate::model::effects::{Identified, ModelEffects, Resonance};
+
+    #[test]
+    fn the_model_files_response_is_the_fitted_structures() {
+        // The model file's formula against the diagnosis's filters, term by term.
+        let structure = Structure {
+            lag: true,
+            skew: true,
+            resonance_axes: vec![2, 0],
+            ..Structure::default()
+        };
+        let theta = Theta {
+            tau_s: 0.0042,
+            skew_s: [0.0003, -0.0001],
+            lag_s: 0.0015,
+            resonances: vec![(23.0, 0.05), (31.0, 0.2)],
+        };
+        let k = [
+            [1.01, 0.002, -0.003],
+            [0.001, 0.99, 0.004],
+            [-0.002, 0.003, 1.002],
+        ];
+        let effects = ModelEffects {
+            accepted: Vec::new(),
+            not_added: Vec::new(),
+            lag_s: Some(theta.lag_s),
+            channel_skew_s: Some(theta.channel_skew_s()),
+            resonances: vec![
+                Resonance {
+                    axis: 2,
+                    frequency_hz: 23.0,
+                    damping: 0.05,
+                },
+                Resonance {
+                    axis: 0,
+                    frequency_hz: 31.0,
+                    damping: 0.2,
+                },
+            ],
+            identified: Identified {
+                k,
+                tau_s: 0.004,
+                order: 0,
+            },
+            band_hz: [0.1, 40.0],
+            chi2_per_dof: [1.0, 1.0],
+            gap_db: [[0.0; 3]; 2],
+        };
+        for f in [0.3, 5.0, 22.9, 30.0, 39.0] {
+            let filters = Filters::at(&structure, &theta, f);
+            let h = effects.response(&k, theta.tau_s, f);
+            for i in 0..3 {
+                for j in 0..3 {
+                    let want = filters.channel[i] * filters.resonant[j] * k[i][j];
+                    assert!(
+                        (h[(i, j)] - want).norm() < 1e-12 * want.norm().max(1.0),
+                        "{f} {i} {j}"
+                    );
+                }
+            }
+        }
+        // Poles: the lag's and each resonance's pair.
+        let poles = effects.poles();
+        assert_eq!(poles.len(), 5);
+        assert!((poles[0][0] + 1.0 / 0.0015).abs() < 1e-9);
+        let w = std::f64::consts::TAU * 23.0;
+        assert!((poles[1][0] + 0.05 * w).abs() < 1e-9 && (poles[1][0].hypot(poles[1][1]) - w).abs() < 1e-9);
+    }
+}

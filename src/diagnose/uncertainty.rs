@@ -1,0 +1,239 @@
+//! Standard deviations of a fitted block model's parameters: the sizes of the effects the
+//! diagnosis names and the gain and delay of a model extended by accepted effects.
+//!
+//! The cost the fit minimises is `C(b, x) = c0 - 2 r(x).b + b' N(x) b` (`profile.rs`), `b` the
+//! linear parameters and `x` the nonlinear ones in the search's scaled units (`fit::pack`). Its
+//! Hessian at the optimum, `2 N` in the linear block, the mixed and nonlinear blocks by central
+//! differences, gives the covariance `V = f H^-1` of every parameter jointly (so the gain's
+//! uncertainty includes the delay's, and a lag's the gain's). The factor `f`:
+//! - the weights are `1/E|psi_k|^2` of independent bins, which would make `V = H^-1` (each
+//!   complex bin is two real observations of half that variance); but the whole-record bins are
+//!   Hann-tapered, and a least-squares fit on tapered data has the variance of one on untapered
+//!   data times `mean(w^4) / mean(w^2)^2 = 35/18` ([`TAPER_VARIANCE`]), however the bins'
+//!   correlation is accounted for: the estimator is the same;
+//! - where the model does not explain the data (`chi2` per degree of freedom above 1), the
+//!   variance is widened by that ratio, as the identifier does.
+//!
+//! Tones are fitted apart (`tone.rs`): their frequency's standard deviation is the Cramér-Rao
+//! bound of a sinusoid, `sqrt(6 / chi2) / (2 pi N) fs` with `chi2` what the tone explains (all
+//! channels, one frequency), times the taper's factor, and each channel's amplitude's is
+//! `|A| / sqrt(chi2)`, as for any linear amplitude. A clock drift's is not computed (its search
+//! re-times the record at each point; `null` in the files).
+//!
+//! Units: as the parameters (s, Hz, output units); `None` where the Hessian is not positive
+//! definite (a parameter the data do not determine).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::fit::{pack, unpack};
+use super::profile::normal_equations;
+use super::state::State;
+use crate::effect::Effect;
+use serde_json::{Value, json};
+
+/// Variance of a least-squares estimate from Hann-tapered data relative to the same estimate
+/// from untapered data: `mean(w^4) / mean(w^2)^2` of `w = sin^2`, `(35/128) / (3/8)^2`.
+pub const TAPER_VARIANCE: f64 = 35.0 / 18.0;
+
+/// The joint covariance of a state's parameters: the linear ones (`K` row-major, then `k2`,
+/// `G`, the lever-arm offset, as `structure::Layout`), then the nonlinear ones in `fit::pack`'s
+/// scaled units.
+#[derive(Clone, Debug)]
+pub struct Covariance {
+    /// The matrix.
+    pub matrix: DMatrix<f64>,
+    /// Number of linear parameters (the nonlinear ones follow).
+    pub n_linear: usize,
+}
+
+impl Covariance {
+    /// Standard deviation of `sum c_k p_k` over `(index, c)` pairs; `None` if not positive.
+    #[must_use]
+    pub fn std_of(&self, terms: &[(usize, f64)]) -> Option<f64> {
+        let mut v = 0.0;
+        for &(a, ca) in terms {
+            for &(b, cb) in terms {
+                v += ca * cb * self.matrix[(a, b)];
+            }
+        }
+        (v.is_finite() && v > 0.0).then(|| v.sqrt())
+    }
+
+    /// Standard deviation of linear parameter `k`.
+    #[must_use]
+    pub fn linear_std(&self, k: usize) -> Option<f64> {
+        self.std_of(&[(k, 1.0)])
+    }
+
+    /// Standard deviation of nonlinear parameter `k` (scaled units).
+    #[must_use]
+    pub fn nonlinear_std(&self, k: usize) -> Option<f64> {
+        self.std_of(&[(self.n_linear + k, 1.0)])
+    }
+}
+
+/// The covariance of `state`'s fitted parameters, widened by `chi2_per_dof` when above 1.
+/// `None` when the Hessian is not positive definite or a step leaves the physical range.
+#[must_use]
+pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option<Covariance> {
+    let f = &state.fitted;
+    let (design, grams, structure, layout) = (&state.design, &state.grams, &f.structure, &f.layout);
+    let (x0, steps) = pack(structure, &f.theta);
+    let beta = DVector::from_column_slice(&f.profile.beta);
+    let (p, q) = (layout.n_params, x0.len());
+    let equations = |x: &[f64]| {
+        let theta = unpack(structure, x, band_hz)?;
+        normal_equations(design, grams, structure, layout, &theta)
+    };
+    let cost = |x: &[f64]| equations(x).map(|(n, r, c0)| c0 - 2.0 * r.dot(&beta) + (n * &beta).dot(&beta));
+    let gradient = |x: &[f64]| equations(x).map(|(n, r, _)| 2.0 * (n * &beta - r));
+    let (n0, _, _) = equations(&x0)?;
+    let mut h = DMatrix::<f64>::zeros(p + q, q + p);
+    h.view_mut((0, 0), (p, p)).copy_from(&(2.0 * n0));
+    // Central differences at a fiftieth of the search's first steps.
+    let hs: Vec<f64> = steps.iter().map(|s| 0.02 * s).collect();
+    let shifted = |moves: &[(usize, f64)]| {
+        let mut x = x0.clone();
+        for &(k, d) in moves {
+            x[k] += d;
+        }
+        x
+    };
+    let c0 = cost(&x0)?;
+    for a in 0..q {
+        let (up, down) = (shifted(&[(a, hs[a])]), shifted(&[(a, -hs[a])]));
+        let mixed = (gradient(&up)? - gradient(&down)?) / (2.0 * hs[a]);
+        for k in 0..p {
+            h[(k, p + a)] = mixed[k];
+            h[(p + a, k)] = mixed[k];
+        }
+        h[(p + a, p + a)] = (cost(&up)? - 2.0 * c0 + cost(&down)?) / (hs[a] * hs[a]);
+        for b in 0..a {
+            let corner = |sa: f64, sb: f64| cost(&shifted(&[(a, sa * hs[a]), (b, sb * hs[b])]));
+            let v = (corner(1.0, 1.0)? - corner(1.0, -1.0)? - corner(-1.0, 1.0)? + corner(-1.0, -1.0)?)
+                / (4.0 * hs[a] * hs[b]);
+            h[(p + a, p + b)] = v;
+            h[(p + b, p + a)] = v;
+        }
+    }
+    // Scale to unit diagonal before inverting: K (near 1) and k2 (1e-3) differ by orders.
+    let d: Vec<f64> = (0..p + q).map(|k| h[(k, k)]).collect();
+    if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return None;
+    }
+    let s = DVector::from_iterator(p + q, d.iter().map(|v| 1.0 / v.sqrt()));
+    let scaled = DMatrix::from_fn(p + q, p + q, |i, j| h[(i, j)] * s[i] * s[j]);
+    let inverse = scaled.cholesky()?.inverse();
+    let factor = TAPER_VARIANCE * chi2_per_dof.max(1.0);
+    let matrix = DMatrix::from_fn(p + q, p + q, |i, j| factor * inverse[(i, j)] * s[i] * s[j]);
+    Some(Covariance { matrix, n_linear: p })
+}
+
+/// Where each nonlinear parameter sits in `fit::pack`'s vector.
+struct Slots {
+    skew: Option<usize>,
+    lag: Option<usize>,
+    resonances: usize,
+}
+
+fn slots(structure: &super::structure::Structure) -> Slots {
+    let skew = structure.skew.then_some(1);
+    let after_skew = 1 + 2 * usize::from(structure.skew);
+    let lag = structure.lag.then_some(after_skew);
+    Slots {
+        skew,
+        lag,
+        resonances: after_skew + usize::from(structure.lag),
+    }
+}
+
+/// Standard deviation of the delay `tau`, s.
+#[must_use]
+pub fn tau_std(cov: &Covariance) -> Option<f64> {
+    cov.nonlinear_std(0).map(|v| v * 1e-3)
+}
+
+/// The standard deviations of [`super::report::parameters`]'s figures, under the same keys
+/// (`null` where not determined or not computed).
+#[must_use]
+pub fn parameter_std(
+    effect: Effect,
+    state: &State,
+    index: usize,
+    cov: Option<&Covariance>,
+    chi2_per_dof: f64,
+) -> Value {
+    let f = &state.fitted;
+    let linear3 = |at: Option<usize>| at.map(|p| [0, 1, 2].map(|i| cov.and_then(|c| c.linear_std(p + i))));
+    let slot = slots(&f.structure);
+    let n = cov.map_or(0, |c| c.n_linear);
+    match effect {
+        Effect::GSensitivity => {
+            let g = f
+                .layout
+                .g
+                .map(|p| [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov.and_then(|c| c.linear_std(p + 3 * i + j)))));
+            json!({"G": g})
+        }
+        Effect::SensorLag => json!({"T_s": slot.lag.and_then(|k| cov?.nonlinear_std(k)).map(|v| v * 1e-3)}),
+        Effect::AxisTimeSkew => {
+            let Some(a) = slot.skew else { return Value::Null };
+            // Channel skews [a, b, -a - b] (ms in the vector); delays add tau (slot 0).
+            let skews: [&[(usize, f64)]; 3] = [
+                &[(n + a, 1.0)],
+                &[(n + a + 1, 1.0)],
+                &[(n + a, -1.0), (n + a + 1, -1.0)],
+            ];
+            let skew = skews.map(|t| cov.and_then(|c| c.std_of(t)).map(|v| v * 1e-3));
+            let delay = skews.map(|t| {
+                let mut t = t.to_vec();
+                t.push((n, 1.0));
+                cov.and_then(|c| c.std_of(&t)).map(|v| v * 1e-3)
+            });
+            json!({"channel_delay_s": delay, "skew_s": skew})
+        }
+        Effect::ScaleNonlinearity => json!({"k2": linear3(f.layout.k2)}),
+        Effect::LeverArmError => json!({"offset_m": linear3(f.layout.lever_arm)}),
+        Effect::PlatformResonance => {
+            let at = slot.resonances + 2 * index;
+            let zeta = f.theta.resonances.get(index).map_or(0.0, |r| r.1);
+            json!({
+                "frequency_hz": cov.and_then(|c| c.nonlinear_std(at)),
+                // x = ln(zeta): sd(zeta) = zeta sd(x).
+                "damping": cov.and_then(|c| c.nonlinear_std(at + 1)).map(|v| v * zeta),
+            })
+        }
+        Effect::ClockDrift => json!({"drift_ppm": null, "delay_change_s": null}),
+        Effect::VibrationTone => state.tones.get(index).map_or(Value::Null, |t| {
+            let widen = TAPER_VARIANCE * chi2_per_dof.max(1.0);
+            let chi2 = t.delta_chi2.max(f64::MIN_POSITIVE);
+            let n = state.design.n_samples as f64;
+            let frequency =
+                (6.0 * widen / chi2).sqrt() / (2.0 * std::f64::consts::PI * n) * state.design.sample_rate_hz;
+            let norm = t.amplitude().iter().map(|a| a * a).sum::<f64>().sqrt();
+            let amplitude = norm * (widen / chi2).sqrt();
+            json!({"frequency_hz": frequency, "amplitude": [amplitude, amplitude, amplitude]})
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TAPER_VARIANCE;
+
+    #[test]
+    fn the_taper_factor_is_that_of_a_hann_window() {
+        // mean(w^4) / mean(w^2)^2 of the periodic Hann window, by brute force.
+        let n = 4096_usize;
+        let w: Vec<f64> = (0..n)
+            .map(|k| (std::f64::consts::PI * k as f64 / n as f64).sin().powi(2))
+            .collect();
+        let m2 = w.iter().map(|v| v * v).sum::<f64>() / n as f64;
+        let m4 = w.iter().map(|v| v.powi(4)).sum::<f64>() / n as f64;
+        assert!(
+            (m4 / (m2 * m2) - TAPER_VARIANCE).abs() < 1e-9,
+            "{}",
+            m4 / (m2 * m2)
+        );
+    }
+}

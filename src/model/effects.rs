@@ -1,0 +1,126 @@
+//! Effects of the catalogue accepted into a block's model (issue 15): the paper's model
+//! `K e^(-tau s)` extended by them, as the diagnosis fits it on the whole record
+//! (`diagnose::extend`). A block model that carries them has `K`, `tau_s` and their standard
+//! deviations from that joint fit, `order` 0, and its response ([`super::BlockModel::response`])
+//! includes the effects that are filters:
+//! `H_ij(s) = e^(-(tau + skew_i) s) / (T s + 1) K_ij M_j(s)`, `M_j` a mount resonance on input
+//! axis `j`. The others (g-sensitivity, quadratic scale factor, lever-arm offset, tones, clock
+//! drift) are terms beside the response, sized in `accepted`.
+//!
+//! Units: SI (s, Hz); sizes as in the discrepancy report's `parameters`, with `parameter_std`
+//! under the same keys (`null` where not determined).
+
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::effect::Effect;
+
+/// One accepted effect with its size.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AcceptedEffect {
+    /// The catalogue entry (its id in JSON).
+    pub effect: Effect,
+    /// Readable name, e.g. "gyro first-order lag".
+    pub name: String,
+    /// Its size, as the discrepancy report's `parameters`.
+    pub parameters: Value,
+    /// Their standard deviations, under the same keys.
+    pub parameter_std: Value,
+}
+
+/// A mount resonance in the response.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Resonance {
+    /// Input axis (0, 1, 2).
+    pub axis: usize,
+    /// Natural frequency, Hz.
+    pub frequency_hz: f64,
+    /// Damping ratio.
+    pub damping: f64,
+}
+
+/// The model before the effects were added: what the identifier gave.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Identified {
+    /// Its static gain.
+    #[serde(rename = "K")]
+    pub k: [[f64; 3]; 3],
+    /// Its delay, s.
+    pub tau_s: f64,
+    /// Its structural order.
+    pub order: usize,
+}
+
+/// The block's accepted effects and the fit that sized them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelEffects {
+    /// The effects, in the order they were added.
+    pub accepted: Vec<AcceptedEffect>,
+    /// Effects asked for that could not be added, each with the reason in words.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_added: Vec<NotAdded>,
+    /// First-order lag time constant, s (absent: no lag).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lag_s: Option<f64>,
+    /// Per-channel delays relative to `tau_s`, s (absent: no skew).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel_skew_s: Option<[f64; 3]>,
+    /// Mount resonances.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub resonances: Vec<Resonance>,
+    /// The identified model the effects extend.
+    pub identified: Identified,
+    /// The band of the whole-record fit, Hz.
+    pub band_hz: [f64; 2],
+    /// `chi2` per degree of freedom of the whole-record fit without and with the effects.
+    pub chi2_per_dof: [f64; 2],
+    /// Per-channel gap (residual over measured band power, dB) without and with the effects.
+    pub gap_db: [[f64; 3]; 2],
+}
+
+/// An effect that could not be added.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NotAdded {
+    /// The catalogue entry.
+    pub effect: Effect,
+    /// Why, in words.
+    pub reason: String,
+}
+
+impl ModelEffects {
+    /// The extended response at `f_hz` of gain `k` and delay `tau_s`.
+    #[must_use]
+    pub fn response(&self, k: &[[f64; 3]; 3], tau_s: f64, f_hz: f64) -> nalgebra::Matrix3<Complex64> {
+        let s = Complex64::new(0.0, std::f64::consts::TAU * f_hz);
+        let lag = self.lag_s.map_or(Complex64::from(1.0), |t| 1.0 / (1.0 + s * t));
+        let skew = self.channel_skew_s.unwrap_or([0.0; 3]);
+        let mut resonant = [Complex64::from(1.0); 3];
+        for r in &self.resonances {
+            let w = std::f64::consts::TAU * r.frequency_hz;
+            if let Some(m) = resonant.get_mut(r.axis) {
+                *m *= w * w / (s * s + 2.0 * r.damping * w * s + w * w);
+            }
+        }
+        nalgebra::Matrix3::from_fn(|i, j| (-s * (tau_s + skew[i])).exp() * lag * k[i][j] * resonant[j])
+    }
+
+    /// The poles the effects give the response, `[re, im]` rad/s (the lag's, each resonance's
+    /// upper one and its conjugate).
+    #[must_use]
+    pub fn poles(&self) -> Vec<[f64; 2]> {
+        let mut poles: Vec<[f64; 2]> = self
+            .lag_s
+            .iter()
+            .filter(|t| **t > 0.0)
+            .map(|t| [-1.0 / t, 0.0])
+            .collect();
+        for r in &self.resonances {
+            let w = std::f64::consts::TAU * r.frequency_hz;
+            let (re, im) = (-r.damping * w, w * (1.0 - r.damping * r.damping).max(0.0).sqrt());
+            poles.push([re, im]);
+            poles.push([re, -im]);
+        }
+        poles
+    }
+}

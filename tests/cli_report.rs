@@ -297,3 +297,45 @@ fn bad_input_exits_with_status_2_and_a_clear_line() {
         assert!(!out.exists(), "nothing written");
     }
 }
+
+#[test]
+fn a_model_with_accepted_effects_lists_them_in_the_certificate() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = sample("cruise.csv.gz");
+    let effects = dir.path().join("effects.json");
+    std::fs::write(
+        &effects,
+        r#"{"effects": [{"block": "gyro", "effect": "sensor_lag"}]}"#,
+    )
+    .unwrap();
+    let model_path = dir.path().join("model.json");
+    let o = imu_attest(&[
+        "identify",
+        run.to_str().unwrap(),
+        "--effects",
+        effects.to_str().unwrap(),
+        "--out",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("report.html");
+    let (o, html) = report(&[
+        "report",
+        run.to_str().unwrap(),
+        "--model",
+        model_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        html.contains("Accepted effects (the model above is the paper"),
+        "gyro's list"
+    );
+    assert!(html.contains("<b>gyro first-order lag</b>: first-order lag, time constant T = "));
+    assert_eq!(
+        html.matches("Accepted effects: none").count(),
+        1,
+        "the accelerometer has none"
+    );
+}

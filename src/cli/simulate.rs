@@ -2,6 +2,7 @@
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
 //! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
 //! [--sensor-noise default|white] [--random-walk K] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
+//! [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]
 //! --out RUN.csv`
 
 use std::path::Path;
@@ -12,6 +13,7 @@ use crate::sim::effect::{Block, EffectSpec};
 use crate::sim::fault::FaultSpec;
 use crate::sim::regime::Regime;
 use crate::sim::stand::StandImperfections;
+use crate::sim::truth::ToneGate;
 use crate::sim::write::write_run_with_progress;
 use crate::sim::{SimConfig, simulate};
 
@@ -100,6 +102,13 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                 .into(),
         ));
     }
+    config.tone.frequency_hz = args
+        .get("tone-hz")
+        .map(|_| args.parsed_or("tone-hz", 0.0))
+        .transpose()?;
+    if let Some(gate) = args.get("tone-gate") {
+        config.tone.gate = parse_gate(gate)?;
+    }
     let out = args.required("out")?;
     args.reject_unknown()?;
     if !args.positional.is_empty() {
@@ -128,4 +137,25 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let written = write_run_with_progress(&run, out, &mut |done, _| bar.set_position(done as u64));
     bar.finish_and_clear();
     written.map_err(|e| CliError::Input(e.to_string()))
+}
+
+/// `--tone-gate from:T` or `pulsed:ON,OFF` (seconds).
+fn parse_gate(text: &str) -> Result<ToneGate, CliError> {
+    let bad = || {
+        CliError::Input(format!(
+            "--tone-gate: '{text}' is not from:T or pulsed:ON,OFF (seconds, e.g. from:60 or pulsed:2,3)"
+        ))
+    };
+    let number = |v: &str| v.trim().parse::<f64>().map_err(|_| bad());
+    match text.split_once(':') {
+        Some(("from", t)) => Ok(ToneGate::From { start_s: number(t)? }),
+        Some(("pulsed", times)) => {
+            let (on, off) = times.split_once(',').ok_or_else(bad)?;
+            Ok(ToneGate::Pulsed {
+                on_s: number(on)?,
+                off_s: number(off)?,
+            })
+        }
+        _ => Err(bad()),
+    }
 }

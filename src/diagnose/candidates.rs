@@ -121,13 +121,25 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
     if wanted(Effect::ClockDrift) {
         out.extend(super::clock::clock_candidate(state, band_hz));
     }
-    if wanted(Effect::VibrationTone)
-        && let Some(tone) = strongest_line(design, &state.residual)
-    {
+    // The strongest line in the fit's band or above it (up to 0.45 of the rate).
+    let line = if wanted(Effect::VibrationTone) {
+        let upper = state
+            .upper
+            .as_deref()
+            .and_then(|u| strongest_line(u, &state.upper_residual).map(|t| Tone { upper: true, ..t }));
+        strongest_line(design, &state.residual)
+            .into_iter()
+            .chain(upper)
+            .max_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2))
+    } else {
+        None
+    };
+    if let Some(tone) = line {
         out.push(Candidate {
             effect: Effect::VibrationTone,
             delta_chi2: tone.delta_chi2,
-            added_params: 7,
+            // Frequency, cosine and sine per channel, and the gate's parameters.
+            added_params: 7 + tone.gate.as_ref().map_or(0, |g| g.parameters),
             extension: Extension::Tone(tone),
         });
     }

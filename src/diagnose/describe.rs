@@ -41,6 +41,38 @@ fn per_channel(names: [&str; 3], v: [f64; 3], sd: [Option<f64>; 3], scale: f64, 
         .join(", ")
 }
 
+/// When a tone is on, in words (nothing when on throughout or unknown).
+fn when_on(p: &Value) -> Option<String> {
+    let fraction = p.get("on_fraction").and_then(num)?;
+    let stretches: Vec<[f64; 2]> = p
+        .get("on_s")?
+        .as_array()?
+        .iter()
+        .filter_map(|s| Some([num(s.get(0)?)?, num(s.get(1)?)?]))
+        .collect();
+    if fraction >= 1.0 || stretches.is_empty() {
+        return None;
+    }
+    let shown: Vec<String> = stretches
+        .iter()
+        .take(4)
+        .map(|[a, b]| format!("{a:.1}-{b:.1} s"))
+        .collect();
+    let more = stretches.len().saturating_sub(4);
+    Some(format!(
+        "on {:.0} % of the record, in {} stretch{}: {}{}",
+        100.0 * fraction,
+        stretches.len(),
+        if stretches.len() == 1 { "" } else { "es" },
+        shown.join(", "),
+        if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        }
+    ))
+}
+
 /// The finding's size as lines of text with units (empty when the parameters cannot be read).
 #[must_use]
 pub fn describe(f: &Finding) -> Vec<String> {
@@ -91,11 +123,13 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
             let fr = p.get("frequency_hz").and_then(num);
             let a = p.get("amplitude").and_then(three);
             fr.zip(a).map(|(fr, a)| {
-                vec![format!(
+                let mut lines = vec![format!(
                     "tone at {fr:.3}{} Hz; amplitude, {unit}: {}",
                     pm(sd1("frequency_hz"), 1.0, 3),
                     per_channel(outputs, a, three_std(sd("amplitude")), 1.0, 6)
-                )]
+                )];
+                lines.extend(when_on(p));
+                lines
             })
         }
         Effect::LeverArmError => p.get("offset_m").and_then(three).map(|o| {
@@ -210,6 +244,26 @@ mod tests {
                 "quadratic scale factor k2 (x += k2 u|u|), per m/s²: ax +0.00100 ± 0.00020, ay -0.00200, az +0.00000 ± 0.00010"
             ]
         );
+    }
+
+    #[test]
+    fn a_tone_says_when_it_is_on() {
+        let f = finding(
+            Block::Gyro,
+            Effect::VibrationTone,
+            json!({"frequency_hz": 43.5, "amplitude": [0.001, 0.002, 0.0], "on_fraction": 0.4,
+                   "on_s": [[0.0, 2.0], [5.0, 7.0], [10.0, 12.0], [15.0, 17.0], [20.0, 22.0]]}),
+        );
+        assert_eq!(
+            describe(&f)[1],
+            "on 40 % of the record, in 5 stretches: 0.0-2.0 s, 5.0-7.0 s, 10.0-12.0 s, 15.0-17.0 s and 1 more"
+        );
+        let f = finding(
+            Block::Gyro,
+            Effect::VibrationTone,
+            json!({"frequency_hz": 43.5, "amplitude": [0.001, 0.002, 0.0], "on_fraction": 1.0, "on_s": [[0.0, 60.0]]}),
+        );
+        assert_eq!(describe(&f).len(), 1, "on throughout: nothing more to say");
     }
 
     #[test]

@@ -229,6 +229,74 @@ impl Design {
             .collect()
     }
 
+    /// The outputs' and inputs' whole-record spectra over `band_hz`, for the line search
+    /// beyond the fit's band (`z` holds the outputs at [`X`] and the inputs at [`U`]; no other
+    /// regressors, no groups). The expected level is set by [`Design::set_line_level`] once the
+    /// model's part is known. `None` when the range holds fewer than 256 bins.
+    #[must_use]
+    pub fn line_search(
+        block: Block,
+        output: &[Vec<f64>; 3],
+        input: &[Vec<f64>; 3],
+        sample_rate_hz: f64,
+        band_hz: [f64; 2],
+    ) -> Option<Self> {
+        let n = output[0].len();
+        let fs = sample_rate_hz;
+        let fft_len = fast_len(n);
+        let mut fft = RecordFft::new(fft_len, fs);
+        let df = fs / fft_len as f64;
+        let first_bin = ((band_hz[0] / df).ceil() as usize).max(1);
+        let last_bin = ((band_hz[1] / df).floor() as usize).min(fft.n_bins() - 1);
+        if last_bin < first_bin + 256 {
+            return None;
+        }
+        let band = first_bin..=last_bin;
+        let taper = hann(n);
+        let z: Vec<Vec<Complex64>> = output
+            .iter()
+            .chain(input)
+            .map(|x| band_spectrum(&mut fft, &taper, x, band.clone()))
+            .collect();
+        let bins = z[0].len();
+        Some(Self {
+            block,
+            n_samples: n,
+            fft_len,
+            sample_rate_hz: fs,
+            first_bin,
+            frequency_hz: band.map(|k| k as f64 * df).collect(),
+            z,
+            expected: [vec![1.0; bins], vec![1.0; bins], vec![1.0; bins]],
+            groups: Vec::new(),
+            group_hz: Vec::new(),
+            group_expected: [Vec::new(), Vec::new(), Vec::new()],
+            record: Arc::new(output.clone()),
+        })
+    }
+
+    /// The line search's residual, outputs minus `K e^(-tau s)` times the inputs, and its
+    /// expected level set to each channel's median periodogram of it.
+    pub fn set_line_level(&mut self, k: [[f64; 3]; 3], tau_s: f64) -> [Vec<Complex64>; 3] {
+        let residual = [0, 1, 2].map(|i| {
+            self.frequency_hz
+                .iter()
+                .enumerate()
+                .map(|(b, &f)| {
+                    let delay = Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * f * tau_s);
+                    let model: Complex64 = (0..3).map(|j| self.z[U + j][b] * k[i][j]).sum();
+                    self.z[X + i][b] - delay * model
+                })
+                .collect::<Vec<_>>()
+        });
+        for (i, r) in residual.iter().enumerate() {
+            let mut p: Vec<f64> = r.iter().map(Complex64::norm_sqr).collect();
+            let level = super::tone::median(&mut p).max(f64::MIN_POSITIVE);
+            self.expected[i] = vec![level; r.len()];
+        }
+        residual
+    }
+
     /// The outputs' spectra (as measured, or re-timed by [`Design::clock_corrected`]).
     #[must_use]
     pub fn outputs(&self) -> [Vec<Complex64>; 3] {
@@ -236,15 +304,15 @@ impl Design {
     }
 }
 
-/// The Hann taper over `n` samples, `w_k = (1 - cos(2 pi k / n)) / 2`.
-fn hann(n: usize) -> Vec<f64> {
+/// The periodic Hann taper over `n` samples, `w_k = (1 - cos(2 pi k / n)) / 2`.
+pub(super) fn hann(n: usize) -> Vec<f64> {
     (0..n)
         .map(|k| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
         .collect()
 }
 
 /// The band bins of the DFT of `x` mean-removed and tapered.
-fn band_spectrum(
+pub(super) fn band_spectrum(
     fft: &mut RecordFft,
     taper: &[f64],
     x: &[f64],

@@ -106,7 +106,7 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
             effect,
             name: effect.name_on(pb.block),
             parameters: parameters(effect, &state, index, input_names),
-            parameter_std: parameter_std(effect, &state, index, cov.as_ref(), chi2_per_dof[1]),
+            parameter_std: parameter_std(effect, &state, index, cov.as_ref()),
         })
         .collect();
     let f = &state.fitted;

@@ -24,6 +24,7 @@ pub mod describe;
 pub mod design;
 pub mod extend;
 pub mod fit;
+pub mod gate;
 pub mod map;
 pub mod profile;
 pub mod report;

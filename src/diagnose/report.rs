@@ -174,9 +174,13 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
             let duration = state.design.n_samples as f64 / state.design.sample_rate_hz;
             json!({"drift_ppm": d * 1e6, "delay_change_s": d * duration})
         }
-        Effect::VibrationTone => state.tones.get(index).map_or(
-            Value::Null,
-            |t| json!({"frequency_hz": t.frequency_hz, "amplitude": t.amplitude()}),
-        ),
+        Effect::VibrationTone => state.tones.get(index).map_or(Value::Null, |t| {
+            let duration = state.design.n_samples as f64 / state.design.sample_rate_hz;
+            let (on_s, on_fraction) = t
+                .gate
+                .as_ref()
+                .map_or((vec![[0.0, duration]], 1.0), |g| (g.on_s.clone(), g.on_fraction));
+            json!({"frequency_hz": t.frequency_hz, "amplitude": t.amplitude(), "on_fraction": on_fraction, "on_s": on_s})
+        }),
     }
 }

@@ -1,6 +1,8 @@
 //! The model of one block as the diagnosis grows it: the fitted structure, the tones found, and
 //! the residual spectrum (measured minus simulated) they leave.
 
+use std::sync::Arc;
+
 use nalgebra::DMatrix;
 use num_complex::Complex64;
 
@@ -31,6 +33,11 @@ pub struct State {
     /// The identification stretches' delay trend and its standard deviation, s per s: where the
     /// search for a clock drift starts (`None`: the record was too short to cut).
     pub drift_hint: Option<[f64; 2]>,
+    /// The spectra above the fit's band, where tones are searched too ([`Design::line_search`];
+    /// `None`: the band reaches the top already).
+    pub upper: Option<Arc<Design>>,
+    /// The upper outputs minus the paper's model and the tones found there.
+    pub upper_residual: [Vec<Complex64>; 3],
 }
 
 impl State {
@@ -52,6 +59,8 @@ impl State {
             residual,
             clock_drift: None,
             drift_hint: None,
+            upper: None,
+            upper_residual: [Vec::new(), Vec::new(), Vec::new()],
         })
     }
 
@@ -72,6 +81,13 @@ impl State {
                 next.fitted = (**fitted).clone();
                 next.clock_drift = Some(*drift);
             }
+            Extension::Tone(tone) if tone.upper => {
+                let upper = self.upper.as_deref()?;
+                for (r, t) in next.upper_residual.iter_mut().zip(&tone.spectrum(upper)) {
+                    r.iter_mut().zip(t).for_each(|(r, t)| *r -= t);
+                }
+                next.tones.push(tone.clone());
+            }
             Extension::Tone(tone) => {
                 let spectrum = tone.spectrum(&self.design);
                 for (out, tone) in next.outputs.iter_mut().zip(&spectrum) {
@@ -90,6 +106,15 @@ impl State {
         }
         next.residual = fitted_residual(&next.design, &next.outputs, &next.fitted);
         Some(next)
+    }
+
+    /// Sets the spectra above the fit's band where tones are searched too
+    /// ([`Design::line_search`]): their residual is that of the current gain and delay.
+    pub fn set_upper(&mut self, mut upper: Design) {
+        let b = &self.fitted.profile.beta;
+        let k = [0, 1, 2].map(|i| [0, 1, 2].map(|j| b[3 * i + j]));
+        self.upper_residual = upper.set_line_level(k, self.fitted.theta.tau_s);
+        self.upper = Some(Arc::new(upper));
     }
 
     /// Band power of the residual relative to the measured output's, per channel, dB.

@@ -11,7 +11,11 @@ use std::f64::consts::PI;
 
 use num_complex::Complex64;
 
-use super::design::{Design, WINDOW_ENBW};
+use std::sync::Arc;
+
+use super::design::{Design, WINDOW_ENBW, band_spectrum, hann};
+use super::gate::{Gate, estimate_gate};
+use crate::fourier::RecordFft;
 
 /// Bins on each side of the line used for the fit.
 const HALF_WINDOW: usize = 16;
@@ -29,6 +33,12 @@ pub struct Tone {
     pub sin: [f64; 3],
     /// `chi2` reduction against the local continuum.
     pub delta_chi2: f64,
+    /// When the tone is on (`None`: throughout).
+    pub gate: Option<Gate>,
+    /// The gated tone's cosine and sine spectra on the band bins (with a gate).
+    pub basis: Option<Arc<[Vec<Complex64>; 2]>>,
+    /// Whether it was found above the fit's band (on the state's upper outputs).
+    pub upper: bool,
 }
 
 impl Tone {
@@ -41,7 +51,10 @@ impl Tone {
     /// The tone's spectrum on every band bin, per channel.
     #[must_use]
     pub fn spectrum(&self, design: &Design) -> [Vec<Complex64>; 3] {
-        let (c, s) = sinusoid_dft(design, self.frequency_hz, 0..design.n_bins());
+        let (c, s) = match &self.basis {
+            Some(b) => (b[0].clone(), b[1].clone()),
+            None => sinusoid_dft(design, self.frequency_hz, 0..design.n_bins()),
+        };
         [0, 1, 2].map(|i| {
             c.iter()
                 .zip(&s)
@@ -96,6 +109,17 @@ fn explain(
     range: &std::ops::Range<usize>,
 ) -> ([f64; 3], [f64; 3], f64) {
     let (c, s) = sinusoid_dft(design, f, range.clone());
+    explain_with(design, residual, (&c, &s), range)
+}
+
+/// Weighted least squares of the basis `(c, s)` (spectra over `range`) per channel; returns
+/// coefficients and explained power.
+fn explain_with(
+    design: &Design,
+    residual: &[Vec<Complex64>; 3],
+    (c, s): (&[Complex64], &[Complex64]),
+    range: &std::ops::Range<usize>,
+) -> ([f64; 3], [f64; 3], f64) {
     let (mut cos, mut sin, mut gain) = ([0.0; 3], [0.0; 3], 0.0);
     for i in 0..3 {
         let (mut a, mut b, mut d, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -133,20 +157,15 @@ pub fn strongest_line(design: &Design, residual: &[Vec<Complex64>; 3]) -> Option
                 .sum()
         })
         .collect();
-    let continuum = |k: usize| {
-        let lo = k.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);
-        median(&mut power[lo..=lo + 2 * MEDIAN_HALF].to_vec())
-    };
-    // The largest ratio to the continuum among the ten strongest bins.
-    let mut strongest: Vec<usize> = (0..n).collect();
-    strongest.sort_by(|&a, &b| power[b].total_cmp(&power[a]));
-    let peak = strongest
-        .iter()
-        .take(10)
-        .copied()
-        .max_by(|&a, &b| (power[a] / continuum(a)).total_cmp(&(power[b] / continuum(b))))?;
+    let continuum = continuum(&power);
+    // The largest ratio of a line's three bins (a tapered line spreads over them) to the
+    // continuum, anywhere in the band: the strongest bins may all be broadband misfit.
+    let peak = (1..n - 1).max_by(|&a, &b| {
+        let ratio = |k: usize| (power[k - 1] + power[k] + power[k + 1]) / continuum[k];
+        ratio(a).total_cmp(&ratio(b))
+    })?;
     // The continuum of three channels' whitened power has median ~ 3 * 0.89 under the model.
-    let background = (continuum(peak) / (3.0 * 0.891)).max(1.0);
+    let background = (continuum[peak] / (3.0 * 0.891)).max(1.0);
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
     let df = design.sample_rate_hz / design.fft_len as f64;
     let f_peak = design.frequency_hz[peak];
@@ -170,10 +189,150 @@ pub fn strongest_line(design: &Design, residual: &[Vec<Complex64>; 3]) -> Option
     }
     let frequency_hz = 0.5 * (lo + hi);
     let (cos, sin, explained) = explain(design, residual, frequency_hz, &range);
+    let delta_chi2 = 2.0 * explained / background / WINDOW_ENBW;
+    let constant = Tone {
+        frequency_hz,
+        cos,
+        sin,
+        delta_chi2,
+        gate: None,
+        basis: None,
+        upper: false,
+    };
+    let Some(gate) = estimate_gate(design, residual, peak, frequency_hz) else {
+        return Some(constant);
+    };
+    // On and off: the gated sinusoid fitted on the whole band (its sidebands included).
+    let basis = gated_basis(design, frequency_hz, &gate);
+    let all = 0..n;
+    let (cos, sin, explained) = explain_with(design, residual, (&basis[0], &basis[1]), &all);
+    // A gated tone's sidebands fill the bins around its line, so the continuum there is
+    // measured on the residual without it.
+    let lo = peak.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);
+    let mut without: Vec<f64> = (lo..=lo + 2 * MEDIAN_HALF)
+        .map(|k| {
+            (0..3)
+                .map(|i| {
+                    (residual[i][k] - basis[0][k] * cos[i] - basis[1][k] * sin[i]).norm_sqr()
+                        / design.expected[i][k]
+                })
+                .sum()
+        })
+        .collect();
+    let background = (median(&mut without) / (3.0 * 0.891)).max(1.0);
     Some(Tone {
         frequency_hz,
         cos,
         sin,
         delta_chi2: 2.0 * explained / background / WINDOW_ENBW,
+        gate: Some(gate),
+        basis: Some(Arc::new(basis)),
+        upper: false,
     })
+}
+
+/// The running median of `power` over [`MEDIAN_HALF`] bins each side (shifted inwards at the
+/// band's ends), evaluated every eighth bin and interpolated between: it changes slowly.
+fn continuum(power: &[f64]) -> Vec<f64> {
+    const STRIDE: usize = 8;
+    let n = power.len();
+    let at = |k: usize| {
+        let lo = k.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);
+        median(&mut power[lo..=lo + 2 * MEDIAN_HALF].to_vec())
+    };
+    let knots: Vec<(usize, f64)> = (0..n)
+        .step_by(STRIDE)
+        .chain(std::iter::once(n - 1))
+        .map(|k| (k, at(k)))
+        .collect();
+    (0..n)
+        .map(|k| {
+            let j = (k / STRIDE).min(knots.len() - 2);
+            let ((a, va), (b, vb)) = (knots[j], knots[j + 1]);
+            if b == a {
+                va
+            } else {
+                va + (vb - va) * (k - a) as f64 / (b - a) as f64
+            }
+        })
+        .collect()
+}
+
+/// Spectra of the gated, tapered `cos(2 pi f t)` and `sin(2 pi f t)` on the design's band bins.
+fn gated_basis(design: &Design, f: f64, gate: &Gate) -> [Vec<Complex64>; 2] {
+    let fs = design.sample_rate_hz;
+    let mut fft = RecordFft::new(design.fft_len, fs);
+    let taper = hann(design.n_samples);
+    let band = design.first_bin..=design.first_bin + design.n_bins() - 1;
+    let w = 2.0 * PI * f;
+    let wave = |phase: f64| -> Vec<f64> {
+        (0..design.n_samples)
+            .map(|k| {
+                let t = k as f64 / fs;
+                if gate.is_on(t) { (w * t + phase).cos() } else { 0.0 }
+            })
+            .collect()
+    };
+    [
+        band_spectrum(&mut fft, &taper, &wave(0.0), band.clone()),
+        band_spectrum(&mut fft, &taper, &wave(-0.5 * PI), band),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::strongest_line;
+    use crate::block::Block;
+    use crate::diagnose::design::Design;
+    use crate::rng::Rng;
+
+    /// Three channels of unit white noise with a tone of amplitude `a` at `f` Hz where `on(t)`.
+    fn record(fs: f64, seconds: f64, f: f64, a: f64, on: &dyn Fn(f64) -> bool) -> [Vec<f64>; 3] {
+        let mut rng = Rng::new(7);
+        let n = (fs * seconds) as usize;
+        [0.3, 1.1, 2.0].map(|phase: f64| {
+            (0..n)
+                .map(|k| {
+                    let t = k as f64 / fs;
+                    let tone = if on(t) {
+                        a * (std::f64::consts::TAU * f * t + phase).sin()
+                    } else {
+                        0.0
+                    };
+                    tone + rng.normal()
+                })
+                .collect()
+        })
+    }
+
+    #[test]
+    fn a_pulsed_tone_is_found_with_its_gate_and_its_whole_evidence() {
+        let (fs, seconds, f, a) = (500.0, 120.0, 30.0, 0.12);
+        let pulsed = |t: f64| t.rem_euclid(5.0) < 2.0;
+        let out = record(fs, seconds, f, a, &pulsed);
+        let zero = [
+            vec![0.0; out[0].len()],
+            vec![0.0; out[0].len()],
+            vec![0.0; out[0].len()],
+        ];
+        let mut design = Design::line_search(Block::Gyro, &out, &zero, fs, [5.0, 100.0]).expect("design");
+        let residual = design.set_line_level([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 0.0);
+        let tone = strongest_line(&design, &residual).expect("a line");
+        assert!((tone.frequency_hz - f).abs() < 1e-3, "{}", tone.frequency_hz);
+        let gate = tone.gate.as_ref().expect("gated");
+        eprintln!("{:?} {} {:?}", &gate.on_s[..4], tone.delta_chi2, tone.amplitude());
+        assert!((gate.on_fraction - 0.4).abs() < 0.06, "{}", gate.on_fraction);
+        // chi2 of the tone where on, in tapered units: N A^2 / (2 sigma^2) per channel, times
+        // the on-time's share of the tapered record's power (0.4), over the taper's bandwidth.
+        let n = fs * seconds;
+        let want = 3.0 * n * a * a / 2.0 * 0.4 / 1.5;
+        assert!(
+            tone.delta_chi2 > 0.7 * want && tone.delta_chi2 < 1.3 * want,
+            "{} vs {want}",
+            tone.delta_chi2
+        );
+        for (est, truth) in tone.amplitude().iter().zip([a; 3]) {
+            assert!((est - truth).abs() < 0.15 * truth, "{est} vs {truth}");
+        }
+    }
 }

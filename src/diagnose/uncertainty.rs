@@ -15,9 +15,10 @@
 //!   variance is widened by that ratio, as the identifier does.
 //!
 //! Tones are fitted apart (`tone.rs`): their frequency's standard deviation is the Cramér-Rao
-//! bound of a sinusoid, `sqrt(6 / chi2) / (2 pi N) fs` with `chi2` what the tone explains (all
-//! channels, one frequency), times the taper's factor, and each channel's amplitude's is
-//! `|A| / sqrt(chi2)`, as for any linear amplitude. A clock drift's is not computed (its search
+//! bound of a sinusoid, `sqrt(6 / chi2) / (2 pi N) fs` with `chi2` what the tone explains in the
+//! untapered record (all channels, one frequency), times the taper's factor for a frequency
+//! ([`TAPER_FREQUENCY_VARIANCE`]), and each channel's amplitude's is `|A| sqrt(35/18 / chi2)`.
+//! A clock drift's is not computed (its search
 //! re-times the record at each point; `null` in the files).
 //!
 //! Units: as the parameters (s, Hz, output units); `None` where the Hessian is not positive
@@ -25,6 +26,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::design::WINDOW_ENBW;
 use super::fit::{pack, unpack};
 use super::profile::normal_equations;
 use super::state::State;
@@ -34,6 +36,11 @@ use serde_json::{Value, json};
 /// Variance of a least-squares estimate from Hann-tapered data relative to the same estimate
 /// from untapered data: `mean(w^4) / mean(w^2)^2` of `w = sin^2`, `(35/128) / (3/8)^2`.
 pub const TAPER_VARIANCE: f64 = 35.0 / 18.0;
+
+/// The same ratio for a sinusoid's frequency, whose information lies in the record's ends that
+/// the taper weighs down: `(S(w^4 t^2) S(t^2)) / S(w^2 t^2)^2`, `t` from the record's middle;
+/// in closed form `35 pi^2 (24 pi^2 - 205) / (108 (2 pi^2 - 15)^2)` = 4.5386.
+pub const TAPER_FREQUENCY_VARIANCE: f64 = 4.538_593_647_68;
 
 /// The joint covariance of a state's parameters: the linear ones (`K` row-major, then `k2`,
 /// `G`, the lever-arm offset, as `structure::Layout`), then the nonlinear ones in `fit::pack`'s
@@ -156,13 +163,7 @@ pub fn tau_std(cov: &Covariance) -> Option<f64> {
 /// The standard deviations of [`super::report::parameters`]'s figures, under the same keys
 /// (`null` where not determined or not computed).
 #[must_use]
-pub fn parameter_std(
-    effect: Effect,
-    state: &State,
-    index: usize,
-    cov: Option<&Covariance>,
-    chi2_per_dof: f64,
-) -> Value {
+pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&Covariance>) -> Value {
     let f = &state.fitted;
     let linear3 = |at: Option<usize>| at.map(|p| [0, 1, 2].map(|i| cov.and_then(|c| c.linear_std(p + i))));
     let slot = slots(&f.structure);
@@ -205,13 +206,14 @@ pub fn parameter_std(
         }
         Effect::ClockDrift => json!({"drift_ppm": null, "delay_change_s": null}),
         Effect::VibrationTone => state.tones.get(index).map_or(Value::Null, |t| {
-            let widen = TAPER_VARIANCE * chi2_per_dof.max(1.0);
-            let chi2 = t.delta_chi2.max(f64::MIN_POSITIVE);
+            // The tone's chi2 is measured against the local continuum (so already widened by it)
+            // and counted in tapered bins: the untapered record's is WINDOW_ENBW times it.
+            let chi2 = (WINDOW_ENBW * t.delta_chi2).max(f64::MIN_POSITIVE);
             let n = state.design.n_samples as f64;
-            let frequency =
-                (6.0 * widen / chi2).sqrt() / (2.0 * std::f64::consts::PI * n) * state.design.sample_rate_hz;
+            let frequency = (6.0 * TAPER_FREQUENCY_VARIANCE / chi2).sqrt() / (2.0 * std::f64::consts::PI * n)
+                * state.design.sample_rate_hz;
             let norm = t.amplitude().iter().map(|a| a * a).sum::<f64>().sqrt();
-            let amplitude = norm * (widen / chi2).sqrt();
+            let amplitude = norm * (TAPER_VARIANCE / chi2).sqrt();
             json!({"frequency_hz": frequency, "amplitude": [amplitude, amplitude, amplitude]})
         }),
     }
@@ -220,6 +222,27 @@ pub fn parameter_std(
 #[cfg(test)]
 mod tests {
     use super::TAPER_VARIANCE;
+
+    #[test]
+    fn the_frequency_taper_factor_is_that_of_a_hann_window() {
+        let n = 200_000_usize;
+        let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+        for k in 0..n {
+            let t = k as f64 - 0.5 * (n as f64 - 1.0);
+            let w = (std::f64::consts::PI * k as f64 / n as f64).sin().powi(2);
+            a += w.powi(4) * t * t;
+            b += t * t;
+            c += w * w * t * t;
+        }
+        let brute = a * b / (c * c);
+        assert!((brute - super::TAPER_FREQUENCY_VARIANCE).abs() < 1e-6, "{brute}");
+        let pi2 = std::f64::consts::PI.powi(2);
+        let closed = 35.0 * pi2 * (24.0 * pi2 - 205.0) / (108.0 * (2.0 * pi2 - 15.0).powi(2));
+        assert!(
+            (closed - super::TAPER_FREQUENCY_VARIANCE).abs() < 1e-10,
+            "{closed}"
+        );
+    }
 
     #[test]
     fn the_taper_factor_is_that_of_a_hann_window() {

@@ -117,11 +117,12 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     for b in &id.blocks {
         let band = b.band_hz;
         let name = b.block.name();
-        let design = block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
-            block: name,
-            low: band[0],
-            high: band[1],
-        })?;
+        let (design, upper) =
+            block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
+                block: name,
+                low: band[0],
+                high: band[1],
+            })?;
         let dof = 3.0 * design.dof_per_channel();
         let mut base =
             State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
@@ -129,6 +130,9 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             .stationarity
             .as_deref()
             .map(|st| [st.tau_trend, st.tau_trend_std]);
+        if let Some(upper) = upper {
+            base.set_upper(upper);
+        }
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,
@@ -182,15 +186,23 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
     }
 }
 
+/// Top of the line search above the fit's band, relative to the band's top: tones are searched
+/// inside the band and up to half as far again above it (and below 0.45 of the rate). Further
+/// up, the inputs computed from the measured angles are their noise (the stand's motion reaches
+/// about 60 Hz), and subtracting the model there puts that noise's lines into the residual: on
+/// simulated approach runs, "tones" at 157-205 Hz in the accelerometer.
+const LINE_SEARCH_TOP: f64 = 1.5;
+
 /// The block's whole-record design, its expected disturbance level taken from the
-/// identification's `S_psi`.
+/// identification's `S_psi`, and its spectra above the band up to [`LINE_SEARCH_TOP`] times
+/// the band's top for the line search (`None` when too few bins remain).
 fn block_design(
     run: &Run,
     motion: &EulerSeries,
     b: &BlockIdentification,
     band: [f64; 2],
     span: &std::ops::Range<usize>,
-) -> Option<Design> {
+) -> Option<(Design, Option<Design>)> {
     let signals = block_signals(run, motion, b.block)?;
     let cut = |x: &[f64]| x[span.clone()].to_vec();
     let g = run.sidecar.g_mps2;
@@ -223,17 +235,22 @@ fn block_design(
         let t = ((f - freq[k - 1]) / (freq[k] - freq[k - 1])).clamp(0.0, 1.0);
         expected[i][k - 1] * (1.0 - t) + expected[i][k] * t
     };
-    Design::new(
+    let output = signals.output.each_ref().map(|x| cut(x));
+    let input = signals.input.each_ref().map(|x| cut(x));
+    let design = Design::new(
         &DesignSignals {
             block: b.block,
-            output: &signals.output.each_ref().map(|x| cut(x)),
-            input: &signals.input.each_ref().map(|x| cut(x)),
+            output: &output,
+            input: &input,
             auxiliary: &auxiliary.iter().map(|x| cut(x)).collect::<Vec<_>>(),
             sample_rate_hz: run.sample_rate_hz,
         },
         band,
         &lookup,
-    )
+    )?;
+    let top = (LINE_SEARCH_TOP * band[1]).min(0.45 * run.sample_rate_hz);
+    let upper = Design::line_search(b.block, &output, &input, run.sample_rate_hz, [band[1], top]);
+    Some((design, upper))
 }
 
 /// `S_psi,ii` running-median smoothed over about four native Welch bins each side, so that a
@@ -326,7 +343,7 @@ fn diagnose_block(
             .find_map(|c| {
                 state
                     .with(c, band)
-                    .filter(|n| closes_gap(&state, n))
+                    .filter(|n| above_band(c) || closes_gap(&state, n))
                     .map(|n| (c, n))
             });
         let Some((best, next)) = chosen else { break };
@@ -370,7 +387,7 @@ fn diagnose_block(
         .into_iter()
         .map(|(effect, index, mut finding)| {
             finding.parameters = parameters(effect, &state, index, input_names);
-            finding.parameter_std = parameter_std(effect, &state, index, cov.as_ref(), chi2_per_dof);
+            finding.parameter_std = parameter_std(effect, &state, index, cov.as_ref());
             finding
         })
         .collect();
@@ -401,6 +418,12 @@ fn within_reach(c: &Candidate, band: [f64; 2]) -> bool {
         }
         _ => true,
     }
+}
+
+/// Whether the candidate is a tone above the fit's band: it leaves the band's gap as it is
+/// (what it explains is its own line, measured against the local continuum there).
+fn above_band(c: &Candidate) -> bool {
+    matches!(&c.extension, Extension::Tone(t) if t.upper)
 }
 
 /// Numerical tolerance of "a channel's gap does not grow", dB: refitting every parameter moves

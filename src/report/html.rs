@@ -7,6 +7,7 @@ use super::RunReport;
 use super::spec::{Check, Verdict};
 use super::svg::{Axis, Plot, Series};
 use crate::block::Block;
+use crate::diagnose::describe::describe_size;
 use crate::model::BlockModel;
 use crate::noise::BlockNoise;
 
@@ -219,7 +220,42 @@ fn equation(h: &mut String, b: &BlockModel) {
     if !why.is_empty() {
         let _ = write!(h, "<p class=\"orders\">Orders tried: {}.</p>", why.join("; "));
     }
-    h.push_str("<p>Accepted effects: none (the diagnosis's findings below are not part of this model).</p>");
+    accepted_effects(h, b);
+}
+
+/// The effects accepted into the block's model with their sizes, or that there are none.
+fn accepted_effects(h: &mut String, b: &BlockModel) {
+    let Some(e) = &b.effects else {
+        h.push_str(
+            "<p>Accepted effects: none (the diagnosis's findings below are not part of this model).</p>",
+        );
+        return;
+    };
+    let block = if b.inputs[0] == crate::ident::signals::channel_names(Block::Gyro).0[0] {
+        Block::Gyro
+    } else {
+        Block::Accel
+    };
+    let _ = write!(
+        h,
+        "<p>Accepted effects (the model above is the paper's model extended by them, fitted on the whole \
+         record; identified without them: order {}, delay {} ms):</p><ul class=\"effects\">",
+        e.identified.order,
+        sig(e.identified.tau_s * 1e3, 4)
+    );
+    for a in &e.accepted {
+        let size = describe_size(block, a.effect, &a.parameters, &a.parameter_std).join("; ");
+        let _ = write!(h, "<li><b>{}</b>: {}</li>", esc(&a.name), esc(&size));
+    }
+    for n in &e.not_added {
+        let _ = write!(
+            h,
+            "<li>not added: {} ({})</li>",
+            esc(&n.effect.name_on(block)),
+            esc(&n.reason)
+        );
+    }
+    h.push_str("</ul>");
 }
 
 fn bode(h: &mut String, b: &BlockModel) {

@@ -170,12 +170,14 @@ pub fn block_outputs(
                 frequency_hz,
                 amplitude,
                 phase_rad,
+                gate,
             } => {
                 let w = 2.0 * std::f64::consts::PI * frequency_hz;
                 for i in 0..3 {
                     out[i]
                         .iter_mut()
                         .zip(drive.time_s)
+                        .filter(|(_, t)| gate.is_on(**t))
                         .for_each(|(x, t)| *x += amplitude[i] * (w * t + phase_rad[i]).sin());
                 }
             }
@@ -283,6 +285,7 @@ pub fn draw_effect(
             frequency_hz: rng.uniform_in(25.0, 38.0),
             amplitude: [0; 3].map(|_| scale * 5e-4 * output_unit * rng.uniform_in(0.3, 1.0)),
             phase_rad: [0; 3].map(|_| rng.uniform_in(0.0, 2.0 * std::f64::consts::PI)),
+            gate: super::truth::ToneGate::Continuous,
         },
         Effect::LeverArmError => EffectTruth::LeverArmError {
             offset_m: [0.02, -0.015, 0.03].map(|v| scale * v * rng.uniform_in(0.7, 1.3)),

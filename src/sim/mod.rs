@@ -62,6 +62,17 @@ pub struct SimConfig {
     pub faults: Vec<FaultSpec>,
     /// The sensors' noise beyond the drawn default.
     pub sensor_noise: SensorNoiseOptions,
+    /// A vibration tone's frequency and when it is on, instead of the drawn defaults.
+    pub tone: ToneOptions,
+}
+
+/// How a hidden `vibration_tone` is made (`simulate --tone-hz`, `--tone-gate`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ToneOptions {
+    /// Its frequency, Hz (drawn in 25-38 Hz when `None`).
+    pub frequency_hz: Option<f64>,
+    /// When it is on.
+    pub gate: truth::ToneGate,
 }
 
 /// Changes to the sensors' drawn noise (white plus a first-order coloured part by default), for
@@ -89,6 +100,7 @@ impl SimConfig {
             stand: StandImperfections::default(),
             faults: Vec::new(),
             sensor_noise: SensorNoiseOptions::default(),
+            tone: ToneOptions::default(),
         }
     }
 }
@@ -118,6 +130,9 @@ pub enum SimError {
     /// No block mounted.
     #[error("no sensor block to simulate")]
     NoBlock,
+    /// A tone frequency outside (0, Nyquist) or a gate time that is not a positive number.
+    #[error("vibration tone: {0}")]
+    BadTone(String),
     /// An effect asks for a block that is not mounted.
     #[error("effect '{effect}' needs the {block} block, which is not simulated")]
     EffectWithoutBlock {
@@ -204,6 +219,28 @@ fn validate(config: &SimConfig) -> Result<usize, SimError> {
     if config.blocks.is_empty() {
         return Err(SimError::NoBlock);
     }
+    if let Some(f) = config.tone.frequency_hz
+        && !(f.is_finite() && f > 0.0 && f < 0.5 * config.rate_hz)
+    {
+        return Err(SimError::BadTone(format!(
+            "frequency {f} Hz is not between 0 and the Nyquist frequency {} Hz",
+            0.5 * config.rate_hz
+        )));
+    }
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    match config.tone.gate {
+        truth::ToneGate::From { start_s } if !(start_s.is_finite() && start_s >= 0.0) => {
+            return Err(SimError::BadTone(format!(
+                "switch-on time {start_s} s is not a number >= 0"
+            )));
+        }
+        truth::ToneGate::Pulsed { on_s, off_s } if !(positive(on_s) && positive(off_s)) => {
+            return Err(SimError::BadTone(format!(
+                "on {on_s} s and off {off_s} s must be positive"
+            )));
+        }
+        _ => {}
+    }
     for spec in &config.effects {
         for b in &spec.blocks {
             if !config.blocks.contains(b) {
@@ -255,7 +292,14 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
             .each_ref()
             .map(|c| (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).sqrt());
         for spec in config.effects.iter().filter(|s| s.blocks.contains(&block)) {
-            let e = draw_effect(spec.effect, block, spec.scale, input_rms, &mut rng);
+            let mut e = draw_effect(spec.effect, block, spec.scale, input_rms, &mut rng);
+            if let EffectTruth::VibrationTone {
+                frequency_hz, gate, ..
+            } = &mut e
+            {
+                *frequency_hz = config.tone.frequency_hz.unwrap_or(*frequency_hz);
+                *gate = config.tone.gate;
+            }
             if let EffectTruth::LeverArmError { offset_m } = e {
                 accel_lever_arm = [0, 1, 2].map(|k| DECLARED_ACCEL_LEVER_ARM_M[k] + offset_m[k]);
             }

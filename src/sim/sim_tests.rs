@@ -324,6 +324,7 @@ fn vibration_tone_lag_and_resonance_act_at_their_frequencies() {
         frequency_hz,
         amplitude,
         phase_rad,
+        ..
     } = e
     else {
         panic!("{e:?}")

@@ -133,7 +133,7 @@ pub enum EffectTruth {
         /// Per channel, output units per input unit squared.
         k2: [f64; 3],
     },
-    /// `x_i += a_i sin(2 pi f t + phi_i)`.
+    /// `x_i += g(t) a_i sin(2 pi f t + phi_i)`, `g` the gate (1 throughout by default).
     VibrationTone {
         /// Tone frequency, Hz.
         frequency_hz: f64,
@@ -141,6 +141,9 @@ pub enum EffectTruth {
         amplitude: [f64; 3],
         /// Phase per channel, rad.
         phase_rad: [f64; 3],
+        /// When the tone is on (absent: throughout).
+        #[serde(default, skip_serializing_if = "ToneGate::is_continuous")]
+        gate: ToneGate,
     },
     /// True lever arm = declared + offset.
     LeverArmError {
@@ -177,6 +180,45 @@ impl EffectTruth {
             EffectTruth::LeverArmError { .. } => Effect::LeverArmError,
             EffectTruth::PlatformResonance { .. } => Effect::PlatformResonance,
             EffectTruth::ClockDrift { .. } => Effect::ClockDrift,
+        }
+    }
+}
+
+/// When a simulated vibration tone is on (`simulate --tone-gate`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ToneGate {
+    /// On throughout.
+    #[default]
+    Continuous,
+    /// Off until `start_s` (s from the record's start), on after.
+    From {
+        /// Switch-on time, s.
+        start_s: f64,
+    },
+    /// On for `on_s`, off for `off_s`, repeating from the record's start (on first).
+    Pulsed {
+        /// On time, s.
+        on_s: f64,
+        /// Off time, s.
+        off_s: f64,
+    },
+}
+
+impl ToneGate {
+    /// Whether the tone is on throughout.
+    #[must_use]
+    pub fn is_continuous(&self) -> bool {
+        *self == ToneGate::Continuous
+    }
+
+    /// Whether the tone is on at `t_s` (s from the record's start).
+    #[must_use]
+    pub fn is_on(&self, t_s: f64) -> bool {
+        match *self {
+            ToneGate::Continuous => true,
+            ToneGate::From { start_s } => t_s >= start_s,
+            ToneGate::Pulsed { on_s, off_s } => t_s >= 0.0 && t_s.rem_euclid(on_s + off_s) < on_s,
         }
     }
 }

@@ -202,3 +202,31 @@ fn an_effect_the_record_cannot_hold_is_listed_as_not_added() {
         e.not_added[0].reason
     );
 }
+
+#[test]
+fn a_tones_frequency_deviation_is_honest() {
+    // Ten gyro tones accepted (three regimes); the frequency's normalised errors.
+    let regimes = [Regime::Cruise, Regime::Approach, Regime::TurbulentCruise];
+    let mut z = Vec::new();
+    for seed in 1..=10_u64 {
+        let (truth, model) = extended(
+            regimes[seed as usize % 3],
+            seed,
+            "vibration_tone:gyro",
+            (Block::Gyro, Effect::VibrationTone),
+        );
+        let [EffectTruth::VibrationTone { frequency_hz, .. }] = truth.effects[..] else {
+            panic!("{:?}", truth.effects)
+        };
+        let (f, sd) = sizes(&model.blocks["gyro"], "frequency_hz");
+        assert!(
+            (f[0] - frequency_hz).abs() < 1e-3 * frequency_hz,
+            "{} vs {frequency_hz}",
+            f[0]
+        );
+        z.push((f[0] - frequency_hz) / sd[0]);
+    }
+    eprintln!("tone frequency: rms {:.2}, {:?}", rms(&z), z);
+    assert!((0.6..=1.5).contains(&rms(&z)), "{z:?}");
+    assert!(beyond_two(&z) <= 0.2, "{z:?}");
+}

@@ -123,11 +123,10 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
     }
     // The strongest line in the fit's band or above it (up to 0.45 of the rate).
     let line = if wanted(Effect::VibrationTone) {
-        let upper = state
-            .upper
-            .as_deref()
-            .and_then(|u| strongest_line(u, &state.upper_residual).map(|t| Tone { upper: true, ..t }));
-        strongest_line(design, &state.residual)
+        let upper = state.upper.as_deref().and_then(|u| {
+            strongest_line(u, &state.upper_residual, &u.outputs()).map(|t| Tone { upper: true, ..t })
+        });
+        strongest_line(design, &state.residual, &state.outputs)
             .into_iter()
             .chain(upper)
             .max_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2))

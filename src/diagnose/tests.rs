@@ -97,7 +97,7 @@ fn a_hidden_tone_is_found_at_its_frequency_and_amplitude() {
     let f = fit(&d, &grams, &Structure::default(), &theta, [0.5, 40.0]).unwrap();
     let model = super::profile::predict(&d, &f.structure, &f.layout, &f.theta, &f.profile.beta);
     let residual = [0, 1, 2].map(|i| d.z[i].iter().zip(&model[i]).map(|(a, b)| a - b).collect());
-    let tone = strongest_line(&d, &residual).unwrap();
+    let tone = strongest_line(&d, &residual, &d.outputs()).unwrap();
     assert!((tone.frequency_hz - f0).abs() < 2e-4, "{}", tone.frequency_hz);
     let a = tone.amplitude();
     assert!(

@@ -15,7 +15,7 @@
 //!   variance is widened by that ratio, as the identifier does.
 //!
 //! Tones are fitted apart (`tone.rs`): their frequency's standard deviation is the Cramér-Rao
-//! bound of a sinusoid, `sqrt(6 / chi2) / (2 pi N) fs` with `chi2` what the tone explains in the
+//! bound of a sinusoid, `sqrt(12 / chi2) / (2 pi N) fs` with `chi2` what the tone explains in the
 //! untapered record (all channels, one frequency), times the taper's factor for a frequency
 //! ([`TAPER_FREQUENCY_VARIANCE`]), and each channel's amplitude's is `|A| sqrt(35/18 / chi2)`.
 //! A clock drift's is not computed (its search
@@ -208,15 +208,60 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
         Effect::VibrationTone => state.tones.get(index).map_or(Value::Null, |t| {
             // The tone's chi2 is measured against the local continuum (so already widened by it)
             // and counted in tapered bins: the untapered record's is WINDOW_ENBW times it.
-            let chi2 = (WINDOW_ENBW * t.delta_chi2).max(f64::MIN_POSITIVE);
+            // The three channels count as n_eff independent ones where their disturbance is
+            // correlated (the angle noise reaches all three): the chi2 summed over them is worth
+            // n_eff / 3 of its face value.
+            let (design, residual) = match (t.upper, state.upper.as_deref()) {
+                (true, Some(upper)) => (upper, &state.upper_residual),
+                _ => (&state.design, &state.residual),
+            };
+            let chi2 = (WINDOW_ENBW * t.delta_chi2 * effective_channels(design, residual, t.frequency_hz)
+                / 3.0)
+                .max(f64::MIN_POSITIVE);
             let n = state.design.n_samples as f64;
-            let frequency = (6.0 * TAPER_FREQUENCY_VARIANCE / chi2).sqrt() / (2.0 * std::f64::consts::PI * n)
+            let frequency = (12.0 * TAPER_FREQUENCY_VARIANCE / chi2).sqrt()
+                / (2.0 * std::f64::consts::PI * n)
                 * state.design.sample_rate_hz;
             let norm = t.amplitude().iter().map(|a| a * a).sum::<f64>().sqrt();
             let amplitude = norm * (TAPER_VARIANCE / chi2).sqrt();
             json!({"frequency_hz": frequency, "amplitude": [amplitude, amplitude, amplitude]})
         }),
     }
+}
+
+/// Bins each side of a line over which the channels' correlation is measured.
+const CORRELATION_HALF: usize = 60;
+
+/// The effective number of independent channels of `residual` around `f_hz`: `9 / sum |rho_ij|^2`
+/// of the channels' correlation over the bins near it (3 when uncorrelated, 1 when identical).
+fn effective_channels(
+    design: &super::design::Design,
+    residual: &[Vec<num_complex::Complex64>; 3],
+    f_hz: f64,
+) -> f64 {
+    let n = design.n_bins();
+    let df = design.sample_rate_hz / design.fft_len as f64;
+    let at = ((f_hz / df).round() as usize)
+        .saturating_sub(design.first_bin)
+        .min(n.saturating_sub(1));
+    let range = at.saturating_sub(CORRELATION_HALF)..(at + CORRELATION_HALF + 1).min(n);
+    let c = |i: usize, j: usize| -> num_complex::Complex64 {
+        range
+            .clone()
+            .map(|k| residual[i][k] * residual[j][k].conj())
+            .sum()
+    };
+    let diag = [0, 1, 2].map(|i| c(i, i).re);
+    if diag.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return 3.0;
+    }
+    let mut sum = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            sum += c(i, j).norm_sqr() / (diag[i] * diag[j]);
+        }
+    }
+    (9.0 / sum).clamp(1.0, 3.0)
 }
 
 #[cfg(test)]

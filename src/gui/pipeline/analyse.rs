@@ -11,12 +11,14 @@ use super::identified::Identification;
 use super::stages::{self, Measured, Motion};
 use super::{Event, FailureKind, RunId, RunSummary, Stage};
 use crate::block::Block;
+use crate::diagnose::extend::prepare_for_effects;
 use crate::diagnose::{DiagnoseError, Prepared, prepare};
 use crate::effect::Effect;
 use crate::ident::IdentError;
 use crate::ident::identify::RunIdentification;
 use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
+use crate::model::Model;
 
 /// A loaded run: the core's session and the display snapshots of its stages.
 pub(super) struct RunCache {
@@ -168,7 +170,9 @@ impl Analysis<'_> {
             let prepared = if cache.accepted.is_empty() {
                 None
             } else {
-                match cache.prepared(&settings) {
+                let model = Model::from_identification(cache.session.run(), &settings, core);
+                let accepted = cache.accepted.clone();
+                match prepare_for_effects(&mut cache.session, &settings, &model, &accepted).map(Arc::new) {
                     Ok(p) => Some(p),
                     Err(e) => {
                         return (self.send)(Event::Failed {
@@ -181,7 +185,9 @@ impl Analysis<'_> {
                     }
                 }
             };
-            let extension = prepared.as_deref().map(|p| (p, cache.accepted.as_slice()));
+            let extension = prepared
+                .as_deref()
+                .map(|p| (p.as_slice(), cache.accepted.as_slice()));
             let i = Arc::new(Identification::extended(
                 cache.session.run(),
                 settings,

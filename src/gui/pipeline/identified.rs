@@ -96,7 +96,7 @@ impl Identification {
         run: &Run,
         settings: Settings,
         core: Arc<RunIdentification>,
-        extension: Option<(&Prepared, &[(Block, Effect)])>,
+        extension: Option<(&[Prepared], &[(Block, Effect)])>,
     ) -> Self {
         let mut model = Model::from_identification(run, &settings, &core);
         if let Some((prepared, accepted)) = extension {

@@ -233,7 +233,9 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
             }
             ui.end_row();
             for c in &m.fit.candidates {
-                let chosen = if c.order == m.order { " <" } else { "" };
+                // The identifier's choice (before any accepted effect made the model order 0).
+                let identified = m.effects.as_ref().map_or(m.order, |e| e.identified.order);
+                let chosen = if c.order == identified { " <" } else { "" };
                 ui.monospace(format!("{}{chosen}", c.order));
                 ui.monospace(c.parameters.to_string());
                 ui.monospace(format!("{:.1}", c.chi2));

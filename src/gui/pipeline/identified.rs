@@ -67,6 +67,9 @@ pub struct BlockBode {
     pub band_hz: [f64; 2],
 }
 
+/// The starting points of accepted effects' fits and the effects (`crate::diagnose::extend`).
+pub type Extension<'a> = (&'a [Prepared], &'a [(Block, Effect)]);
+
 /// A run's identification under one set of settings.
 #[derive(Debug)]
 pub struct Identification {
@@ -96,7 +99,7 @@ impl Identification {
         run: &Run,
         settings: Settings,
         core: Arc<RunIdentification>,
-        extension: Option<(&[Prepared], &[(Block, Effect)])>,
+        extension: Option<Extension<'_>>,
     ) -> Self {
         let mut model = Model::from_identification(run, &settings, &core);
         if let Some((prepared, accepted)) = extension {

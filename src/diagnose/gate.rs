@@ -206,7 +206,8 @@ fn periodic_gate(
         let nb = ((2.0 * period / resolution).round() as usize).max(8);
         let (mut sum, mut count) = (vec![0.0; nb], vec![0_usize; nb]);
         for (&t, &v) in times.iter().zip(q) {
-            let b = ((t.rem_euclid(period) / period * nb as f64) as usize).min(nb - 1);
+            let cycles = t / period;
+            let b = (((cycles - cycles.floor()) * nb as f64) as usize).min(nb - 1);
             sum[b] += v;
             count[b] += 1;
         }
@@ -223,9 +224,11 @@ fn periodic_gate(
         let excess = chi2 - (nb as f64 + 6.0 * (2.0 * nb as f64).sqrt());
         (excess > 0.0).then_some((excess, profile))
     };
-    // Periods on a geometric grid whose neighbours drift apart by a resolution over the record,
-    // then refined an eighth of that around the best.
-    let ratio = resolution / duration;
+    // Candidate periods from the envelope's own spectrum: its strongest peaks between
+    // 1/longest and 1/(4 resolutions), each as the fundamental or the second harmonic; then a
+    // fold on a fine grid (neighbours drifting apart by an eighth of a resolution over the
+    // record) within the spectral peak's uncertainty around each.
+    let ratio = resolution / duration / 8.0;
     let longest = (duration / 4.0).min(MAX_PERIOD_S);
     let mut best: Option<(f64, f64, Vec<f64>)> = None;
     let keep = |period: f64, best: &mut Option<(f64, f64, Vec<f64>)>| {
@@ -235,14 +238,26 @@ fn periodic_gate(
             *best = Some((excess, period, profile));
         }
     };
-    let mut period = 4.0 * resolution;
-    while period <= longest {
-        keep(period, &mut best);
-        period *= 1.0 + ratio;
+    for f in spectral_peaks(q, mean, step, [1.0 / longest, 1.0 / (4.0 * resolution)], 3) {
+        for harmonic in [1.0, 2.0] {
+            let centre = harmonic / f;
+            if !(4.0 * resolution..=longest).contains(&centre) {
+                continue;
+            }
+            // The peak's frequency is known to about a bin of the record, 1/duration: a coarse
+            // pass over that spread, eight fine steps apart.
+            let spread = 2.0 * centre * centre / duration;
+            let mut period = (centre - spread).max(4.0 * resolution);
+            while period <= (centre + spread).min(longest) {
+                keep(period, &mut best);
+                period *= 1.0 + 8.0 * ratio;
+            }
+        }
     }
-    let coarse = best.as_ref()?.1;
-    for j in -8..=8 {
-        keep(coarse * (1.0 + ratio * f64::from(j) / 8.0), &mut best);
+    if let Some(coarse) = best.as_ref().map(|b| b.1) {
+        for j in -8..=8 {
+            keep(coarse * (1.0 + ratio * f64::from(j)), &mut best);
+        }
     }
     let (_, period, profile) = best?;
     // The on-arc of the cycle: the contiguous (circular) run of phase bins whose two levels fit
@@ -250,16 +265,49 @@ fn periodic_gate(
     let nb = profile.len();
     let width = period / nb as f64;
     let (start, len) = best_arc(&profile);
-    let mut on_s: Vec<[f64; 2]> = Vec::new();
-    let mut cycle = (start as f64 * width) - period;
-    while cycle < duration {
-        let (a, e) = (cycle.max(0.0), (cycle + len as f64 * width).min(duration));
-        if e > a {
-            push_stretch(&mut on_s, [a, e], 0.5 * width);
+    // The fold's bins are noisy: period, start and length are refined on the envelope itself,
+    // by the two-level fit of the tiled gate over every sample.
+    let tile = |period: f64, start: f64, length: f64| -> Vec<[f64; 2]> {
+        let mut on_s: Vec<[f64; 2]> = Vec::new();
+        let mut cycle = start.rem_euclid(period) - period;
+        while cycle < duration {
+            let (a, e) = (cycle.max(0.0), (cycle + length).min(duration));
+            if e > a {
+                push_stretch(&mut on_s, [a, e], 0.25 * resolution);
+            }
+            cycle += period;
         }
-        cycle += period;
+        on_s
+    };
+    let misfit = |on_s: &[[f64; 2]]| {
+        let on: Vec<bool> = times.iter().map(|&t| on_at(on_s, t)).collect();
+        two_level_misfit(q, &on)
+    };
+    let (mut p0, mut a0, mut l0) = (period, start as f64 * width, len as f64 * width);
+    let mut best_misfit = misfit(&tile(p0, a0, l0));
+    for scale in [1.0, 0.25] {
+        let (dp, da) = (scale * period * resolution / duration, scale * resolution / 4.0);
+        let (pc, ac, lc) = (p0, a0, l0);
+        for i in -8..=8 {
+            for j in -4..=4 {
+                for k in -2..=2 {
+                    let (p, a, l) = (
+                        pc + f64::from(i) * dp,
+                        ac + f64::from(j) * da,
+                        lc + f64::from(k) * da,
+                    );
+                    if l <= 0.0 || l >= p {
+                        continue;
+                    }
+                    let m = misfit(&tile(p, a, l));
+                    if m < best_misfit {
+                        (best_misfit, p0, a0, l0) = (m, p, a, l);
+                    }
+                }
+            }
+        }
     }
-    Some(on_s)
+    Some(tile(p0, a0, l0))
 }
 
 /// The circular run `(start, length)` of `profile`'s bins that, as the higher of two levels,
@@ -286,6 +334,26 @@ fn best_arc(profile: &[f64]) -> (usize, usize) {
         }
     }
     (best.1, best.2)
+}
+
+/// The frequencies, Hz, of the `count` strongest local maxima of the spectrum of `q - mean`
+/// (samples `step` s apart) inside `range`.
+fn spectral_peaks(q: &[f64], mean: f64, step: f64, range: [f64; 2], count: usize) -> Vec<f64> {
+    let len = (2 * q.len()).next_power_of_two();
+    let mut buf: Vec<Complex64> = q.iter().map(|v| Complex64::from(v - mean)).collect();
+    buf.resize(len, Complex64::default());
+    FftPlanner::<f64>::new().plan_fft_forward(len).process(&mut buf);
+    let df = 1.0 / (len as f64 * step);
+    let power: Vec<f64> = buf[..len / 2].iter().map(Complex64::norm_sqr).collect();
+    let mut peaks: Vec<(f64, f64)> = (1..power.len() - 1)
+        .filter(|&k| {
+            let f = k as f64 * df;
+            f >= range[0] && f <= range[1] && power[k] >= power[k - 1] && power[k] >= power[k + 1]
+        })
+        .map(|k| (power[k], k as f64 * df))
+        .collect();
+    peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
+    peaks.into_iter().take(count).map(|p| p.1).collect()
 }
 
 /// A gate that switches at arbitrary times: the envelope's power smoothed over the finest

@@ -180,11 +180,11 @@ pub fn strongest_line(
         // angle measurement or of its processing (on simulated clean runs, 56 Hz in the
         // accelerometer's residual, above the band), not a tone of the sensor.
         let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
-        let tone = line_at(design, residual, peak, continuum[peak]);
-        let in_residual = explain(design, residual, tone.frequency_hz, &range).2;
-        let in_outputs = explain(design, outputs, tone.frequency_hz, &range).2;
+        let frequency_hz = line_frequency(design, residual, peak, &range);
+        let in_residual = explain(design, residual, frequency_hz, &range).2;
+        let in_outputs = explain(design, outputs, frequency_hz, &range).2;
         if in_outputs >= OUTPUT_SHARE * in_residual {
-            return Some(tone);
+            return Some(line_at(design, residual, peak, frequency_hz, continuum[peak]));
         }
     }
     None
@@ -195,17 +195,19 @@ const MAX_TRIES: usize = 5;
 /// Share of a residual line's power the outputs must carry for it to be the sensor's.
 const OUTPUT_SHARE: f64 = 0.5;
 
-/// The line at band bin `peak` fitted (frequency refined, gated if it comes and goes);
-/// `continuum` is the running median of the whitened residual power there.
-fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, continuum: f64) -> Tone {
-    let n = design.n_bins();
-    let background = background_level(design, continuum);
-    let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
+/// The frequency of the line at band bin `peak`: where a sinusoid explains most of the
+/// residual over `range`, by golden-section search within 1.5 bins of the peak.
+fn line_frequency(
+    design: &Design,
+    residual: &[Vec<Complex64>; 3],
+    peak: usize,
+    range: &std::ops::Range<usize>,
+) -> f64 {
     let df = design.sample_rate_hz / design.fft_len as f64;
     let f_peak = design.frequency_hz[peak];
     let (mut lo, mut hi) = (f_peak - 1.5 * df, f_peak + 1.5 * df);
     let golden = 0.5 * (5.0_f64.sqrt() - 1.0);
-    let gain = |f: f64| explain(design, residual, f, &range).2;
+    let gain = |f: f64| explain(design, residual, f, range).2;
     let (mut a, mut b) = (hi - golden * (hi - lo), lo + golden * (hi - lo));
     let (mut ga, mut gb) = (gain(a), gain(b));
     for _ in 0..40 {
@@ -221,7 +223,21 @@ fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, continu
             gb = gain(b);
         }
     }
-    let frequency_hz = 0.5 * (lo + hi);
+    0.5 * (lo + hi)
+}
+
+/// The line at band bin `peak` and `frequency_hz` fitted (gated if it comes and goes);
+/// `continuum` is the running median of the whitened residual power there.
+fn line_at(
+    design: &Design,
+    residual: &[Vec<Complex64>; 3],
+    peak: usize,
+    frequency_hz: f64,
+    continuum: f64,
+) -> Tone {
+    let n = design.n_bins();
+    let background = background_level(design, continuum);
+    let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
     let (cos, sin, explained) = explain(design, residual, frequency_hz, &range);
     let delta_chi2 = 2.0 * explained / background / WINDOW_ENBW;
     let constant = Tone {
@@ -368,7 +384,6 @@ mod tests {
         let tone = strongest_line(&design, &residual, &design.outputs()).expect("a line");
         assert!((tone.frequency_hz - f).abs() < 1e-3, "{}", tone.frequency_hz);
         let gate = tone.gate.as_ref().expect("gated");
-        eprintln!("{:?} {} {:?}", &gate.on_s[..4], tone.delta_chi2, tone.amplitude());
         assert!((gate.on_fraction - 0.4).abs() < 0.06, "{}", gate.on_fraction);
         // chi2 of the tone where on, in tapered units: N A^2 / (2 sigma^2) per channel, times
         // the on-time's share of the tapered record's power (0.4), over the taper's bandwidth.

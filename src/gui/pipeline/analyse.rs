@@ -20,6 +20,9 @@ use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
 use crate::model::Model;
 
+/// The accepted effects' starting points with the settings and effects they were made for.
+pub(super) type EffectStart = (Settings, Vec<(Block, Effect)>, Arc<Vec<Prepared>>);
+
 /// A loaded run: the core's session and the display snapshots of its stages.
 pub(super) struct RunCache {
     pub summary: Arc<RunSummary>,
@@ -34,8 +37,12 @@ pub(super) struct RunCache {
     /// Effects accepted into the model (the latest analysis job's).
     pub accepted: Vec<(Block, Effect)>,
     /// The diagnosis's starting point under the settings it was made for (blocks resolved):
-    /// reused by a rejection's rerun and by accepted effects.
+    /// reused by a rejection's rerun.
     pub prepared: Option<(Settings, Arc<Prepared>)>,
+    /// The accepted effects' starting points (`prepare_for_effects`) under the settings and
+    /// effects they were made for: a retune or a refit from scratch with the same settings and
+    /// effects reuses them.
+    pub effect_prepared: Option<EffectStart>,
 }
 
 impl RunCache {
@@ -50,6 +57,7 @@ impl RunCache {
             identification: None,
             accepted: Vec::new(),
             prepared: None,
+            effect_prepared: None,
         }
     }
 
@@ -170,9 +178,24 @@ impl Analysis<'_> {
             let prepared = if cache.accepted.is_empty() {
                 None
             } else {
-                let model = Model::from_identification(cache.session.run(), &settings, core);
                 let accepted = cache.accepted.clone();
-                match prepare_for_effects(&mut cache.session, &settings, &model, &accepted).map(Arc::new) {
+                let cached = cache
+                    .effect_prepared
+                    .as_ref()
+                    .filter(|(s, a, _)| *s == settings && *a == accepted)
+                    .map(|(_, _, p)| p.clone());
+                let fresh = |cache: &mut RunCache| {
+                    let model = Model::from_identification(cache.session.run(), &settings, core);
+                    let p = Arc::new(prepare_for_effects(
+                        &mut cache.session,
+                        &settings,
+                        &model,
+                        &accepted,
+                    )?);
+                    cache.effect_prepared = Some((settings.clone(), accepted.clone(), p.clone()));
+                    Ok::<_, DiagnoseError>(p)
+                };
+                match cached.map_or_else(|| fresh(cache), Ok) {
                     Ok(p) => Some(p),
                     Err(e) => {
                         return (self.send)(Event::Failed {

@@ -569,6 +569,51 @@ mod tests {
     }
 
     #[test]
+    fn accepted_effects_stay_in_the_model_through_a_retune_and_its_refit() {
+        use crate::block::Block;
+        use crate::effect::Effect;
+        use crate::ident::settings::{LambdaSetting, Settings};
+
+        let (mut worker, _) = sample_loaded();
+        let accepted = vec![(Block::Gyro, Effect::SensorLag)];
+        let analyse = |settings: &Settings| JobKind::Analyse {
+            settings: Box::new(settings.clone()),
+            accepted: accepted.clone(),
+        };
+        let first = Settings::default();
+        worker.submit(job(2, analyse(&first)));
+        let start = |worker: &Worker| {
+            let cache = &worker.inline.as_ref().expect("inline").runs[&1];
+            cache.effect_prepared.as_ref().expect("prepared").2.clone()
+        };
+        let before = start(&worker);
+        let retuned = Settings {
+            lambda: LambdaSetting::Values([0.05, 0.03, 0.02]),
+            ..first
+        };
+        worker.submit(job(3, analyse(&retuned)));
+        let shown: Vec<_> = worker
+            .events
+            .try_iter()
+            .filter_map(|e| match e {
+                Event::Identified { identification, .. } => Some(identification),
+                _ => None,
+            })
+            .collect();
+        assert!(shown.len() >= 2);
+        for i in &shown {
+            let gyro = i.block_model(Block::Gyro).expect("gyro");
+            assert_eq!(
+                gyro.effects.as_ref().expect("the lag stays").accepted[0].effect,
+                Effect::SensorLag
+            );
+            assert!(i.block_model(Block::Accel).expect("accel").effects.is_none());
+        }
+        // The retune's settings differ: the effects' start is made again for them.
+        assert!(!Arc::ptr_eq(&before, &start(&worker)));
+    }
+
+    #[test]
     fn a_retune_is_sent_at_once_then_refitted_from_scratch() {
         use crate::ident::identify::identify_run;
         use crate::ident::settings::{LambdaSetting, Settings};

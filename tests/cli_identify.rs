@@ -250,6 +250,42 @@ fn effects_accepted_from_a_list_or_a_discrepancy_report() {
         "{err}"
     );
     assert!(!bad.exists());
+    // An effect on a block the run does not have is said, not silently dropped.
+    let gyro_only = dir.path().join("gyro_only.csv");
+    let o = imu_attest(&[
+        "simulate",
+        "--regime",
+        "cruise",
+        "--duration",
+        "60",
+        "--seed",
+        "2",
+        "--blocks",
+        "gyro",
+        "--out",
+        gyro_only.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(
+        &list,
+        r#"{"effects": [{"block": "accel", "effect": "lever_arm_error"}]}"#,
+    )
+    .unwrap();
+    let out = dir.path().join("gyro_only_model.json");
+    let o = imu_attest(&[
+        "identify",
+        gyro_only.to_str().unwrap(),
+        "--effects",
+        list.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("lever_arm_error not added: the run has no accel block"),
+        "{err}"
+    );
     // The effects file is an input: never written over.
     let o = identify(&list, &list);
     assert_eq!(o.status.code(), Some(2));

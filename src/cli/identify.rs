@@ -109,6 +109,14 @@ pub(super) fn identify_model(
             );
         }
     }
+    for (block, effect) in accepted {
+        if !model.blocks.contains_key(block.name()) {
+            eprintln!(
+                "imu-attest: warning: {effect} not added: the run has no {} block",
+                block.name()
+            );
+        }
+    }
     for fault in &model.recording_faults {
         eprintln!("imu-attest: warning: {fault}");
     }

@@ -30,6 +30,10 @@ pub enum Effect {
     /// The block's clock runs at `1 + drift` against the stand's: its delay grows linearly
     /// through the run.
     ClockDrift,
+    /// Stand side, not a sensor effect: the angle measurement lags (its band limit or latency),
+    /// which both blocks see through their inputs as the same first-order lag. Not in
+    /// [`Effect::ALL`] (the sensors' catalogue the simulator hides); the diagnosis names it.
+    ReferenceLag,
 }
 
 impl Effect {
@@ -57,6 +61,7 @@ impl Effect {
             Effect::LeverArmError => "lever_arm_error",
             Effect::PlatformResonance => "platform_resonance",
             Effect::ClockDrift => "clock_drift",
+            Effect::ReferenceLag => "reference_lag",
         }
     }
 
@@ -72,6 +77,7 @@ impl Effect {
             Effect::LeverArmError => "lever-arm error",
             Effect::PlatformResonance => "mount resonance",
             Effect::ClockDrift => "clock drift",
+            Effect::ReferenceLag => "angle-measurement lag (stand side)",
         }
     }
 
@@ -93,6 +99,12 @@ impl Effect {
             Effect::LeverArmError => &[Block::Accel],
             _ => &Block::BOTH,
         }
+    }
+
+    /// Whether the effect is the stand's (its angle measurement), not a sensor's.
+    #[must_use]
+    pub fn is_stand_side(self) -> bool {
+        self == Effect::ReferenceLag
     }
 
     /// Every id, comma-separated (for messages).

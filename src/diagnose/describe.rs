@@ -107,6 +107,13 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
                 pm(sd1("T_s"), 1e3, 3)
             )]
         }),
+        Effect::ReferenceLag => p.get("T_s").and_then(num).map(|t| {
+            vec![format!(
+                "the angle measurement lags: T = {:.3}{} ms, the same on both blocks (the stand's band limit or latency, not the sensor)",
+                t * 1e3,
+                pm(sd1("T_s"), 1e3, 3)
+            )]
+        }),
         Effect::AxisTimeSkew => p.get("skew_s").and_then(three).map(|s| {
             vec![format!(
                 "channel delays relative to their mean, ms: {}",

@@ -114,7 +114,13 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
             continue;
         }
         let index = index_of(&state, effect);
-        let best = candidates_among(&state, band, &|e| e == effect)
+        // The stand's lag is fitted as a lag of the block's model (the same filter).
+        let fitted = if effect == Effect::ReferenceLag {
+            Effect::SensorLag
+        } else {
+            effect
+        };
+        let best = candidates_among(&state, band, &|e| e == fitted)
             .into_iter()
             .max_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2));
         match best.and_then(|c| state.with(&c, band)) {

@@ -157,7 +157,7 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
                 .map_or([[0.0; 3]; 3], |p| [0, 1, 2].map(|i| slice3(b, Some(p + 3 * i))));
             json!({"G": g, "units": "output units per m/s^2"})
         }
-        Effect::SensorLag => json!({"T_s": theta.lag_s}),
+        Effect::SensorLag | Effect::ReferenceLag => json!({"T_s": theta.lag_s}),
         Effect::AxisTimeSkew => {
             let skew = theta.channel_skew_s();
             json!({"channel_delay_s": skew.map(|d| theta.tau_s + d), "skew_s": skew})

@@ -7,6 +7,7 @@ use super::fit::fit;
 use super::structure::{Structure, Theta};
 use super::tone::strongest_line;
 use crate::block::Block;
+use crate::effect::Effect;
 use crate::fourier::{RecordFft, fast_len};
 use crate::rng::Rng;
 
@@ -105,4 +106,44 @@ fn a_hidden_tone_is_found_at_its_frequency_and_amplitude() {
         "{a:?}"
     );
     assert!(tone.delta_chi2 > 1000.0);
+}
+
+fn lag_finding(block: Block, t: f64, sd: f64) -> super::Finding {
+    super::Finding {
+        block,
+        effect: Effect::SensorLag,
+        name: Effect::SensorLag.name_on(block),
+        parameters: serde_json::json!({"T_s": t}),
+        parameter_std: serde_json::json!({"T_s": sd}),
+        gap_before_db: -20.0,
+        gap_after_db: -25.0,
+        evidence: String::new(),
+        delta_chi2: 500.0,
+        added_parameters: 1,
+        criterion_gain: 480.0,
+    }
+}
+
+#[test]
+fn the_same_lag_on_both_blocks_is_the_angle_measurements() {
+    // 2.31 +- 0.03 and 2.45 +- 0.04 ms: 2.8 sigma apart, one lag.
+    let mut f = vec![
+        lag_finding(Block::Gyro, 2.31e-3, 0.03e-3),
+        lag_finding(Block::Accel, 2.45e-3, 0.04e-3),
+    ];
+    super::workflow::name_stand_side(&mut f);
+    assert!(f.iter().all(|f| f.effect == Effect::ReferenceLag), "{f:?}");
+    assert_eq!(f[0].name, "gyro angle-measurement lag (stand side)");
+    assert!(f[1].evidence.contains("not the sensors'"), "{}", f[1].evidence);
+    // 3.6 and 4.4 ms, a few hundredths of a ms each: two sensors' own lags.
+    let mut f = vec![
+        lag_finding(Block::Gyro, 3.6e-3, 0.02e-3),
+        lag_finding(Block::Accel, 4.4e-3, 0.03e-3),
+    ];
+    super::workflow::name_stand_side(&mut f);
+    assert!(f.iter().all(|f| f.effect == Effect::SensorLag));
+    // A lag on one block only is the sensor's.
+    let mut f = vec![lag_finding(Block::Gyro, 2.3e-3, 0.03e-3)];
+    super::workflow::name_stand_side(&mut f);
+    assert_eq!(f[0].effect, Effect::SensorLag);
 }

@@ -176,7 +176,9 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
                 .map(|p| [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov.and_then(|c| c.linear_std(p + 3 * i + j)))));
             json!({"G": g})
         }
-        Effect::SensorLag => json!({"T_s": slot.lag.and_then(|k| cov?.nonlinear_std(k)).map(|v| v * 1e-3)}),
+        Effect::SensorLag | Effect::ReferenceLag => {
+            json!({"T_s": slot.lag.and_then(|k| cov?.nonlinear_std(k)).map(|v| v * 1e-3)})
+        }
         Effect::AxisTimeSkew => {
             let Some(a) = slot.skew else { return Value::Null };
             // Channel skews [a, b, -a - b] (ms in the vector); delays add tau (slot 0).

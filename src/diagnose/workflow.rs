@@ -3,6 +3,7 @@
 
 use crate::ident::band::BandSetting;
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 
 use super::DiagnoseError;
 use super::candidates::{Candidate, Extension, candidates};
@@ -155,17 +156,25 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
     let mut penalty = 0.0;
     for pb in &prep.blocks {
         let given = options.given.and_then(|m| m.blocks.get(pb.block.name()));
+        // A rejected stand-side lag rejects the lag it was found as.
         let rejected: Vec<Effect> = options
             .rejected
             .iter()
             .filter(|(block, _)| *block == pb.block)
-            .map(|&(_, e)| e)
+            .map(|&(_, e)| {
+                if e == Effect::ReferenceLag {
+                    Effect::SensorLag
+                } else {
+                    e
+                }
+            })
             .collect();
         let (report, mut found) = diagnose_block(pb, given, &rejected);
         penalty = pb.dof.ln();
         findings.append(&mut found);
         blocks.insert(pb.block.name().to_owned(), report);
     }
+    name_stand_side(&mut findings);
     findings.sort_by(|a: &Finding, b: &Finding| b.criterion_gain.total_cmp(&a.criterion_gain));
     Report {
         schema: DISCREPANCY_SCHEMA.to_owned(),
@@ -394,6 +403,51 @@ fn diagnose_block(
     let mut report = block_report(base, &state, first_round, dof);
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     (report, findings)
+}
+
+/// How many standard deviations two blocks' lags may differ by and still be one lag.
+const SHARED_LAG_SIGMAS: f64 = 3.0;
+
+/// A first-order lag found on both blocks with the same time constant (within
+/// [`SHARED_LAG_SIGMAS`] of their combined standard deviation) is the angle measurement's, not
+/// the sensors': both blocks see the stand's band limit or latency through their inputs, and
+/// per block an input lag and an output lag are the same filter. Both findings are renamed
+/// [`Effect::ReferenceLag`]. (The simulator draws a sensor lag on each block independently,
+/// 3.2-5 ms apart by up to 1.8 ms, far beyond the few hundredths of a ms their deviations are.)
+pub(super) fn name_stand_side(findings: &mut [Finding]) {
+    let lag = |f: &Finding| {
+        let t = f.parameters.get("T_s")?.as_f64()?;
+        let sd = f.parameter_std.get("T_s")?.as_f64()?;
+        Some((t, sd))
+    };
+    let of = |findings: &[Finding], block: Block| {
+        findings
+            .iter()
+            .position(|f| f.block == block && f.effect == Effect::SensorLag)
+    };
+    let (Some(g), Some(a)) = (of(findings, Block::Gyro), of(findings, Block::Accel)) else {
+        return;
+    };
+    let (Some((tg, sg)), Some((ta, sa))) = (lag(&findings[g]), lag(&findings[a])) else {
+        return;
+    };
+    if (tg - ta).abs() > SHARED_LAG_SIGMAS * sg.hypot(sa) {
+        return;
+    }
+    for k in [g, a] {
+        let f = &mut findings[k];
+        f.effect = Effect::ReferenceLag;
+        f.name = Effect::ReferenceLag.name_on(f.block);
+        let _ = write!(
+            f.evidence,
+            "; the same lag on both blocks (gyro {:.3} ± {:.3} ms, accelerometer {:.3} ± {:.3} ms): the angle \
+             measurement's band limit or latency, seen by both through their inputs, not the sensors'",
+            tg * 1e3,
+            sg * 1e3,
+            ta * 1e3,
+            sa * 1e3
+        );
+    }
 }
 
 /// Highest damping ratio of a resonance reported as a finding: a mode damped more has no peak

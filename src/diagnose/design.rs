@@ -99,15 +99,8 @@ impl Design {
     ) -> Option<Self> {
         let n = signals.output[0].len();
         let fs = signals.sample_rate_hz;
-        let fft_len = fast_len(n);
-        let mut fft = RecordFft::new(fft_len, fs);
-        let df = fs / fft_len as f64;
-        let first_bin = ((band_hz[0] / df).ceil() as usize).max(1);
-        let last_bin = ((band_hz[1] / df).floor() as usize).min(fft.n_bins() - 1);
-        if last_bin < first_bin + 16 {
-            return None;
-        }
-        let band = first_bin..=last_bin;
+        let (mut fft, band) = record_band(n, fs, band_hz, 16)?;
+        let (fft_len, first_bin, df) = (fft.len(), *band.start(), fs / fft.len() as f64);
         let taper = hann(n);
         let mut spectrum = |x: &[f64]| band_spectrum(&mut fft, &taper, x, band.clone());
         let mut z: Vec<Vec<Complex64>> = Vec::new();
@@ -243,15 +236,8 @@ impl Design {
     ) -> Option<Self> {
         let n = output[0].len();
         let fs = sample_rate_hz;
-        let fft_len = fast_len(n);
-        let mut fft = RecordFft::new(fft_len, fs);
-        let df = fs / fft_len as f64;
-        let first_bin = ((band_hz[0] / df).ceil() as usize).max(1);
-        let last_bin = ((band_hz[1] / df).floor() as usize).min(fft.n_bins() - 1);
-        if last_bin < first_bin + 256 {
-            return None;
-        }
-        let band = first_bin..=last_bin;
+        let (mut fft, band) = record_band(n, fs, band_hz, 256)?;
+        let (fft_len, first_bin, df) = (fft.len(), *band.start(), fs / fft.len() as f64);
         let taper = hann(n);
         let z: Vec<Vec<Complex64>> = output
             .iter()
@@ -302,6 +288,21 @@ impl Design {
     pub fn outputs(&self) -> [Vec<Complex64>; 3] {
         [0, 1, 2].map(|i| self.z[X + i].clone())
     }
+}
+
+/// The DFT plans of a record of `n` samples at `fs` (zero-padded to a fast length) and its bins
+/// inside `band_hz`; `None` when fewer than `min_bins` bins fall inside.
+fn record_band(
+    n: usize,
+    fs: f64,
+    band_hz: [f64; 2],
+    min_bins: usize,
+) -> Option<(RecordFft, std::ops::RangeInclusive<usize>)> {
+    let fft = RecordFft::new(fast_len(n), fs);
+    let df = fs / fft.len() as f64;
+    let first_bin = ((band_hz[0] / df).ceil() as usize).max(1);
+    let last_bin = ((band_hz[1] / df).floor() as usize).min(fft.n_bins() - 1);
+    (last_bin >= first_bin + min_bins).then_some((fft, first_bin..=last_bin))
 }
 
 /// The periodic Hann taper over `n` samples, `w_k = (1 - cos(2 pi k / n)) / 2`.

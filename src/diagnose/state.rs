@@ -111,8 +111,7 @@ impl State {
     /// Sets the spectra above the fit's band where tones are searched too
     /// ([`Design::line_search`]): their residual is that of the current gain and delay.
     pub fn set_upper(&mut self, mut upper: Design) {
-        let b = &self.fitted.profile.beta;
-        let k = [0, 1, 2].map(|i| [0, 1, 2].map(|j| b[3 * i + j]));
+        let k = super::report::gain(self);
         self.upper_residual = upper.set_line_level(k, self.fitted.theta.tau_s);
         self.upper = Some(Arc::new(upper));
     }

@@ -175,6 +175,7 @@ impl Analysis<'_> {
                 return;
             };
             let settings = settings.clone();
+            let model = Model::from_identification(cache.session.run(), &settings, core);
             let prepared = if cache.accepted.is_empty() {
                 None
             } else {
@@ -185,7 +186,6 @@ impl Analysis<'_> {
                     .filter(|(s, a, _)| *s == settings && *a == accepted)
                     .map(|(_, _, p)| p.clone());
                 let fresh = |cache: &mut RunCache| {
-                    let model = Model::from_identification(cache.session.run(), &settings, core);
                     let p = Arc::new(prepare_for_effects(
                         &mut cache.session,
                         &settings,
@@ -211,12 +211,7 @@ impl Analysis<'_> {
             let extension = prepared
                 .as_deref()
                 .map(|p| (p.as_slice(), cache.accepted.as_slice()));
-            let i = Arc::new(Identification::extended(
-                cache.session.run(),
-                settings,
-                core.clone(),
-                extension,
-            ));
+            let i = Arc::new(Identification::extended(settings, core.clone(), model, extension));
             cache.identification = Some(i.clone());
             i
         };

@@ -89,19 +89,20 @@ impl Identification {
     /// Builds the snapshot from the core's results.
     #[must_use]
     pub fn new(run: &Run, settings: Settings, core: Arc<RunIdentification>) -> Self {
-        Self::extended(run, settings, core, None)
+        let model = Model::from_identification(run, &settings, &core);
+        Self::extended(settings, core, model, None)
     }
 
-    /// [`Identification::new`] with the model extended by accepted effects, from the diagnosis's
+    /// [`Identification::new`] from its model file (`Model::from_identification` of `core`), the
+    /// model extended by accepted effects, from the diagnosis's
     /// starting point of the same run and settings (`crate::diagnose::extend`).
     #[must_use]
     pub fn extended(
-        run: &Run,
         settings: Settings,
         core: Arc<RunIdentification>,
+        mut model: Model,
         extension: Option<Extension<'_>>,
     ) -> Self {
-        let mut model = Model::from_identification(run, &settings, &core);
         if let Some((prepared, accepted)) = extension {
             apply_effects(&mut model, prepared, accepted);
         }

@@ -36,7 +36,7 @@ use super::structural::StructuralFit;
 use crate::block::Block;
 use crate::run::Run;
 use crate::spectral::{WelchPlanner, WelchSettings};
-use crate::stand::observer::{ObserverEstimate, ObserverSettings, observe};
+use crate::stand::observer::{ObserverEstimate, ObserverSettings, observe_with_witness};
 
 /// Where the factorisation and the structural fit start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,8 +93,10 @@ impl Session {
     }
 
     /// The observer's estimate of the platform motion (the sidecar's declared angle noise, else
-    /// estimated), from the measured angles with their isolated glitches bridged
-    /// ([`bridged`]: a spike in an angle would be differentiated twice into every block's input).
+    /// estimated, as the white floor; coloured per frequency by what the gyro's outputs do not
+    /// explain when the run has a gyro block), from the measured angles with their isolated
+    /// glitches bridged ([`bridged`]: a spike in an angle would be differentiated twice into
+    /// every block's input).
     ///
     /// # Errors
     /// What the observer refuses (too few samples, a bad declared noise).
@@ -107,10 +109,12 @@ impl Session {
             ..ObserverSettings::default()
         };
         let angles = bridged(self.run.angles.clone());
-        let m = Arc::new(observe(
+        let witness = self.run.outputs(Block::Gyro).map(|gyro| bridged(gyro.clone()));
+        let m = Arc::new(observe_with_witness(
             angles.each_ref().map(Vec::as_slice),
             self.run.sample_rate_hz,
             &settings,
+            witness.as_ref().map(|w| w.each_ref().map(Vec::as_slice)),
         )?);
         self.motion = Some(m.clone());
         Ok(m)

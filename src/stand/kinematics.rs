@@ -74,6 +74,20 @@ pub fn body_rate(e: &EulerState) -> Vector3<f64> {
     )
 }
 
+/// Euler rates `[roll', yaw', pitch']` from a body rate `w` at the Euler `angle`: the inverse of
+/// [`body_rate`] (`yaw' = (cos(roll) wy - sin(roll) wz) / cos(pitch)`,
+/// `pitch' = sin(roll) wy + cos(roll) wz`, `roll' = wx - yaw' sin(pitch)`). Singular at
+/// `pitch = +-pi/2` (gimbal lock), where it returns non-finite values.
+#[must_use]
+pub fn euler_rate(angle: [f64; 3], w: [f64; 3]) -> [f64; 3] {
+    let [roll, _, pitch] = angle;
+    let (sr, cr) = roll.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let dyaw = (cr * w[1] - sr * w[2]) / cp;
+    let dpitch = sr * w[1] + cr * w[2];
+    [w[0] - dyaw * sp, dyaw, dpitch]
+}
+
 /// Body angular acceleration (platform axes), rad/s^2: the time derivative of [`body_rate`].
 #[must_use]
 pub fn body_angular_accel(e: &EulerState) -> Vector3<f64> {

@@ -161,3 +161,17 @@ fn series_evaluation_matches_pointwise() {
         }
     }
 }
+
+#[test]
+fn euler_rate_inverts_body_rate() {
+    let e = EulerState {
+        angle: [0.3, -1.1, -0.4],
+        rate: [0.2, -0.7, 1.3],
+        accel: [0.0; 3],
+    };
+    let w = body_rate(&e);
+    let back = euler_rate(e.angle, [w[0], w[1], w[2]]);
+    for (b, r) in back.iter().zip(e.rate) {
+        assert!((b - r).abs() < 1e-14, "{back:?} vs {:?}", e.rate);
+    }
+}

@@ -6,6 +6,7 @@
 //! yaw -> pitch -> roll, so the platform-to-level rotation is `C = R_y(yaw) R_z(pitch) R_x(roll)`.
 //! Units: rad, rad/s, rad/s^2, m, m/s^2.
 
+pub mod colour;
 pub mod inputs;
 pub mod kinematics;
 pub mod observer;

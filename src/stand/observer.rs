@@ -9,9 +9,13 @@
 //! 2. The 3x3 spectral matrix `S_yy` of the measurements is estimated on the record's own FFT grid
 //!    by a smoothed cross-periodogram (Daniell window `max(smoothing_hz, smoothing_fraction * f)`
 //!    wide).
-//! 3. The measurement noise is white with per-axis variance `N = diag(sigma^2)`: the declared
-//!    `angle_noise_rad`, or else estimated from the periodogram's floor between 0.70 and 0.95 of
-//!    Nyquist (median / ln 2, the median of an exponential being ln 2 times its mean).
+//! 3. The measurement noise has per-axis variance `N = diag(sigma^2)` per bin. Its white floor is
+//!    the declared `angle_noise_rad`, or else estimated from the periodogram's floor between 0.70
+//!    and 0.95 of Nyquist (median / ln 2, the median of an exponential being ln 2 times its mean).
+//!    Given a witness of the motion (the gyro's outputs as Euler rates,
+//!    [`observe_with_witness`]), the noise is coloured: per bin, the part of each angle the
+//!    witness does not explain, never below the floor ([`super::colour`]). Without one it is the
+//!    floor in every bin.
 //! 4. The gain per bin is `H = S_uu S_yy^-1 = I - N S_yy^-1`, computed in the noise-whitened basis
 //!    with eigenvalues clamped to `[0, 1]`: `H = N^1/2 V diag((1 - 1/l)_+) V^H N^-1/2`.
 //!    `H` is Hermitian per bin, with `H(-f) = conj(H(f))`: a zero-phase smoother, so it cannot
@@ -30,6 +34,7 @@
 use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex64;
 
+use super::colour::{AngleNoise, coloured_noise};
 use super::kinematics::EulerSeries;
 use crate::fourier::{RecordFft, fast_len};
 
@@ -61,6 +66,17 @@ impl Default for ObserverSettings {
     }
 }
 
+/// The noise model's shape over frequency.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseColour {
+    /// The white level in every bin (no witness of the motion: a run without a gyro block).
+    White,
+    /// Per bin, the part of the angles the gyro's outputs do not explain, floored at the white
+    /// level ([`super::colour`]).
+    FromGyro,
+}
+
 /// Where the noise level came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -78,8 +94,13 @@ pub struct ObserverEstimate {
     pub euler: EulerSeries,
     /// Noise standard deviation used per axis, rad.
     pub angle_noise_rad: [f64; 3],
-    /// Where that came from.
+    /// Where that came from (the white floor).
     pub noise_source: NoiseSource,
+    /// Whether the noise model is white or coloured (estimated per frequency).
+    pub noise_colour: NoiseColour,
+    /// The noise model per frequency: the one-sided density of the angle measurement's noise the
+    /// observer assumed, rad^2/Hz per axis, in the bands of [`ErrorPsd`].
+    pub angle_noise_psd: ErrorPsd,
     /// The spectral density of the estimate's error, per angle axis (see [`ErrorPsd`]).
     pub error_psd: ErrorPsd,
 }
@@ -88,7 +109,7 @@ pub struct ObserverEstimate {
 /// per axis, averaged over bands a twentieth of a decade wide (ascending, positive frequencies).
 /// For the Wiener smoother it is `H N` per bin (the part of the angle noise that passes, where
 /// the motion is; the motion that is smoothed away, bounded by the noise, where it is not), with
-/// `N = 2 sigma^2 / fs` the white angle noise's density. Rates' errors are `w^2` times it.
+/// `N = 2 sigma^2 / fs` the density of the noise model in that bin. Rates' errors are `w^2` times it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorPsd {
     /// Band centres (geometric), Hz.
@@ -191,6 +212,21 @@ pub fn observe(
     sample_rate_hz: f64,
     settings: &ObserverSettings,
 ) -> Result<ObserverEstimate, ObserverError> {
+    observe_with_witness(angles, sample_rate_hz, settings, None)
+}
+
+/// [`observe`], with the angle noise's colour estimated from `witness` when one is given: the
+/// gyro block's outputs (body rates, rad/s, columns `gx, gy, gz`), the angles' length (module
+/// [`super::colour`]). A witness of another length or with a non-finite value is not used.
+///
+/// # Errors
+/// As [`observe`].
+pub fn observe_with_witness(
+    angles: [&[f64]; 3],
+    sample_rate_hz: f64,
+    settings: &ObserverSettings,
+    witness: Option<[&[f64]; 3]>,
+) -> Result<ObserverEstimate, ObserverError> {
     validate(angles, sample_rate_hz, settings)?;
     let n = angles[0].len();
     let pad = ((settings.pad_s * sample_rate_hz).round() as usize).clamp(4, n - 1);
@@ -198,12 +234,17 @@ pub fn observe(
     let taper = half_hann(pad);
     let effective_len = n as f64 + 2.0 * taper.iter().map(|w| w * w).sum::<f64>();
 
+    let witness = witness.filter(|w| w.iter().all(|c| c.len() == n && c.iter().all(|v| v.is_finite())));
     let mut trends = [(0.0, 0.0); 3];
     let mut spectra: [Vec<Complex64>; 3] = Default::default();
+    let mut residuals: [Vec<f64>; 3] = Default::default();
     for axis in 0..3 {
         let (offset, slope, residual) = remove_line(angles[axis], sample_rate_hz);
         trends[axis] = (offset, slope);
         spectra[axis] = fft.forward(&extend(&residual, pad, &taper, fft.len()));
+        if witness.is_some() {
+            residuals[axis] = residual;
+        }
     }
 
     let (noise_var, noise_source) = match settings.angle_noise_rad {
@@ -211,14 +252,30 @@ pub fn observe(
         None => (estimate_noise(&spectra, effective_len), NoiseSource::Estimated),
     };
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
-    let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, noise_var);
+    let (noise, noise_colour) = match witness {
+        Some(w) => {
+            let half_widths: Vec<usize> = (0..fft.n_bins()).map(|k| half_width(&fft, settings, k)).collect();
+            let residuals = residuals.each_ref().map(Vec::as_slice);
+            let per_bin = coloured_noise(angles, residuals, w, &mut fft, &half_widths, noise_var);
+            (AngleNoise::PerBin(per_bin), NoiseColour::FromGyro)
+        }
+        None => (AngleNoise::White(noise_var), NoiseColour::White),
+    };
+    let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, &noise);
     let density = 2.0 / sample_rate_hz;
+    let df = sample_rate_hz / fft.len() as f64;
     let error_psd = ErrorPsd::from_bins(
         &error_per_bin
             .iter()
             .map(|e| e.map(|v| v * density))
             .collect::<Vec<_>>(),
-        sample_rate_hz / fft.len() as f64,
+        df,
+    );
+    let angle_noise_psd = ErrorPsd::from_bins(
+        &(0..fft.n_bins())
+            .map(|k| noise.at(k).map(|v| v * density))
+            .collect::<Vec<_>>(),
+        df,
     );
 
     let last = fft.n_bins() - 1;
@@ -253,6 +310,8 @@ pub fn observe(
         euler,
         angle_noise_rad: noise_var.map(f64::sqrt),
         noise_source,
+        noise_colour,
+        angle_noise_psd,
         error_psd,
     })
 }
@@ -289,7 +348,7 @@ fn validate(angles: [&[f64]; 3], rate: f64, settings: &ObserverSettings) -> Resu
 }
 
 /// Least-squares line `x ~ offset + slope t`; returns it and the residual.
-fn remove_line(x: &[f64], rate: f64) -> (f64, f64, Vec<f64>) {
+pub(super) fn remove_line(x: &[f64], rate: f64) -> (f64, f64, Vec<f64>) {
     let n = x.len() as f64;
     let t_mean = (n - 1.0) / 2.0 / rate;
     let x_mean = x.iter().sum::<f64>() / n;
@@ -342,6 +401,16 @@ fn estimate_noise(spectra: &[Vec<Complex64>; 3], effective_len: f64) -> [f64; 3]
     })
 }
 
+/// Half-width in bins of the Daniell window at bin `k`: `max(smoothing_hz, smoothing_fraction f)`
+/// wide, at least one bin each side.
+fn half_width(fft: &RecordFft, settings: &ObserverSettings, k: usize) -> usize {
+    let bins_per_hz = fft.len() as f64 / fft.sample_rate_hz();
+    let width = settings
+        .smoothing_hz
+        .max(settings.smoothing_fraction * fft.frequency_hz(k));
+    ((width * bins_per_hz / 2.0) as usize).max(1)
+}
+
 /// Daniell-smoothed cross-periodogram `Y Y^H / L_eff` per bin, via prefix sums.
 fn smoothed_cross_periodogram(
     spectra: &[Vec<Complex64>; 3],
@@ -358,13 +427,9 @@ fn smoothed_cross_periodogram(
         acc += y * y.adjoint() / Complex64::from(effective_len);
         prefix.push(acc);
     }
-    let bins_per_hz = fft.len() as f64 / fft.sample_rate_hz();
     (0..bins)
         .map(|k| {
-            let width = settings
-                .smoothing_hz
-                .max(settings.smoothing_fraction * fft.frequency_hz(k));
-            let half = ((width * bins_per_hz / 2.0) as usize).max(1);
+            let half = half_width(fft, settings, k);
             let (lo, hi) = (k.saturating_sub(half), (k + half + 1).min(bins));
             (prefix[hi] - prefix[lo]) / Complex64::from((hi - lo) as f64)
         })
@@ -376,19 +441,19 @@ fn smoothed_cross_periodogram(
 fn wiener_gain_apply(
     spectra: &[Vec<Complex64>; 3],
     smoothed: &[Matrix3<Complex64>],
-    noise_var: [f64; 3],
+    noise: &AngleNoise,
 ) -> ([Vec<Complex64>; 3], Vec<[f64; 3]>) {
     let floor = smoothed.iter().map(|s| s.trace().re).fold(0.0, f64::max) * 1e-30;
-    let sd = noise_var.map(|v| v.max(floor).max(f64::MIN_POSITIVE).sqrt());
-    let n_half = Matrix3::from_diagonal(&Vector3::from(sd).map(Complex64::from));
-    let n_half_inv = Matrix3::from_diagonal(&Vector3::from(sd.map(f64::recip)).map(Complex64::from));
     let mut out: [Vec<Complex64>; 3] = Default::default();
     for o in &mut out {
         o.reserve(smoothed.len());
     }
     let mut error = Vec::with_capacity(smoothed.len());
-    let n_diag = Matrix3::from_diagonal(&Vector3::from(sd.map(|v| v * v)).map(Complex64::from));
     for (k, s) in smoothed.iter().enumerate() {
+        let sd = noise.at(k).map(|v| v.max(floor).max(f64::MIN_POSITIVE).sqrt());
+        let n_half = Matrix3::from_diagonal(&Vector3::from(sd).map(Complex64::from));
+        let n_half_inv = Matrix3::from_diagonal(&Vector3::from(sd.map(f64::recip)).map(Complex64::from));
+        let n_diag = Matrix3::from_diagonal(&Vector3::from(sd.map(|v| v * v)).map(Complex64::from));
         let whitened = n_half_inv * s * n_half_inv;
         let eig = whitened.symmetric_eigen();
         let gains = eig.eigenvalues.map(|l| {

@@ -1,0 +1,262 @@
+//! The colour of the angle measurement's noise, estimated per frequency from the data.
+//!
+//! A real stand's angles are not white-noised: an optical reference or an encoder's interpolation
+//! error puts most of its noise inside the motion's band, where a white floor read near Nyquist
+//! says nothing about it, and the observer would pass it into the blocks' inputs as motion
+//! (errors in variables: gains biased low where the motion is weak, a gain that varies with
+//! frequency, which the order selection then "explains" with poles).
+//!
+//! A run with a gyro block carries a second, independent measurement of the same motion: the
+//! gyro's outputs, turned into Euler rates at the measured angles ([`euler_rate`]), the
+//! **witness** `w`. Per bin the part of each measured angle that no linear filter of the witness
+//! explains is
+//!
+//! `N_c = S_yy - S_yw S_ww^-1 S_wy`,
+//!
+//! with the cross-periodograms of the Hann-windowed record (the strong low-frequency motion
+//! would leak through a rectangular window into the weak high-frequency bins) smoothed over the
+//! observer's Daniell windows, and corrected by `M / (M - 3)` for the three regressors fitted in
+//! a window of `M` independent bins (the window's bins times `(2n/3) / L_fft`). The witness's
+//! own misalignment and dynamics are linear filters, so they do not enter; its bulk delay is
+//! taken out (a delay turns the phase across a window); the kinematic coupling does not enter
+//! either, because the witness is converted to Euler rates sample by sample with the exact
+//! kinematics, at the angles one delay earlier (in a fast rotation the attitude turns within the
+//! delay).
+//!
+//! What `N_c` also holds: the gyro's own noise as seen in angle units, `S_psi / w^2`. Where the
+//! gyro's signal-to-noise ratio is high (most of a certification run's band) it is negligible;
+//! where it is not, taking it as the reference's noise shrinks the input estimate by the gyro's
+//! noise-to-signal ratio (gains biased high by that ratio), the mirror of the white model's
+//! error. The observer uses `clamp(N_c, white floor, S_yy)` per axis and bin; with one block of
+//! outputs the two noises cannot be told apart in a bin, and this choice errs on the side the
+//! gyro's quality bounds.
+//!
+//! Units: the per-bin values are periodogram levels `|Y|^2 / L_eff` (rad^2 per sample, the units
+//! of a white noise's variance); densities are `2 / fs` times them. Empty windows or a singular
+//! `S_ww` give `S_yy` (nothing explained). NaN cannot arise from finite input.
+
+use nalgebra::{Matrix3, Vector3};
+use num_complex::Complex64;
+
+use super::kinematics::euler_rate;
+use super::observer::remove_line;
+use crate::fourier::RecordFft;
+
+/// Bins between two exact recomputations of the sliding window's sums (bounds rounding drift).
+const RESUM_EVERY: usize = 1024;
+
+/// The angle noise the observer assumes, per bin, as per-sample variances per axis.
+#[derive(Clone, Debug)]
+pub(super) enum AngleNoise {
+    /// The same white level in every bin.
+    White([f64; 3]),
+    /// A level per bin (the coloured model).
+    PerBin(Vec<[f64; 3]>),
+}
+
+impl AngleNoise {
+    /// The variances at bin `k`.
+    pub(super) fn at(&self, k: usize) -> [f64; 3] {
+        match self {
+            Self::White(v) => *v,
+            Self::PerBin(v) => v[k],
+        }
+    }
+}
+
+/// The witness: the gyro's body rates `body` turned into Euler rates at the measured `angles`
+/// (rad/s, axis order `[roll, yaw, pitch]`). Samples at gimbal lock (non-finite) become 0.
+fn witness_euler_rates(angles: [&[f64]; 3], body: [&[f64]; 3]) -> [Vec<f64>; 3] {
+    let n = angles[0].len().min(body[0].len());
+    let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    for i in 0..n {
+        let r = euler_rate(
+            [angles[0][i], angles[1][i], angles[2][i]],
+            [body[0][i], body[1][i], body[2][i]],
+        );
+        for a in 0..3 {
+            out[a][i] = if r[a].is_finite() { r[a] } else { 0.0 };
+        }
+    }
+    out
+}
+
+/// Sums of `y y^H`, `y w^H` and `w w^H` over a window of bins.
+#[derive(Clone, Copy)]
+struct Sums {
+    yy: Matrix3<Complex64>,
+    yw: Matrix3<Complex64>,
+    ww: Matrix3<Complex64>,
+}
+
+impl Sums {
+    fn zero() -> Self {
+        Self {
+            yy: Matrix3::zeros(),
+            yw: Matrix3::zeros(),
+            ww: Matrix3::zeros(),
+        }
+    }
+
+    fn add(&mut self, y: &Vector3<Complex64>, w: &Vector3<Complex64>, sign: f64) {
+        let s = Complex64::from(sign);
+        self.yy += y * y.adjoint() * s;
+        self.yw += y * w.adjoint() * s;
+        self.ww += w * w.adjoint() * s;
+    }
+}
+
+fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
+    Vector3::new(spectra[0][k], spectra[1][k], spectra[2][k])
+}
+
+/// `x` times a Hann window over its length, at the start of a zero buffer of `len` samples.
+fn hann_windowed(x: &[f64], len: usize) -> Vec<f64> {
+    let n = x.len();
+    let mut out = vec![0.0; len];
+    for (i, (o, v)) in out.iter_mut().zip(x).enumerate() {
+        let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * (i as f64 + 0.5) / n as f64).cos();
+        *o = w * v;
+    }
+    out
+}
+
+/// `x` late by `samples` (linear interpolation, held at the ends).
+fn delayed(x: &[f64], samples: f64) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            let t = (i as f64 - samples).clamp(0.0, (n - 1) as f64);
+            let j = (t.floor() as usize).min(n.saturating_sub(2));
+            let frac = t - j as f64;
+            x[j] * (1.0 - frac) + x[(j + 1).min(n - 1)] * frac
+        })
+        .collect()
+}
+
+/// The witness as angles: integrated by trapezoids, its least-squares line removed.
+fn witness_angles(rates: &[f64], sample_rate_hz: f64) -> Vec<f64> {
+    let mut angle = Vec::with_capacity(rates.len());
+    let mut sum = 0.0;
+    angle.push(sum);
+    for pair in rates.windows(2) {
+        sum += 0.5 * (pair[0] + pair[1]) / sample_rate_hz;
+        angle.push(sum);
+    }
+    remove_line(&angle, sample_rate_hz).2
+}
+
+/// Advances the witness's spectra `w` by its bulk delay behind the angles' `y`: the peak of their
+/// summed cross-correlation, refined by a parabola. A delay left in would turn the phase across
+/// a smoothing window and leak motion into the unexplained part. Returns the delay, s.
+fn align(w: &mut [Vec<Complex64>; 3], y: &[Vec<Complex64>; 3], fft: &mut RecordFft) -> f64 {
+    let rate = fft.sample_rate_hz();
+    let cross: Vec<Complex64> = (0..fft.n_bins())
+        .map(|k| (0..3).map(|a| y[a][k] * w[a][k].conj()).sum())
+        .collect();
+    let correlation = fft.inverse(cross);
+    let len = correlation.len();
+    let max_lag = ((0.5 * rate) as usize).min(len / 2 - 1);
+    let lag_of = |i: usize| {
+        if i <= len / 2 {
+            i as f64
+        } else {
+            i as f64 - len as f64
+        }
+    };
+    let peak = (0..=max_lag)
+        .chain(len - max_lag..len)
+        .max_by(|&a, &b| correlation[a].total_cmp(&correlation[b]))
+        .unwrap_or(0);
+    let (before, after) = (correlation[(peak + len - 1) % len], correlation[(peak + 1) % len]);
+    let curvature = before - 2.0 * correlation[peak] + after;
+    let refine = if curvature < 0.0 {
+        (0.5 * (before - after) / curvature).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    };
+    let delay_s = -(lag_of(peak) + refine) / rate;
+    for s in w.iter_mut() {
+        for (k, v) in s.iter_mut().enumerate() {
+            let omega = 2.0 * std::f64::consts::PI * fft.frequency_hz(k);
+            *v *= Complex64::from_polar(1.0, omega * delay_s);
+        }
+    }
+    delay_s
+}
+
+/// The coloured model on the observer's grid `fft`: per bin and axis, `clamp(N_c, white, S_yy)`
+/// (module docs), from the angles' residuals (their lines removed) and the witness's Euler rates,
+/// both Hann-windowed over the record (a rectangular or short-tapered record leaks the strong
+/// low-frequency motion into the weak high-frequency bins, where its relation to the witness is
+/// not the local one); `half_widths[k]` is the observer's smoothing half-width at bin `k`.
+pub(super) fn coloured_noise(
+    angles: [&[f64]; 3],
+    residuals: [&[f64]; 3],
+    body_rates: [&[f64]; 3],
+    fft: &mut RecordFft,
+    half_widths: &[usize],
+    white: [f64; 3],
+) -> Vec<[f64; 3]> {
+    let n = residuals[0].len();
+    let rate = fft.sample_rate_hz();
+    let y = residuals.map(|r| fft.forward(&hann_windowed(r, fft.len())));
+    let spectra = |fft: &mut RecordFft, angles: [&[f64]; 3]| {
+        let euler = witness_euler_rates(angles, body_rates);
+        let len = fft.len();
+        euler.map(|r| fft.forward(&hann_windowed(&witness_angles(&r, rate), len)))
+    };
+    // The gyro's rates are late by its delay: converted at the angles of the same instant, a fast
+    // rotation turns the attitude within the delay and the conversion itself leaks. So: the
+    // delay from a first conversion, then the conversion at the angles that much earlier.
+    let mut first = spectra(fft, angles);
+    let delay_s = align(&mut first, &y, fft);
+    let late = angles.map(|a| delayed(a, delay_s * rate));
+    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice));
+    align(&mut w, &y, fft);
+    // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
+    // record's equivalent number of independent samples, spread over the padded grid.
+    let power_norm = 3.0 * n as f64 / 8.0;
+    let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
+    let bins = fft.n_bins();
+    let mut sums = Sums::zero();
+    let (mut lo, mut hi) = (0, 0);
+    let mut out = Vec::with_capacity(bins);
+    for k in 0..bins {
+        let half = half_widths[k].max(1);
+        let (new_lo, new_hi) = (k.saturating_sub(half), (k + half + 1).min(bins));
+        if k % RESUM_EVERY == 0 {
+            sums = Sums::zero();
+            for j in new_lo..new_hi {
+                sums.add(&bin(&y, j), &bin(&w, j), 1.0);
+            }
+        } else {
+            for j in hi..new_hi {
+                sums.add(&bin(&y, j), &bin(&w, j), 1.0);
+            }
+            for j in lo..new_lo {
+                sums.add(&bin(&y, j), &bin(&w, j), -1.0);
+            }
+        }
+        (lo, hi) = (new_lo, new_hi);
+        let count = (hi - lo) as f64;
+        let independent = count * independent_per_bin;
+        let scale = Complex64::from(1.0 / (count * power_norm));
+        let (syy, syw, sww) = (sums.yy * scale, sums.yw * scale, sums.ww * scale);
+        let total = [syy[(0, 0)].re, syy[(1, 1)].re, syy[(2, 2)].re];
+        let unexplained = match sww.try_inverse() {
+            Some(inv) if independent > 4.0 => {
+                let explained = syw * inv * syw.adjoint();
+                let correction = independent / (independent - 3.0);
+                [0, 1, 2].map(|a| (total[a] - explained[(a, a)].re) * correction)
+            }
+            _ => total,
+        };
+        out.push([0, 1, 2].map(|a| unexplained[a].min(total[a]).max(white[a])));
+    }
+    out
+}
+
+#[cfg(test)]
+#[path = "colour_tests.rs"]
+mod tests;

@@ -74,20 +74,23 @@ fn a_span_after_a_late_start_gives_the_clean_run_s_gain() {
             assert!(worst(&whole) > 10.0, "the dead start spoils the whole record's K");
         }
     }
-    // What lies outside the span does not matter: the clean run over the same span gives the
-    // same K and tau (the outputs differ only before the span; the angles not at all).
+    // What lies outside the span hardly matters: the clean run over the same span gives the same
+    // K and tau to a tenth of their standard deviations (the outputs differ only before the span;
+    // the angles not at all; the observer's noise model, estimated from the gyro's outputs over
+    // the whole record, is the median of five stretches and ignores the dead one).
     let clean_span = gyro_fit(&clean, &spanned);
     for i in 0..3 {
         for j in 0..3 {
+            let sigma = span.k_std[i][j];
             assert!(
-                (span.k[i][j] - clean_span.k[i][j]).abs() < 1e-9,
-                "K[{i}][{j}]: {} vs {}",
+                (span.k[i][j] - clean_span.k[i][j]).abs() < 0.1 * sigma,
+                "K[{i}][{j}]: {} vs {} (sigma {sigma:e})",
                 span.k[i][j],
                 clean_span.k[i][j]
             );
         }
     }
-    assert!((span.tau_s - clean_span.tau_s).abs() < 1e-12);
+    assert!((span.tau_s - clean_span.tau_s).abs() < 0.1 * span.tau_std_s);
     // And it agrees with the whole clean record's within the span's own uncertainty (loosely:
     // the two share most of their data, and the gyro's sigma runs about 1.5x small, README).
     assert!(worst(&span) < 5.0, "span K off by {} sigma", worst(&span));

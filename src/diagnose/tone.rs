@@ -6,9 +6,14 @@
 //!
 //! The explained power is measured against the local continuum, not the model's disturbance
 //! level, so that broadband misfit left by another effect cannot pass for a line.
+//!
+//! The three channels are fitted together against their background's correlation (a random peak
+//! of motion every channel sees, above the reference's band limit, is one draw, not three), and
+//! a line must stand above its neighbourhood away from the edges of the searched range.
 
 use std::f64::consts::PI;
 
+use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex64;
 
 use std::sync::Arc;
@@ -19,6 +24,8 @@ use crate::fourier::RecordFft;
 
 /// Bins on each side of the line used for the fit.
 const HALF_WINDOW: usize = 16;
+/// Bins at either end of a searched range where no line is looked for ([`HALF_WINDOW`]).
+pub(super) const EDGE_MARGIN_BINS: usize = HALF_WINDOW;
 /// Bins on each side for the running median of the continuum.
 const MEDIAN_HALF: usize = 60;
 
@@ -112,6 +119,27 @@ fn explain(
     explain_with(design, residual, (&c, &s), range)
 }
 
+/// Channel `i`'s weighted Gram matrix `[a, b; b, d]` of the basis `(c, s)` over `range` and its
+/// projections `r1, r2` of the residual, weights `1 / expected`.
+fn projections(
+    design: &Design,
+    residual: &[Vec<Complex64>; 3],
+    (c, s): (&[Complex64], &[Complex64]),
+    range: &std::ops::Range<usize>,
+    i: usize,
+) -> [f64; 5] {
+    let mut out = [0.0; 5];
+    for (m, k) in range.clone().enumerate() {
+        let w = 1.0 / design.expected[i][k];
+        out[0] += w * c[m].norm_sqr();
+        out[1] += w * (c[m].conj() * s[m]).re;
+        out[2] += w * s[m].norm_sqr();
+        out[3] += w * (c[m].conj() * residual[i][k]).re;
+        out[4] += w * (s[m].conj() * residual[i][k]).re;
+    }
+    out
+}
+
 /// Weighted least squares of the basis `(c, s)` (spectra over `range`) per channel; returns
 /// coefficients and explained power.
 fn explain_with(
@@ -122,15 +150,7 @@ fn explain_with(
 ) -> ([f64; 3], [f64; 3], f64) {
     let (mut cos, mut sin, mut gain) = ([0.0; 3], [0.0; 3], 0.0);
     for i in 0..3 {
-        let (mut a, mut b, mut d, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for (m, k) in range.clone().enumerate() {
-            let w = 1.0 / design.expected[i][k];
-            a += w * c[m].norm_sqr();
-            b += w * (c[m].conj() * s[m]).re;
-            d += w * s[m].norm_sqr();
-            r1 += w * (c[m].conj() * residual[i][k]).re;
-            r2 += w * (s[m].conj() * residual[i][k]).re;
-        }
+        let [a, b, d, r1, r2] = projections(design, residual, (c, s), range, i);
         let det = a * d - b * b;
         if det.abs() <= f64::MIN_POSITIVE {
             continue;
@@ -140,6 +160,57 @@ fn explain_with(
         gain += cos[i] * r1 + sin[i] * r2;
     }
     (cos, sin, gain)
+}
+
+/// The correlation of the channels' whitened residuals around bin `peak`: over the continuum's
+/// window ([`MEDIAN_HALF`] bins each side), the line's own [`HALF_WINDOW`] bins each side left
+/// out; a ridge of 1e-3 keeps it invertible. Above the reference's band limit the residual is
+/// the platform motion the angles no longer carry, the same in every channel: a random peak of
+/// it is in all three at once, and counted as three independent channels it would pass for a
+/// tone.
+fn channel_correlation(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize) -> Matrix3<f64> {
+    let n = design.n_bins();
+    let lo = peak.saturating_sub(MEDIAN_HALF);
+    let hi = (peak + MEDIAN_HALF + 1).min(n);
+    let mut sum = Matrix3::<f64>::zeros();
+    for k in (lo..hi).filter(|k| k.abs_diff(peak) > HALF_WINDOW) {
+        let w = [0, 1, 2].map(|i| residual[i][k] / design.expected[i][k].sqrt());
+        for i in 0..3 {
+            for j in 0..3 {
+                sum[(i, j)] += (w[i] * w[j].conj()).re;
+            }
+        }
+    }
+    let scale = [0, 1, 2].map(|i| sum[(i, i)].max(f64::MIN_POSITIVE).sqrt());
+    Matrix3::from_fn(|i, j| sum[(i, j)] / (scale[i] * scale[j])) * (1.0 - 1e-3) + Matrix3::identity() * 1e-3
+}
+
+/// The power the basis `(c, s)` explains over `range` fitted on the three channels at once, with
+/// their background correlation `corr` ([`channel_correlation`]): each channel's two projections,
+/// whitened by its own Gram matrix (Cholesky), form two 3-vectors `y`, and the power is
+/// `sum y^T corr^-1 y` over the two; with independent channels (`corr = I`) it is the sum of the
+/// channels' own explained powers ([`explain_with`]).
+fn correlated_explained(
+    design: &Design,
+    residual: &[Vec<Complex64>; 3],
+    (c, s): (&[Complex64], &[Complex64]),
+    range: &std::ops::Range<usize>,
+    corr: &Matrix3<f64>,
+) -> f64 {
+    let mut y = [Vector3::<f64>::zeros(), Vector3::<f64>::zeros()];
+    for i in 0..3 {
+        let [a, b, d, r1, r2] = projections(design, residual, (c, s), range, i);
+        let l11 = a.sqrt();
+        let l21 = if l11 > 0.0 { b / l11 } else { 0.0 };
+        let l22 = (d - l21 * l21).max(0.0).sqrt();
+        if l11 <= f64::MIN_POSITIVE || l22 <= f64::MIN_POSITIVE {
+            continue;
+        }
+        y[0][i] = r1 / l11;
+        y[1][i] = (r2 - l21 * y[0][i]) / l22;
+    }
+    let inverse = corr.try_inverse().unwrap_or_else(Matrix3::identity);
+    y.iter().map(|v| v.dot(&(inverse * v))).sum()
 }
 
 /// The strongest line in `residual` (band bins, per channel), fitted; `None` when the band is
@@ -165,7 +236,14 @@ pub fn strongest_line(
     // The largest ratios of a line's three bins (a tapered line spreads over them) to the
     // continuum, anywhere in the band: the strongest bins may all be broadband misfit.
     let ratio = |k: usize| (power[k - 1] + power[k] + power[k + 1]) / continuum[k];
-    let mut order: Vec<usize> = (1..n - 1).collect();
+    // A line needs its neighbourhood on both sides (its frequency fit, its continuum): within
+    // HALF_WINDOW bins of either end of the searched range it cannot be told from the edge of a
+    // rising residual (on `--stand real` runs, where the reference's band limit ends the inputs,
+    // the residual's ratio to the continuum climbs to the search's top edge).
+    if n < 2 * HALF_WINDOW + 3 {
+        return None;
+    }
+    let mut order: Vec<usize> = (HALF_WINDOW..n - HALF_WINDOW).collect();
     order.sort_by(|&a, &b| ratio(b).total_cmp(&ratio(a)));
     let mut tried: Vec<usize> = Vec::new();
     for peak in order {
@@ -176,6 +254,15 @@ pub fn strongest_line(
             continue;
         }
         tried.push(peak);
+        // A line stands above its neighbourhood: a residual that climbs toward the edge of the
+        // search has its largest ratio where the window is cut, not at a peak.
+        // (The line's own main lobe, two bins each side, may hold the larger ratio by a hair.)
+        if (peak - HALF_WINDOW + 1..peak + HALF_WINDOW)
+            .filter(|k| k.abs_diff(peak) > 2)
+            .any(|k| ratio(k) > ratio(peak))
+        {
+            continue;
+        }
         // A line of the residual that the outputs do not carry is the inputs': a line of the
         // angle measurement or of its processing (on simulated clean runs, 56 Hz in the
         // accelerometer's residual, above the band), not a tone of the sensor.
@@ -238,7 +325,10 @@ fn line_at(
     let n = design.n_bins();
     let background = background_level(design, continuum);
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
-    let (cos, sin, explained) = explain(design, residual, frequency_hz, &range);
+    let (cos, sin, _) = explain(design, residual, frequency_hz, &range);
+    let corr = channel_correlation(design, residual, peak);
+    let (c, s) = sinusoid_dft(design, frequency_hz, range.clone());
+    let explained = correlated_explained(design, residual, (&c, &s), &range, &corr);
     let delta_chi2 = 2.0 * explained / background / WINDOW_ENBW;
     let constant = Tone {
         frequency_hz,
@@ -255,7 +345,8 @@ fn line_at(
     // On and off: the gated sinusoid fitted on the whole band (its sidebands included).
     let basis = gated_basis(design, frequency_hz, &gate);
     let all = 0..n;
-    let (cos, sin, explained) = explain_with(design, residual, (&basis[0], &basis[1]), &all);
+    let (cos, sin, _) = explain_with(design, residual, (&basis[0], &basis[1]), &all);
+    let explained = correlated_explained(design, residual, (&basis[0], &basis[1]), &all, &corr);
     // A gated tone's sidebands fill the bins around its line, so the continuum there is
     // measured on the residual without it.
     let lo = peak.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);

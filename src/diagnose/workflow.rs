@@ -258,7 +258,13 @@ fn block_design(
         &lookup,
     )?;
     let top = (LINE_SEARCH_TOP * band[1]).min(0.45 * run.sample_rate_hz);
-    let upper = Design::line_search(b.block, &output, &input, run.sample_rate_hz, [band[1], top]);
+    // The line search needs a line's neighbourhood on both sides, so neither range finds a line
+    // within its edge margin: the upper range starts that margin below the band's top, and a
+    // line at the top is inside one of the two.
+    let margin =
+        2.0 * super::tone::EDGE_MARGIN_BINS as f64 * run.sample_rate_hz / output[0].len().max(1) as f64;
+    let from = (band[1] - margin).max(band[0]);
+    let upper = Design::line_search(b.block, &output, &input, run.sample_rate_hz, [from, top]);
     Some((design, upper))
 }
 

@@ -31,6 +31,12 @@
 //! outputs the two noises cannot be told apart in a bin, and this choice errs on the side the
 //! gyro's quality bounds.
 //!
+//! Robustness: the estimate is the median over up to five equal stretches of the record, each
+//! estimated on its own (a stretch where the gyro is no witness, a hold or a dead start, would
+//! otherwise pass its unexplained motion for angle noise everywhere), with windows of at least
+//! 24 independent bins. The model is used for the input estimate only: the error the observer
+//! reports for the noise terms ([`super::observer::ErrorPsd`]) is the white floor's.
+//!
 //! Units: the per-bin values are periodogram levels `|Y|^2 / L_eff` (rad^2 per sample, the units
 //! of a white noise's variance); densities are `2 / fs` times them. Empty windows or a singular
 //! `S_ww` give `S_yy` (nothing explained). NaN cannot arise from finite input.
@@ -40,7 +46,7 @@ use num_complex::Complex64;
 
 use super::kinematics::euler_rate;
 use super::observer::remove_line;
-use crate::fourier::RecordFft;
+use crate::fourier::{RecordFft, fast_len};
 
 /// Bins between two exact recomputations of the sliding window's sums (bounds rounding drift).
 const RESUM_EVERY: usize = 1024;
@@ -185,22 +191,68 @@ fn align(w: &mut [Vec<Complex64>; 3], y: &[Vec<Complex64>; 3], fft: &mut RecordF
     delay_s
 }
 
-/// The coloured model on the observer's grid `fft`: per bin and axis, `clamp(N_c, white, S_yy)`
-/// (module docs), from the angles' residuals (their lines removed) and the witness's Euler rates,
-/// both Hann-windowed over the record (a rectangular or short-tapered record leaks the strong
-/// low-frequency motion into the weak high-frequency bins, where its relation to the witness is
-/// not the local one); `half_widths[k]` is the observer's smoothing half-width at bin `k`.
+/// Records shorter than this many seconds per stretch are not split (see [`coloured_noise`]).
+const MIN_STRETCH_S: f64 = 20.0;
+/// Most stretches the record is split into.
+const MAX_STRETCHES: usize = 5;
+/// Fewest independent bins a smoothing window holds for the conditional spectrum (its relative
+/// standard deviation is about `1 / sqrt(M - 3)`); narrower windows are widened.
+const MIN_INDEPENDENT: f64 = 24.0;
+
+/// The coloured model on the observer's grid `grid`: per bin and axis, `clamp(N_c, white, S_yy)`
+/// (module docs), the median over up to five equal stretches of the record, each estimated on its
+/// own: a stretch where the gyro is no witness of the motion (a hold, a dropout, a dead start)
+/// leaves much of the motion unexplained there and would pass for angle noise everywhere; the
+/// median ignores up to two such stretches. The smoothing windows are the observer's
+/// (`max(smoothing_hz, smoothing_fraction f)` wide), widened to [`MIN_INDEPENDENT`] bins.
 pub(super) fn coloured_noise(
     angles: [&[f64]; 3],
-    residuals: [&[f64]; 3],
     body_rates: [&[f64]; 3],
-    fft: &mut RecordFft,
-    half_widths: &[usize],
+    grid: &RecordFft,
+    smoothing: (f64, f64),
     white: [f64; 3],
 ) -> Vec<[f64; 3]> {
-    let n = residuals[0].len();
-    let rate = fft.sample_rate_hz();
-    let y = residuals.map(|r| fft.forward(&hann_windowed(r, fft.len())));
+    let n = angles[0].len();
+    let rate = grid.sample_rate_hz();
+    let count = ((n as f64 / (MIN_STRETCH_S * rate)) as usize).clamp(1, MAX_STRETCHES);
+    let count = if count.is_multiple_of(2) { count - 1 } else { count };
+    let stretches: Vec<(f64, Vec<[f64; 3]>)> = (0..count)
+        .map(|j| {
+            let range = j * n / count..(j + 1) * n / count;
+            let a = angles.map(|x| &x[range.clone()]);
+            let w = body_rates.map(|x| &x[range.clone()]);
+            stretch_noise(a, w, rate, smoothing, white)
+        })
+        .collect();
+    let mut values = Vec::with_capacity(count);
+    (0..grid.n_bins())
+        .map(|k| {
+            let f = grid.frequency_hz(k);
+            [0, 1, 2].map(|a| {
+                values.clear();
+                values.extend(stretches.iter().map(|(df, v)| {
+                    let i = ((f / df).round() as usize).min(v.len() - 1);
+                    v[i][a]
+                }));
+                values.sort_by(f64::total_cmp);
+                values[values.len() / 2]
+            })
+        })
+        .collect()
+}
+
+/// One stretch's model on its own grid: (bin spacing in Hz, per-bin variances).
+fn stretch_noise(
+    angles: [&[f64]; 3],
+    body_rates: [&[f64]; 3],
+    rate: f64,
+    (smoothing_hz, smoothing_fraction): (f64, f64),
+    white: [f64; 3],
+) -> (f64, Vec<[f64; 3]>) {
+    let n = angles[0].len();
+    let mut fft = RecordFft::new(fast_len(2 * n), rate);
+    let fft = &mut fft;
+    let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, rate).2, fft.len())));
     let spectra = |fft: &mut RecordFft, angles: [&[f64]; 3]| {
         let euler = witness_euler_rates(angles, body_rates);
         let len = fft.len();
@@ -215,15 +267,18 @@ pub(super) fn coloured_noise(
     let mut w = spectra(fft, late.each_ref().map(Vec::as_slice));
     align(&mut w, &y, fft);
     // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
-    // record's equivalent number of independent samples, spread over the padded grid.
+    // stretch's equivalent number of independent samples, spread over the padded grid.
     let power_norm = 3.0 * n as f64 / 8.0;
     let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
+    let bins_per_hz = fft.len() as f64 / rate;
+    let min_half = (MIN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
     let bins = fft.n_bins();
     let mut sums = Sums::zero();
     let (mut lo, mut hi) = (0, 0);
     let mut out = Vec::with_capacity(bins);
     for k in 0..bins {
-        let half = half_widths[k].max(1);
+        let width = smoothing_hz.max(smoothing_fraction * fft.frequency_hz(k));
+        let half = ((width * bins_per_hz / 2.0) as usize).max(min_half);
         let (new_lo, new_hi) = (k.saturating_sub(half), (k + half + 1).min(bins));
         if k % RESUM_EVERY == 0 {
             sums = Sums::zero();
@@ -244,17 +299,18 @@ pub(super) fn coloured_noise(
         let scale = Complex64::from(1.0 / (count * power_norm));
         let (syy, syw, sww) = (sums.yy * scale, sums.yw * scale, sums.ww * scale);
         let total = [syy[(0, 0)].re, syy[(1, 1)].re, syy[(2, 2)].re];
+        // Too few bins or no witness power: nothing is known beyond the floor.
         let unexplained = match sww.try_inverse() {
             Some(inv) if independent > 4.0 => {
                 let explained = syw * inv * syw.adjoint();
                 let correction = independent / (independent - 3.0);
                 [0, 1, 2].map(|a| (total[a] - explained[(a, a)].re) * correction)
             }
-            _ => total,
+            _ => white,
         };
         out.push([0, 1, 2].map(|a| unexplained[a].min(total[a]).max(white[a])));
     }
-    out
+    (rate / fft.len() as f64, out)
 }
 
 #[cfg(test)]

@@ -109,7 +109,10 @@ pub struct ObserverEstimate {
 /// per axis, averaged over bands a twentieth of a decade wide (ascending, positive frequencies).
 /// For the Wiener smoother it is `H N` per bin (the part of the angle noise that passes, where
 /// the motion is; the motion that is smoothed away, bounded by the noise, where it is not), with
-/// `N = 2 sigma^2 / fs` the density of the noise model in that bin. Rates' errors are `w^2` times it.
+/// `N = 2 sigma^2 / fs` the density of the **white floor**: the coloured part of the noise model
+/// cannot be told from the gyro's own noise (module [`super::colour`]), and what takes this error
+/// out of a block's residual (its noise terms) must not credit the block with less noise than
+/// may be its own. Rates' errors are `w^2` times it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorPsd {
     /// Band centres (geometric), Hz.
@@ -237,14 +240,10 @@ pub fn observe_with_witness(
     let witness = witness.filter(|w| w.iter().all(|c| c.len() == n && c.iter().all(|v| v.is_finite())));
     let mut trends = [(0.0, 0.0); 3];
     let mut spectra: [Vec<Complex64>; 3] = Default::default();
-    let mut residuals: [Vec<f64>; 3] = Default::default();
     for axis in 0..3 {
         let (offset, slope, residual) = remove_line(angles[axis], sample_rate_hz);
         trends[axis] = (offset, slope);
         spectra[axis] = fft.forward(&extend(&residual, pad, &taper, fft.len()));
-        if witness.is_some() {
-            residuals[axis] = residual;
-        }
     }
 
     let (noise_var, noise_source) = match settings.angle_noise_rad {
@@ -254,14 +253,13 @@ pub fn observe_with_witness(
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
     let (noise, noise_colour) = match witness {
         Some(w) => {
-            let half_widths: Vec<usize> = (0..fft.n_bins()).map(|k| half_width(&fft, settings, k)).collect();
-            let residuals = residuals.each_ref().map(Vec::as_slice);
-            let per_bin = coloured_noise(angles, residuals, w, &mut fft, &half_widths, noise_var);
+            let smoothing = (settings.smoothing_hz, settings.smoothing_fraction);
+            let per_bin = coloured_noise(angles, w, &fft, smoothing, noise_var);
             (AngleNoise::PerBin(per_bin), NoiseColour::FromGyro)
         }
         None => (AngleNoise::White(noise_var), NoiseColour::White),
     };
-    let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, &noise);
+    let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, &noise, noise_var);
     let density = 2.0 / sample_rate_hz;
     let df = sample_rate_hz / fft.len() as f64;
     let error_psd = ErrorPsd::from_bins(
@@ -436,13 +434,16 @@ fn smoothed_cross_periodogram(
         .collect()
 }
 
-/// Applies `H = N^1/2 V diag((1 - 1/l)_+) V^H N^-1/2` per bin to the measured spectra; also
-/// returns the diagonal of the error covariance `H N` per bin (per-sample variance units).
+/// Applies `H = N^1/2 V diag((1 - 1/l)_+) V^H N^-1/2` per bin to the measured spectra (`N` the
+/// noise model's level in that bin); also returns the diagonal of `H N_white` per bin
+/// (per-sample variance units), the part of the white floor that passes ([`ErrorPsd`]).
 fn wiener_gain_apply(
     spectra: &[Vec<Complex64>; 3],
     smoothed: &[Matrix3<Complex64>],
     noise: &AngleNoise,
+    white: [f64; 3],
 ) -> ([Vec<Complex64>; 3], Vec<[f64; 3]>) {
+    let white_diag = Matrix3::from_diagonal(&Vector3::from(white).map(Complex64::from));
     let floor = smoothed.iter().map(|s| s.trace().re).fold(0.0, f64::max) * 1e-30;
     let mut out: [Vec<Complex64>; 3] = Default::default();
     for o in &mut out {
@@ -453,7 +454,6 @@ fn wiener_gain_apply(
         let sd = noise.at(k).map(|v| v.max(floor).max(f64::MIN_POSITIVE).sqrt());
         let n_half = Matrix3::from_diagonal(&Vector3::from(sd).map(Complex64::from));
         let n_half_inv = Matrix3::from_diagonal(&Vector3::from(sd.map(f64::recip)).map(Complex64::from));
-        let n_diag = Matrix3::from_diagonal(&Vector3::from(sd.map(|v| v * v)).map(Complex64::from));
         let whitened = n_half_inv * s * n_half_inv;
         let eig = whitened.symmetric_eigen();
         let gains = eig.eigenvalues.map(|l| {
@@ -472,7 +472,7 @@ fn wiener_gain_apply(
         for axis in 0..3 {
             out[axis].push(x[axis]);
         }
-        let e = h * n_diag;
+        let e = h * white_diag;
         error.push([e[(0, 0)].re, e[(1, 1)].re, e[(2, 2)].re]);
     }
     (out, error)

@@ -96,12 +96,22 @@ fn white_gyro_noise_gives_its_angle_random_walk_within_the_stated_interval() {
     );
 }
 
+/// On runs whose model explains the data (the terms of a misfitting model are upper bounds, tested
+/// below). The approach regime's gyro does not yet (chi2/dof 3-4 on clean runs, worst at the Dutch
+/// roll; README, issue 13): its residual's low-frequency part is the model's misfit, which the
+/// term fit may take as a Markov process instead of the walk (approach seed 12, channel gx, since
+/// the coloured angle-noise model moved that misfit).
 #[test]
 fn a_rate_random_walk_is_found_with_its_strength() {
     let k = 2e-5;
     let mut zs = Vec::new();
-    for (regime, seed) in [(Regime::Cruise, 11), (Regime::Approach, 12)] {
+    for (regime, seed) in [(Regime::Cruise, 11), (Regime::TurbulentCruise, 12)] {
         let (model, _) = identified(regime, seed, k);
+        let chi2 = model.blocks["gyro"].fit.chi2_per_dof;
+        assert!(
+            chi2 < 1.5,
+            "{regime:?} seed {seed}: the model explains the data (chi2/dof {chi2})"
+        );
         let noise = model.blocks["gyro"].noise.as_ref().expect("noise figures");
         for ch in &noise.channels {
             let rrw = ch.term(NoiseTerm::RateRandomWalk).expect("the walk is seen");

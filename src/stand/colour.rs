@@ -242,7 +242,7 @@ pub(super) fn coloured_noise(
         })
         .collect();
     let mut values = Vec::with_capacity(count);
-    (0..grid.n_bins())
+    let mut out: Vec<[f64; 3]> = (0..grid.n_bins())
         .map(|k| {
             let f = grid.frequency_hz(k);
             [0, 1, 2].map(|a| {
@@ -255,7 +255,44 @@ pub(super) fn coloured_noise(
                 values[values.len() / 2]
             })
         })
-        .collect()
+        .collect();
+    keep_the_gyro_s_drift_out(&mut out, grid, white);
+    out
+}
+
+/// The gyro's own noise taken out of the unexplained part. In rate units (`w^2 N`) a gyro's noise
+/// is flat or falling with frequency (white, flicker, random walk), an angle measurement's rises
+/// (its noise, differentiated, grows as `w^2`). So below the frequency where the unexplained part
+/// in rate units is smallest it is the gyro's, and the white floor is kept; above it the gyro's
+/// part is at most its level at that minimum, which is subtracted. (Taken as angle noise, a gyro's
+/// rate random walk, `1/f^4` in angle units, shrank the inputs at low frequency and hid the walk
+/// from the noise terms; its white noise shrank them where the motion is weak.)
+fn keep_the_gyro_s_drift_out(out: &mut [[f64; 3]], grid: &RecordFft, white: [f64; 3]) {
+    let top = (0.4 * grid.sample_rate_hz()).min(40.0);
+    for a in 0..3 {
+        let in_rate = |k: usize| {
+            let w = 2.0 * std::f64::consts::PI * grid.frequency_hz(k);
+            w * w * out[k][a]
+        };
+        let last = (1..out.len())
+            .take_while(|&k| grid.frequency_hz(k) <= top)
+            .last()
+            .unwrap_or(0);
+        let Some(lowest) = (1..=last).min_by(|&i, &j| in_rate(i).total_cmp(&in_rate(j))) else {
+            continue;
+        };
+        // The gyro's part is at most its level at the minimum, and (flat or falling) no more above
+        // it: what rises beyond that level is the angle measurement's.
+        let floor = in_rate(lowest);
+        for (k, v) in out.iter_mut().enumerate() {
+            let w = 2.0 * std::f64::consts::PI * grid.frequency_hz(k);
+            v[a] = if k < lowest {
+                white[a]
+            } else {
+                (v[a] - floor / (w * w)).max(white[a])
+            };
+        }
+    }
 }
 
 /// One stretch's model on its own grid, per cell of bins: (cell width in Hz, per-cell variances;

@@ -42,16 +42,18 @@
 //! reports for the noise terms ([`super::observer::ErrorPsd`]) is the white floor's.
 //!
 //! Units: the per-bin values are periodogram levels `|Y|^2 / L_eff` (rad^2 per sample, the units
-//! of a white noise's variance); densities are `2 / fs` times them. Empty windows or a singular
-//! `S_ww` give `S_yy` (nothing explained). NaN cannot arise from finite input.
+//! of a white noise's variance); densities are `2 / fs` times them. Windows of too few bins or a
+//! singular `S_ww` give the white floor (nothing is known beyond it). NaN cannot arise from
+//! finite input.
 
 use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
 use super::kinematics::euler_rate;
-use super::observer::remove_line;
+use super::observer::{daniell_half_width, remove_line};
 use crate::fourier::{RecordFft, fast_len};
+use crate::spectral::Window;
 
 /// Cells between two exact recomputations of the sliding window's sums (bounds rounding drift).
 const RESUM_EVERY: usize = 1024;
@@ -127,14 +129,16 @@ fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
     Vector3::new(spectra[0][k], spectra[1][k], spectra[2][k])
 }
 
-/// `x` times a Hann window over its length, at the start of a zero buffer of `len` samples.
+/// `x` times the (periodic) Hann window over its length, at the start of a zero buffer of `len`
+/// samples.
 fn hann_windowed(x: &[f64], len: usize) -> Vec<f64> {
-    let n = x.len();
-    let mut out = vec![0.0; len];
-    for (i, (o, v)) in out.iter_mut().zip(x).enumerate() {
-        let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * (i as f64 + 0.5) / n as f64).cos();
-        *o = w * v;
-    }
+    let mut out: Vec<f64> = Window::Hann
+        .coefficients(x.len())
+        .iter()
+        .zip(x)
+        .map(|(w, v)| w * v)
+        .collect();
+    out.resize(len, 0.0);
     out
 }
 
@@ -301,7 +305,7 @@ fn stretch_noise(
     angles: [&[f64]; 3],
     body_rates: [&[f64]; 3],
     rate: f64,
-    (smoothing_hz, smoothing_fraction): (f64, f64),
+    smoothing: (f64, f64),
     white: [f64; 3],
 ) -> (f64, Vec<[f64; 3]>) {
     let n = angles[0].len();
@@ -348,9 +352,8 @@ fn stretch_noise(
     let (mut lo, mut hi) = (0, 0);
     let mut out = Vec::with_capacity(cells.len());
     for c in 0..cells.len() {
-        let centre = c * cell + cell / 2;
-        let width = smoothing_hz.max(smoothing_fraction * centre as f64 / bins_per_hz);
-        let half = ((width * bins_per_hz / 2.0) as usize)
+        let centre_hz = (c * cell + cell / 2) as f64 / bins_per_hz;
+        let half = daniell_half_width(smoothing, centre_hz, bins_per_hz)
             .max(min_half)
             .div_ceil(cell);
         let (new_lo, new_hi) = (c.saturating_sub(half), (c + half + 1).min(cells.len()));

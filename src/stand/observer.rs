@@ -399,13 +399,14 @@ fn estimate_noise(spectra: &[Vec<Complex64>; 3], effective_len: f64) -> [f64; 3]
     })
 }
 
-/// Half-width in bins of the Daniell window at bin `k`: `max(smoothing_hz, smoothing_fraction f)`
-/// wide, at least one bin each side.
-fn half_width(fft: &RecordFft, settings: &ObserverSettings, k: usize) -> usize {
-    let bins_per_hz = fft.len() as f64 / fft.sample_rate_hz();
-    let width = settings
-        .smoothing_hz
-        .max(settings.smoothing_fraction * fft.frequency_hz(k));
+/// Half-width in bins of the Daniell window at `f_hz`, `max(smoothing_hz, smoothing_fraction f)`
+/// wide (`(smoothing_hz, smoothing_fraction)`), at least one bin each side.
+pub(super) fn daniell_half_width(
+    (smoothing_hz, smoothing_fraction): (f64, f64),
+    f_hz: f64,
+    bins_per_hz: f64,
+) -> usize {
+    let width = smoothing_hz.max(smoothing_fraction * f_hz);
     ((width * bins_per_hz / 2.0) as usize).max(1)
 }
 
@@ -425,9 +426,14 @@ fn smoothed_cross_periodogram(
         acc += y * y.adjoint() / Complex64::from(effective_len);
         prefix.push(acc);
     }
+    let bins_per_hz = fft.len() as f64 / fft.sample_rate_hz();
     (0..bins)
         .map(|k| {
-            let half = half_width(fft, settings, k);
+            let half = daniell_half_width(
+                (settings.smoothing_hz, settings.smoothing_fraction),
+                fft.frequency_hz(k),
+                bins_per_hz,
+            );
             let (lo, hi) = (k.saturating_sub(half), (k + half + 1).min(bins));
             (prefix[hi] - prefix[lo]) / Complex64::from((hi - lo) as f64)
         })

@@ -10,18 +10,16 @@ mod binary;
 use binary::imu_attest;
 
 fn simulated_run(dir: &Path) -> PathBuf {
-    let run = dir.join("cruise.csv");
-    let o = imu_attest(&[
-        "simulate",
-        "--regime",
-        "cruise",
-        "--duration",
-        "60",
-        "--seed",
-        "4",
-        "--out",
-        run.to_str().unwrap(),
-    ]);
+    simulated_run_as(dir, "cruise.csv", &["--seed", "4"])
+}
+
+/// A 60 s cruise run written to `dir/file` by `simulate` with `extra` arguments.
+fn simulated_run_as(dir: &Path, file: &str, extra: &[&str]) -> PathBuf {
+    let run = dir.join(file);
+    let mut args = vec!["simulate", "--regime", "cruise", "--duration", "60"];
+    args.extend_from_slice(extra);
+    args.extend(["--out", run.to_str().unwrap()]);
+    let o = imu_attest(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     run
 }
@@ -190,7 +188,7 @@ fn effects_accepted_from_a_list_or_a_discrepancy_report() {
         run.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let identify = |effects: &Path, out: &Path| {
+    let identify_run = |run: &Path, effects: &Path, out: &Path| {
         imu_attest(&[
             "identify",
             run.to_str().unwrap(),
@@ -200,6 +198,7 @@ fn effects_accepted_from_a_list_or_a_discrepancy_report() {
             out.to_str().unwrap(),
         ])
     };
+    let identify = |effects: &Path, out: &Path| identify_run(&run, effects, out);
     // A list.
     let list = dir.path().join("effects.json");
     std::fs::write(
@@ -251,35 +250,14 @@ fn effects_accepted_from_a_list_or_a_discrepancy_report() {
     );
     assert!(!bad.exists());
     // An effect on a block the run does not have is said, not silently dropped.
-    let gyro_only = dir.path().join("gyro_only.csv");
-    let o = imu_attest(&[
-        "simulate",
-        "--regime",
-        "cruise",
-        "--duration",
-        "60",
-        "--seed",
-        "2",
-        "--blocks",
-        "gyro",
-        "--out",
-        gyro_only.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gyro_only = simulated_run_as(dir.path(), "gyro_only.csv", &["--seed", "2", "--blocks", "gyro"]);
     std::fs::write(
         &list,
         r#"{"effects": [{"block": "accel", "effect": "lever_arm_error"}]}"#,
     )
     .unwrap();
     let out = dir.path().join("gyro_only_model.json");
-    let o = imu_attest(&[
-        "identify",
-        gyro_only.to_str().unwrap(),
-        "--effects",
-        list.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = identify_run(&gyro_only, &list, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

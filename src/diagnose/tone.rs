@@ -116,7 +116,8 @@ fn explain(
     range: &std::ops::Range<usize>,
 ) -> ([f64; 3], [f64; 3], f64) {
     let (c, s) = sinusoid_dft(design, f, range.clone());
-    explain_with(design, residual, (&c, &s), range)
+    let fit = fit_channels(design, residual, (&c, &s), range);
+    (fit.cos, fit.sin, fit.explained())
 }
 
 /// Channel `i`'s weighted Gram matrix `[a, b; b, d]` of the basis `(c, s)` over `range` and its
@@ -140,26 +141,57 @@ fn projections(
     out
 }
 
-/// Weighted least squares of the basis `(c, s)` (spectra over `range`) per channel; returns
-/// coefficients and explained power.
-fn explain_with(
+/// The basis `(c, s)` fitted by weighted least squares on each channel over `range`.
+struct ChannelFit {
+    /// Cosine and sine coefficients per channel.
+    cos: [f64; 3],
+    sin: [f64; 3],
+    /// Each channel's two projections whitened by its own Gram matrix (Cholesky): per quadrature,
+    /// a 3-vector over the channels; `|y_i|^2` is channel `i`'s explained power.
+    whitened: [Vector3<f64>; 2],
+}
+
+impl ChannelFit {
+    /// The power explained, the channels counted as independent.
+    fn explained(&self) -> f64 {
+        self.whitened.iter().map(Vector3::norm_squared).sum()
+    }
+
+    /// The power explained with the channels' background correlation `corr`
+    /// ([`channel_correlation`]): `sum y^T corr^-1 y` over the two quadratures ([`Self::explained`]
+    /// when `corr = I`).
+    fn explained_correlated(&self, corr: &Matrix3<f64>) -> f64 {
+        let inverse = corr.try_inverse().unwrap_or_else(Matrix3::identity);
+        self.whitened.iter().map(|v| v.dot(&(inverse * v))).sum()
+    }
+}
+
+/// Weighted least squares of the basis `(c, s)` (spectra over `range`) per channel.
+fn fit_channels(
     design: &Design,
     residual: &[Vec<Complex64>; 3],
     (c, s): (&[Complex64], &[Complex64]),
     range: &std::ops::Range<usize>,
-) -> ([f64; 3], [f64; 3], f64) {
-    let (mut cos, mut sin, mut gain) = ([0.0; 3], [0.0; 3], 0.0);
+) -> ChannelFit {
+    let mut fit = ChannelFit {
+        cos: [0.0; 3],
+        sin: [0.0; 3],
+        whitened: [Vector3::zeros(), Vector3::zeros()],
+    };
     for i in 0..3 {
         let [a, b, d, r1, r2] = projections(design, residual, (c, s), range, i);
         let det = a * d - b * b;
-        if det.abs() <= f64::MIN_POSITIVE {
+        if det.abs() <= f64::MIN_POSITIVE || a <= f64::MIN_POSITIVE {
             continue;
         }
-        cos[i] = (d * r1 - b * r2) / det;
-        sin[i] = (a * r2 - b * r1) / det;
-        gain += cos[i] * r1 + sin[i] * r2;
+        fit.cos[i] = (d * r1 - b * r2) / det;
+        fit.sin[i] = (a * r2 - b * r1) / det;
+        let (l11, l21) = (a.sqrt(), b / a.sqrt());
+        let l22 = (d - l21 * l21).max(f64::MIN_POSITIVE).sqrt();
+        fit.whitened[0][i] = r1 / l11;
+        fit.whitened[1][i] = (r2 - l21 * r1 / l11) / l22;
     }
-    (cos, sin, gain)
+    fit
 }
 
 /// The correlation of the channels' whitened residuals around bin `peak`: over the continuum's
@@ -183,34 +215,6 @@ fn channel_correlation(design: &Design, residual: &[Vec<Complex64>; 3], peak: us
     }
     let scale = [0, 1, 2].map(|i| sum[(i, i)].max(f64::MIN_POSITIVE).sqrt());
     Matrix3::from_fn(|i, j| sum[(i, j)] / (scale[i] * scale[j])) * (1.0 - 1e-3) + Matrix3::identity() * 1e-3
-}
-
-/// The power the basis `(c, s)` explains over `range` fitted on the three channels at once, with
-/// their background correlation `corr` ([`channel_correlation`]): each channel's two projections,
-/// whitened by its own Gram matrix (Cholesky), form two 3-vectors `y`, and the power is
-/// `sum y^T corr^-1 y` over the two; with independent channels (`corr = I`) it is the sum of the
-/// channels' own explained powers ([`explain_with`]).
-fn correlated_explained(
-    design: &Design,
-    residual: &[Vec<Complex64>; 3],
-    (c, s): (&[Complex64], &[Complex64]),
-    range: &std::ops::Range<usize>,
-    corr: &Matrix3<f64>,
-) -> f64 {
-    let mut y = [Vector3::<f64>::zeros(), Vector3::<f64>::zeros()];
-    for i in 0..3 {
-        let [a, b, d, r1, r2] = projections(design, residual, (c, s), range, i);
-        let l11 = a.sqrt();
-        let l21 = if l11 > 0.0 { b / l11 } else { 0.0 };
-        let l22 = (d - l21 * l21).max(0.0).sqrt();
-        if l11 <= f64::MIN_POSITIVE || l22 <= f64::MIN_POSITIVE {
-            continue;
-        }
-        y[0][i] = r1 / l11;
-        y[1][i] = (r2 - l21 * y[0][i]) / l22;
-    }
-    let inverse = corr.try_inverse().unwrap_or_else(Matrix3::identity);
-    y.iter().map(|v| v.dot(&(inverse * v))).sum()
 }
 
 /// The strongest line in `residual` (band bins, per channel), fitted; `None` when the band is
@@ -325,15 +329,14 @@ fn line_at(
     let n = design.n_bins();
     let background = background_level(design, continuum);
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
-    let (cos, sin, _) = explain(design, residual, frequency_hz, &range);
     let corr = channel_correlation(design, residual, peak);
     let (c, s) = sinusoid_dft(design, frequency_hz, range.clone());
-    let explained = correlated_explained(design, residual, (&c, &s), &range, &corr);
-    let delta_chi2 = 2.0 * explained / background / WINDOW_ENBW;
+    let fit = fit_channels(design, residual, (&c, &s), &range);
+    let delta_chi2 = 2.0 * fit.explained_correlated(&corr) / background / WINDOW_ENBW;
     let constant = Tone {
         frequency_hz,
-        cos,
-        sin,
+        cos: fit.cos,
+        sin: fit.sin,
         delta_chi2,
         gate: None,
         basis: None,
@@ -345,8 +348,8 @@ fn line_at(
     // On and off: the gated sinusoid fitted on the whole band (its sidebands included).
     let basis = gated_basis(design, frequency_hz, &gate);
     let all = 0..n;
-    let (cos, sin, _) = explain_with(design, residual, (&basis[0], &basis[1]), &all);
-    let explained = correlated_explained(design, residual, (&basis[0], &basis[1]), &all, &corr);
+    let fit = fit_channels(design, residual, (&basis[0], &basis[1]), &all);
+    let (cos, sin, explained) = (fit.cos, fit.sin, fit.explained_correlated(&corr));
     // A gated tone's sidebands fill the bins around its line, so the continuum there is
     // measured on the residual without it.
     let lo = peak.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);

@@ -11,7 +11,8 @@
 //! (the phase of the top bin wraps every `1 / f_max`, so no basin is missed; the step grows only if
 //! the range would need more than `MAX_SCAN` points), then a safeguarded Newton iteration on `F'`
 //! inside the best grid cell to a step below `1e-15` s. The scan allocates nothing: each point
-//! costs one `sin_cos` per bin and nine complex multiply-adds.
+//! costs one complex product per bin for its phase factor (`super::phasor`) and nine complex
+//! multiply-adds.
 
 use nalgebra::Matrix3;
 use num_complex::Complex64;
@@ -47,10 +48,8 @@ impl Sums<'_> {
         let mut c0 = [Complex64::new(0.0, 0.0); ELEMENTS];
         let mut c1 = c0;
         let mut c2 = c0;
-        for (k, v) in self.v.iter().enumerate() {
-            let omega = self.data.omega[k];
-            let (sin, cos) = (omega * tau).sin_cos();
-            let z = Complex64::new(cos, sin);
+        for ((v, &omega), phase) in self.v.iter().zip(&self.data.omega).zip(self.data.phasors(tau)) {
+            let z = phase.conj();
             for e in 0..ELEMENTS {
                 let t = v[e] * z;
                 c0[e] += t;
@@ -77,9 +76,8 @@ impl Sums<'_> {
     /// The gain for a given delay.
     fn gain(&self, tau: f64) -> [f64; ELEMENTS] {
         let mut a = [0.0; ELEMENTS];
-        for (k, v) in self.v.iter().enumerate() {
-            let (sin, cos) = (self.data.omega[k] * tau).sin_cos();
-            let z = Complex64::new(cos, sin);
+        for (v, phase) in self.v.iter().zip(self.data.phasors(tau)) {
+            let z = phase.conj();
             for e in 0..ELEMENTS {
                 a[e] += (v[e] * z).re;
             }

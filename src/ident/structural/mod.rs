@@ -56,6 +56,7 @@ pub mod admissible;
 mod gain_delay;
 mod model;
 mod order;
+mod phasor;
 mod project;
 mod rational;
 mod report;

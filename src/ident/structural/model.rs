@@ -11,6 +11,7 @@ use nalgebra::DMatrix;
 use num_complex::Complex64;
 
 use super::ResponseEstimate;
+use super::phasor::{Phasors, uniform_step};
 use super::weights::RowWeight;
 
 /// Elements of a 3x3 block, row-major: element `e` is row `e / 3`, column `e % 3`.
@@ -30,6 +31,8 @@ pub(super) struct Prepared {
     pub x: Vec<f64>,
     /// The normalising angular frequency (the band's top), rad/s.
     pub omega_ref: f64,
+    /// The common spacing of `omega` when its bins are equally spaced ([`super::phasor`]).
+    pub omega_step: Option<f64>,
     /// The diagonal approximation `Re(Omega_i)_jj` of the weights (exactly `1 / variance` on
     /// the variance path), element-major within a bin: for the Sanathanan–Koerner starts only.
     pub w: Vec<[f64; ELEMENTS]>,
@@ -87,7 +90,9 @@ impl Prepared {
             })
             .collect();
         let fingerprint = fingerprint(&omega, &h, rows);
+        let omega_step = uniform_step(&omega);
         Self {
+            omega_step,
             omega,
             x,
             omega_ref,
@@ -98,6 +103,11 @@ impl Prepared {
             g,
             fingerprint,
         }
+    }
+
+    /// `e^(-j omega_k tau)` over the bins, in order.
+    pub fn phasors(&self, tau: f64) -> Phasors<'_> {
+        Phasors::new(&self.omega, self.omega_step, tau)
     }
 
     /// Number of bins.

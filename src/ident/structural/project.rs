@@ -52,7 +52,7 @@ impl<'a> Projector<'a> {
         // (contiguous, so that the accumulation vectorises).
         let mut moments = [[0.0; 54]; MAX_MOMENTS];
         let mut rhs = [[0.0; MAX_SYS]; 3];
-        for k in 0..data.bins() {
+        for (k, phase) in data.phasors(tau).enumerate() {
             let x = data.x[k];
             let sigma = Complex64::new(0.0, x);
             let mut d = Complex64::new(0.0, 0.0);
@@ -60,7 +60,7 @@ impl<'a> Projector<'a> {
                 d = (d + c) * sigma;
             }
             let d = d + 1.0;
-            let mut p = Complex64::from_polar(1.0, -data.omega[k] * tau) / d;
+            let mut p = phase / d;
             let u = &mut self.u[k * nn..(k + 1) * nn];
             for um in u.iter_mut() {
                 *um = p;

@@ -154,7 +154,7 @@ fn the_extended_model_explains_more_and_the_other_block_is_as_identified() {
     // does into the paper's model's (order 0; the identifier's own choice here, order 1, already
     // holds a lag).
     let order0 = Settings {
-        order: imu_attest::ident::settings::OrderSetting::Fixed(0),
+        order: imu_attest::ident::settings::OrderSetting::Fixed(0).into(),
         ..settings.clone()
     };
     let paper = identified_model(&mut Session::new(run.clone()), &order0, &mut |_| {}).expect("identified");

@@ -88,7 +88,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
 
     let chosen = after.model.blocks["gyro"].order;
     let other = if chosen == 2 { 1 } else { 2 };
-    set(&mut harness, |s| s.order = OrderSetting::Fixed(other));
+    set(&mut harness, |s| s.order = OrderSetting::Fixed(other).into());
     let (tau2, _) = gyro_labels(&harness);
     assert_ne!(tau2, tau0);
     harness.get_by_label(&tau2);
@@ -108,6 +108,57 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
         .get_all_by_label_contains(&format!("order {other} (fixed)"))
         .count();
     assert_eq!(shown, 2, "both blocks at the fixed order");
+}
+
+/// An order per block, picked in the Controls' combo boxes: the accelerometer fixed at 1, the
+/// gyro left on auto; Results says which is which, and the exported model's settings keep both.
+#[test]
+fn an_order_per_block_from_the_controls_reaches_the_model_and_its_file() {
+    let mut harness = sample_app();
+    let gyro_auto = harness.state().runs()[0]
+        .identification
+        .as_ref()
+        .expect("identified")
+        .model
+        .blocks["gyro"]
+        .order;
+    harness.get_by_label("accel order").click();
+    harness.run_steps(2);
+    harness.get_by_label("accel 1").click();
+    harness.run_steps(4);
+    let settings = harness.state().settings().clone();
+    assert_eq!(
+        (settings.order.gyro, settings.order.accel),
+        (OrderSetting::Auto, OrderSetting::Fixed(1))
+    );
+    let id = harness.state().runs()[0]
+        .identification
+        .value
+        .clone()
+        .expect("identified");
+    assert_eq!(id.model.blocks["accel"].order, 1);
+    assert_eq!(id.model.blocks["gyro"].order, gyro_auto, "the gyro stays on auto");
+    assert_eq!(harness.get_all_by_label_contains("order 1 (fixed)").count(), 1);
+    assert_eq!(
+        harness
+            .get_all_by_label_contains("(auto: lowest BIC among the admissible orders)")
+            .count(),
+        1
+    );
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("per_block.json");
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(out.clone())));
+    harness.run_steps(2);
+    let text = std::fs::read_to_string(&out).expect("exported");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("json");
+    assert_eq!(
+        json["settings"]["order"],
+        serde_json::json!({"gyro": "auto", "accel": 1}),
+        "{}",
+        json["settings"]
+    );
 }
 
 #[test]
@@ -137,7 +188,7 @@ fn a_worker_panic_is_shown_the_last_result_kept_and_the_app_goes_on() {
     harness.get_by_label_contains("showing the last good result");
     harness.get_by_label(&gyro_labels(&harness).0);
     // Still responsive: a new order is identified and clears the failure.
-    set(&mut harness, |s| s.order = OrderSetting::Fixed(0));
+    set(&mut harness, |s| s.order = OrderSetting::Fixed(0).into());
     let run = &harness.state().runs()[0];
     assert!(run.identification.error.is_none());
     assert_eq!(

@@ -20,7 +20,7 @@ fn check(regime: Regime, seed: u64) {
     write_run(&sim, &path).unwrap();
     let run = load(&path, &LoadOptions::default()).unwrap();
     let settings = Settings {
-        order: OrderSetting::Fixed(0),
+        order: OrderSetting::Fixed(0).into(),
         ..Settings::default()
     };
     let id = identify_run(&run, &settings).unwrap();

@@ -159,7 +159,7 @@ fn a_gyro_leading_the_stand_is_a_negative_delay() {
 fn a_fixed_order_the_data_do_not_support_is_flagged() {
     let run = real("broad11_slow_translation");
     let fixed = |n| Settings {
-        order: OrderSetting::Fixed(n),
+        order: OrderSetting::Fixed(n).into(),
         ..Settings::default()
     };
     let b = gyro(&run, &fixed(4));

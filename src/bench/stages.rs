@@ -178,7 +178,14 @@ fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
     }
     for ((block, sp, f), w) in cached.iter().zip(&state.wiener) {
         let band = native_bins(sp, resolve_band(sp, *block, state.settings.band_hz)?);
-        std::hint::black_box(structural_fit(sp, f, w, &band, state.settings.order, None)?);
+        std::hint::black_box(structural_fit(
+            sp,
+            f,
+            w,
+            &band,
+            state.settings.order.of(*block),
+            None,
+        )?);
     }
     Ok(())
 }
@@ -232,14 +239,14 @@ fn retune_order_stage(state: &mut BenchState) -> Result<(), BenchError> {
         .identification()
         .map(|(s, _)| s.clone());
     let settings = Settings {
-        order,
+        order: order.into(),
         ..latest.unwrap_or_else(|| state.settings.clone())
     };
     reidentify(state, &settings, Start::Warm)
 }
 
 fn retune_order0_stage(state: &mut BenchState) -> Result<(), BenchError> {
-    let order = std::mem::replace(&mut state.settings.order, OrderSetting::Fixed(0));
+    let order = std::mem::replace(&mut state.settings.order, OrderSetting::Fixed(0).into());
     let result = retune_cold_stage(state);
     state.settings.order = order;
     result

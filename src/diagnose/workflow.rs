@@ -107,7 +107,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     // would hide the very misfit the diagnosis looks for.
     let band_hz = BandSetting::Fixed(settings.band_hz.search_limits(run.sample_rate_hz));
     let settings = Settings {
-        order: OrderSetting::Fixed(0),
+        order: OrderSetting::Fixed(0).into(),
         blocks: settings.blocks_for(&run.blocks()),
         band_hz,
         ..settings.clone()

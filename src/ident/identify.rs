@@ -147,7 +147,7 @@ pub fn identify_block_from(
         &factorisation,
         &wiener,
         &band,
-        settings.order,
+        settings.order.of(block),
         previous,
     )?);
     let stationarity = cached_stationarity(&spectra, band_hz);

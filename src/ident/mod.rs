@@ -6,6 +6,7 @@
 //! structural fit (order).
 
 pub mod band;
+pub mod block_orders;
 pub mod excitation;
 pub mod factorisation;
 pub mod identify;

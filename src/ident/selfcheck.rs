@@ -117,7 +117,7 @@ pub fn self_check(
             tau_std_s: fit.tau_std_s,
         });
     }
-    if let OrderSetting::Fixed(n) = settings.order
+    if let OrderSetting::Fixed(n) = settings.order.of(block)
         && let Some(reason) = fit
             .candidates
             .iter()

@@ -1,7 +1,8 @@
 //! Identifier settings (contract section 3): every field optional, defaults echoed into every
 //! output.
 //!
-//! `lambda` is three numbers or `"auto"`; `order` is an integer 0..=4 or `"auto"`. Validation
+//! `lambda` is three numbers or `"auto"`; `order` is an integer 0..=4 or `"auto"`, or one of
+//! these per block (`{"gyro": 0, "accel": "auto"}`, [`BlockOrders`]). Validation
 //! against a run ([`Settings::validate`]) refuses: a band outside `(0, Nyquist]` or empty, a
 //! weight `A` that is not symmetric positive definite, a `lambda` that makes `I - A^-1 Lambda`
 //! singular, a negative `lambda` or one that shrinks the gain by more than [`MAX_SHRINK`], an order above 4, a segment longer than the run, a block the run does not have.
@@ -14,6 +15,7 @@ use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 
 use super::band::BandSetting;
+pub use super::block_orders::BlockOrders;
 use crate::block::Block;
 use crate::spectral::WelchSettings;
 
@@ -52,8 +54,8 @@ pub struct Settings {
     pub weight_a: [[f64; 3]; 3],
     /// Lagrange multipliers.
     pub lambda: LambdaSetting,
-    /// Structural order.
-    pub order: OrderSetting,
+    /// Structural order: one for both blocks, or one per block ([`BlockOrders`]).
+    pub order: BlockOrders,
     /// Blocks to identify; empty (the default) means every block the run has.
     pub blocks: Vec<Block>,
     /// Whether the blocks are calibrated (K near identity): the self-check then warns about a
@@ -74,7 +76,7 @@ impl Default for Settings {
             band_hz: BandSetting::Auto,
             weight_a: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             lambda: LambdaSetting::Values([0.0; 3]),
-            order: OrderSetting::Auto,
+            order: BlockOrders::both(OrderSetting::Auto),
             blocks: Vec::new(),
             calibrated: true,
             span_s: None,
@@ -267,10 +269,12 @@ impl Settings {
             return Err(SettingsError::Band { low, high, nyquist });
         }
         self.validate_weight_and_lambda()?;
-        if let OrderSetting::Fixed(n) = self.order
-            && n > MAX_ORDER
-        {
-            return Err(SettingsError::Order(n));
+        for block in Block::BOTH {
+            if let OrderSetting::Fixed(n) = self.order.of(block)
+                && n > MAX_ORDER
+            {
+                return Err(SettingsError::Order(n));
+            }
         }
         self.welch
             .validate(n_samples)

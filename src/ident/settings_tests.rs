@@ -20,11 +20,15 @@ fn contract_example_parses() {
     let s = parse(r#"{"welch": {"segment_len": 4096, "overlap": 0.5, "window": "hann"}, "band_hz": [0.1, 40.0],
         "weight_A": [[1,0,0],[0,1,0],[0,0,1]], "lambda": [0, 0, 0], "order": "auto", "blocks": ["gyro", "accel"]}"#).unwrap();
     assert_eq!(s.lambda, LambdaSetting::Values([0.0; 3]));
-    assert_eq!(s.order, OrderSetting::Auto);
+    assert_eq!(s.order, OrderSetting::Auto.into());
     let s = parse(r#"{"lambda": "auto", "order": 2, "blocks": ["accel"]}"#).unwrap();
     assert_eq!(
         (s.lambda, s.order, s.blocks.clone()),
-        (LambdaSetting::Auto, OrderSetting::Fixed(2), vec![Block::Accel])
+        (
+            LambdaSetting::Auto,
+            OrderSetting::Fixed(2).into(),
+            vec![Block::Accel]
+        )
     );
     assert!(s.validate(100_000, 500.0, &Block::BOTH).is_ok());
 }

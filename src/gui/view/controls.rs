@@ -69,20 +69,7 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
     weight(ui, &mut s);
     lambda(ui, &mut s);
     ui.separator();
-    ui.horizontal(|ui| {
-        let text = match s.order {
-            OrderSetting::Auto => "auto".to_owned(),
-            OrderSetting::Fixed(n) => n.to_string(),
-        };
-        ComboBox::from_label("order")
-            .selected_text(text)
-            .show_ui(ui, |ui| {
-                ui.selectable_value(&mut s.order, OrderSetting::Auto, "auto");
-                for n in 0..=MAX_ORDER {
-                    ui.selectable_value(&mut s.order, OrderSetting::Fixed(n), n.to_string());
-                }
-            });
-    });
+    orders(ui, &mut s);
     ui.horizontal(|ui| {
         ui.label("blocks");
         for block in Block::BOTH {
@@ -199,6 +186,29 @@ fn lambda(ui: &mut egui::Ui, s: &mut Settings) {
     if let Err(e) = s.validate_weight_and_lambda() {
         ui.colored_label(ui.visuals().error_fg_color, e.to_string());
     }
+}
+
+/// The structural order of each block: "auto" (lowest BIC among the admissible orders) or fixed.
+fn orders(ui: &mut egui::Ui, s: &mut Settings) {
+    ui.horizontal(|ui| {
+        for block in Block::BOTH {
+            let order = s.order.of_mut(block);
+            ComboBox::from_label(format!("{block} order"))
+                .selected_text(order.to_string())
+                .show_ui(ui, |ui| {
+                    ui.selectable_value(order, OrderSetting::Auto, format!("{block} auto"));
+                    for n in 0..=MAX_ORDER {
+                        ui.selectable_value(order, OrderSetting::Fixed(n), format!("{block} {n}"));
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "0: K e^(-tau s); 1-4: a rational transfer of that order with the delay; \
+                     auto: the lowest BIC among the admissible orders (Results says why the \
+                     others were rejected)",
+                );
+        }
+    });
 }
 
 /// The stretch of the record to analyse (`span_s`): the whole record, or `from`..`to` in the

@@ -85,12 +85,11 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     if ui.button("Export model JSON…").clicked() {
         commands.push(Command::ExportModel(None));
     }
-    let auto_order = id.settings.order == OrderSetting::Auto;
-    for (name, m) in id
-        .blocks()
-        .iter()
-        .filter_map(|b| id.model.blocks.get_key_value(b.block.name()))
-    {
+    for (block, name, m) in id.blocks().iter().filter_map(|b| {
+        let (name, m) = id.model.blocks.get_key_value(b.block.name())?;
+        Some((b.block, name, m))
+    }) {
+        let auto_order = id.settings.order.of(block) == OrderSetting::Auto;
         ui.separator();
         ui.strong(format!(
             "{name}: {} to {}",

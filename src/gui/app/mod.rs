@@ -107,6 +107,10 @@ pub struct ViewState {
     pub heatmap_frequency_hz: f64,
     /// Block shown on the Bode and Compare tabs.
     pub bode_block: Block,
+    /// A stretch being selected by shift+drag in the Time series: `[start, now]`, s (not
+    /// persisted).
+    #[serde(skip)]
+    pub span_drag: Option<[f64; 2]>,
 }
 
 impl Default for ViewState {
@@ -118,6 +122,7 @@ impl Default for ViewState {
             heatmap_mode: HeatmapMode::Magnitude,
             heatmap_frequency_hz: 5.0,
             bode_block: Block::Gyro,
+            span_drag: None,
         }
     }
 }

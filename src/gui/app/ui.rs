@@ -82,7 +82,7 @@ impl App {
                 return;
             };
             match view.tab {
-                Tab::TimeSeries => timeseries::show(ui, run, view),
+                Tab::TimeSeries => timeseries::show(ui, run, view, &self.prefs.settings, &mut commands),
                 Tab::Spectra => {
                     let texture = self.pair_texture.as_ref().map(|(_, t)| t);
                     spectra::show(ui, run, view, texture);

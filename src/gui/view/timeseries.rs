@@ -1,13 +1,15 @@
 //! The time-series tab: stacked plots with linked time axes and a shared cursor; each series is
-//! drawn from its min/max pyramid at about two points per pixel.
+//! drawn from its min/max pyramid at about two points per pixel. Shift+drag selects the stretch
+//! of the record to analyse (`span_s`, sent as new settings); the analysed stretch is shaded.
 
 use eframe::egui;
-use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, PlotUi, VLine};
+use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, PlotUi, Span, VLine};
 
 use super::palette;
 use crate::faults::RecordingFault;
-use crate::gui::app::{RunEntry, ViewState};
+use crate::gui::app::{Command, RunEntry, ViewState};
 use crate::gui::pipeline::{Measured, Motion, Series};
+use crate::ident::settings::Settings;
 
 /// One plot: a title and its series (`true` = plain differentiation, drawn dashed).
 type Group<'a> = (&'static str, Vec<(&'a Series, bool)>);
@@ -48,8 +50,35 @@ fn groups<'a>(measured: &'a Measured, motion: Option<&'a Motion>, with_diff: boo
     out
 }
 
-/// Draws the tab for `run`.
-pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
+/// Fewest samples of a stretch selected by dragging (a click with shift held selects nothing).
+const MIN_SPAN_SAMPLES: f64 = 16.0;
+
+/// The stretch a drag from `a` to `b` (s, either order) selects in a record from `start` to
+/// `end` sampled every `dt`: clamped to the record, `None` when shorter than
+/// [`MIN_SPAN_SAMPLES`] samples or not finite.
+#[must_use]
+pub fn dragged_span(a: f64, b: f64, start: f64, end: f64, dt: f64) -> Option<[f64; 2]> {
+    let (lo, hi) = (a.min(b).max(start), a.max(b).min(end));
+    (lo.is_finite() && hi.is_finite() && hi - lo >= MIN_SPAN_SAMPLES * dt).then_some([lo, hi])
+}
+
+/// What one plot saw of a selecting drag.
+#[derive(Clone, Copy)]
+enum DragEvent {
+    Start(f64),
+    Move(f64),
+    Stop,
+}
+
+/// Draws the tab for `run`; a shift+drag over a plot sends the selected stretch as new
+/// `settings` (`span_s`).
+pub fn show(
+    ui: &mut egui::Ui,
+    run: &RunEntry,
+    view: &mut ViewState,
+    settings: &Settings,
+    commands: &mut Vec<Command>,
+) {
     let Some(measured) = &run.measured else {
         ui.label("loading…");
         return;
@@ -73,6 +102,9 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
     let readout_height = 22.0;
     let height = ((ui.available_height() - readout_height) / groups.len() as f32 - 4.0).max(80.0);
     let mut cursor_t = None;
+    let mut drag = None;
+    // Shift held (or a selection under way): a drag selects a stretch instead of panning.
+    let selecting = view.span_drag.is_some() || ui.input(|i| i.modifiers.shift);
     for (k, (title, series)) in groups.iter().enumerate() {
         let mut plot = Plot::new(("ts", *title, run.id))
             .height(height)
@@ -80,7 +112,7 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
             .link_cursor(link, [true, false])
             .default_x_bounds(t_start, t_end)
             // Time only: y stays fitted to the visible samples while panning and zooming.
-            .allow_drag([true, false])
+            .allow_drag([!selecting, false])
             .allow_zoom([true, false])
             .allow_scroll(false)
             .allow_boxed_zoom(false)
@@ -114,14 +146,20 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
                 );
             }
             mark_faults(plot, series, faults);
-            let cursor = plot
-                .response()
-                .hovered()
-                .then(|| plot.pointer_coordinate())
-                .flatten();
-            (cursor.map(|p| p.x), lo, hi)
+            mark_span(plot, settings.span_s, view.span_drag);
+            let pointer = plot.pointer_coordinate().map(|p| p.x);
+            let cursor = plot.response().hovered().then_some(pointer).flatten();
+            let r = plot.response();
+            let event = match pointer {
+                Some(t) if r.drag_started() && selecting => Some(DragEvent::Start(t)),
+                Some(t) if r.dragged() && view.span_drag.is_some() => Some(DragEvent::Move(t)),
+                _ if r.drag_stopped() && view.span_drag.is_some() => Some(DragEvent::Stop),
+                _ => None,
+            };
+            (cursor, lo, hi, event)
         });
-        let (cursor, lo, hi) = response.inner;
+        let (cursor, lo, hi, event) = response.inner;
+        drag = drag.or(event);
         // Pan and zoom move the bounds after the points were chosen: draw once more for them.
         let shown = response.transform.bounds();
         if (shown.min()[0] - lo).abs() > 1e-9 * (hi - lo) || (shown.max()[0] - hi).abs() > 1e-9 * (hi - lo) {
@@ -129,7 +167,39 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
         }
         cursor_t = cursor_t.or(cursor);
     }
+    match (drag, view.span_drag) {
+        (Some(DragEvent::Start(t)), _) => view.span_drag = Some([t, t]),
+        (Some(DragEvent::Move(t)), Some([from, _])) => view.span_drag = Some([from, t]),
+        (Some(DragEvent::Stop), Some([from, to])) => {
+            view.span_drag = None;
+            if let Some(span) = dragged_span(from, to, t_start, t_end, first.dt) {
+                commands.push(Command::SetSettings(Box::new(Settings {
+                    span_s: Some(span),
+                    ..settings.clone()
+                })));
+            }
+        }
+        _ => {}
+    }
     readout(ui, &groups, cursor_t);
+}
+
+/// The analysed stretch (`span_s`), shaded, and a selection under way.
+fn mark_span(plot: &mut PlotUi<'_>, span: Option<[f64; 2]>, dragging: Option<[f64; 2]>) {
+    if let Some([from, to]) = span {
+        plot.span(
+            Span::new("analysed stretch", from..=to)
+                .fill(egui::Color32::from_rgba_unmultiplied(90, 140, 255, 28))
+                .border_width(1.0),
+        );
+    }
+    if let Some([a, b]) = dragging {
+        plot.span(
+            Span::new("selecting", a.min(b)..=a.max(b))
+                .fill(egui::Color32::from_rgba_unmultiplied(255, 190, 60, 40))
+                .border_style(LineStyle::dashed_loose()),
+        );
+    }
 }
 
 /// The recording faults of the plot's channels: a red line where each starts (named in the
@@ -154,7 +224,10 @@ fn mark_faults(plot: &mut PlotUi<'_>, series: &[(&Series, bool)], faults: &[Reco
 
 fn readout(ui: &mut egui::Ui, groups: &[Group<'_>], t: Option<f64>) {
     let Some(t) = t else {
-        ui.weak("hover a plot for a read-out; drag to pan, ctrl+scroll to zoom time, double-click to reset");
+        ui.weak(
+            "hover a plot for a read-out; drag to pan, ctrl+scroll to zoom time, double-click to \
+             reset; shift+drag to analyse only that stretch",
+        );
         return;
     };
     let values: Vec<String> = groups

@@ -1,0 +1,93 @@
+//! The stretch to analyse, selected as a lab engineer would: shift+drag over the Time series
+//! (issue 16). A plain drag pans and selects nothing; a shift+drag sends `span_s` and the run is
+//! identified over it. AccessKit (`egui_kittest`) with raw pointer events, no GPU; the worker runs
+//! synchronously.
+
+use eframe::egui::{self, Modifiers, PointerButton, Pos2};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use imu_attest::gui::view::timeseries::dragged_span;
+use imu_attest::gui::{App, WorkerMode, sample_run_path};
+
+#[path = "common/gui.rs"]
+mod gui_common;
+
+/// Presses at `from`, moves to `to` in four steps and releases, with `modifiers` held.
+fn drag(harness: &mut Harness<'_, App>, from: Pos2, to: Pos2, modifiers: Modifiers) {
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed,
+        modifiers,
+    };
+    let events = &mut harness.input_mut().events;
+    events.push(egui::Event::ModifiersChanged(modifiers));
+    events.push(egui::Event::PointerMoved(from));
+    harness.run_steps(1);
+    harness.input_mut().events.push(button(from, true));
+    harness.run_steps(1);
+    for step in 1..=4 {
+        let pos = from + (to - from) * (step as f32 / 4.0);
+        harness.input_mut().events.push(egui::Event::PointerMoved(pos));
+        harness.run_steps(1);
+    }
+    harness.input_mut().events.push(button(to, false));
+    harness.run_steps(1);
+    let events = &mut harness.input_mut().events;
+    events.push(egui::Event::ModifiersChanged(Modifiers::NONE));
+    harness.run_steps(3);
+}
+
+#[test]
+fn a_shift_drag_over_the_time_series_selects_the_stretch_the_run_is_identified_over() {
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    let summary = harness.state().runs()[0].summary.clone().expect("loaded");
+    let (start, end) = (summary.start_s, summary.start_s + summary.duration_s);
+    // Over the first (angles) plot, in the central panel between the side panels.
+    let (from, to) = (Pos2::new(520.0, 160.0), Pos2::new(860.0, 160.0));
+
+    drag(&mut harness, from, to, Modifiers::SHIFT);
+    let span = harness
+        .state()
+        .settings()
+        .span_s
+        .expect("a shift+drag selects a stretch");
+    assert!(
+        start <= span[0] && span[0] < span[1] && span[1] <= end,
+        "{span:?} inside [{start}, {end}]"
+    );
+    // A third of the plot's width or so: neither a sliver nor the whole record.
+    let share = (span[1] - span[0]) / (end - start);
+    assert!(share > 0.05 && share < 0.9, "{span:?} is {share} of the record");
+    let id = harness.state().runs()[0]
+        .identification
+        .value
+        .clone()
+        .expect("identified");
+    assert_eq!(id.settings.span_s, Some(span), "identified over the stretch");
+    harness.get_by_label(&format!(
+        "gyro analysed over t = {:.2} to {:.2} s of the record",
+        span[0], span[1]
+    ));
+
+    // A plain drag pans the time axis and leaves the stretch as it is.
+    drag(&mut harness, to, from, Modifiers::NONE);
+    assert_eq!(harness.state().settings().span_s, Some(span), "a plain drag pans");
+}
+
+#[test]
+fn a_dragged_span_is_clamped_to_the_record_and_refused_when_shorter_than_16_samples() {
+    assert_eq!(dragged_span(5.0, 2.0, 0.0, 10.0, 0.01), Some([2.0, 5.0]));
+    assert_eq!(dragged_span(-3.0, 20.0, 0.0, 10.0, 0.01), Some([0.0, 10.0]));
+    assert_eq!(dragged_span(4.0, 4.1, 0.0, 10.0, 0.01), None);
+    assert_eq!(dragged_span(4.0, 4.16, 0.0, 10.0, 0.01), Some([4.0, 4.16]));
+    assert_eq!(dragged_span(f64::NAN, 4.0, 0.0, 10.0, 0.01), None);
+    assert_eq!(
+        dragged_span(11.0, 12.0, 0.0, 10.0, 0.01),
+        None,
+        "outside the record"
+    );
+}

@@ -43,6 +43,8 @@ fn plot(id: impl egui::AsIdSalt, width: f32, height: f32, group: &str) -> Plot<'
         .link_axis(Id::unique(group), [true, false])
         .link_cursor(Id::unique(group), [true, false])
         .x_axis_formatter(hz_label)
+        .y_grid_spacer(super::grid::nice_grid_spacer())
+        .y_axis_formatter(super::grid::nice_label)
         .allow_scroll(false)
 }
 

@@ -6,6 +6,7 @@ pub mod compare;
 pub mod controls;
 pub mod discrepancy;
 pub mod errors;
+pub mod grid;
 pub mod heatmap;
 pub mod results;
 pub mod runs;

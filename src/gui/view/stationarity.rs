@@ -38,6 +38,8 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     let mid = |s: &crate::ident::stretches::StretchFit| 0.5 * (s.span_s[0] + s.span_s[1]);
     let link = egui::Id::unique(("stretches", name));
     Plot::new(("stretch-delay", name))
+        .x_grid_spacer(super::grid::nice_grid_spacer())
+        .x_axis_formatter(super::grid::nice_label)
         .height(110.0)
         .link_axis(link, [true, false])
         .legend(Legend::default())
@@ -73,6 +75,8 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
             );
         });
     Plot::new(("stretch-gain", name))
+        .x_grid_spacer(super::grid::nice_grid_spacer())
+        .x_axis_formatter(super::grid::nice_label)
         .height(110.0)
         .link_axis(link, [true, false])
         .legend(Legend::default())

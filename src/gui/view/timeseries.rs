@@ -118,7 +118,11 @@ pub fn show(
             .allow_boxed_zoom(false)
             .legend(Legend::default())
             .y_axis_label(*title)
-            .y_axis_min_width(64.0);
+            .y_axis_min_width(64.0)
+            .x_grid_spacer(super::grid::nice_grid_spacer())
+            .y_grid_spacer(super::grid::nice_grid_spacer())
+            .x_axis_formatter(super::grid::nice_label)
+            .y_axis_formatter(super::grid::nice_label);
         if k + 1 == groups.len() {
             plot = plot.x_axis_label("t, s");
         }

@@ -222,13 +222,40 @@ fn two_runs_are_compared_side_by_side() {
         }
     }
     harness.get_by_label(&significance_label(&c, "gyro"));
-    harness.get_by_label("approach - cruise");
+    harness.get_by_label("approach.csv.gz - cruise.csv.gz");
     // K elements named as everywhere else; no order note for models of one order.
     harness.get_by_label("K gx/wy");
     assert!(
         harness
             .query_by_label(imu_attest::gui::view::compare::ORDERS_DIFFER)
             .is_none()
+    );
+}
+
+/// Three runs: six columns, wider than the tab. The table scrolls sideways inside the tab: its
+/// last column, scrolled to, lies left of the Results panel (before, it ran on under it).
+#[test]
+fn a_wide_comparison_scrolls_and_never_hides_under_results() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("sample_runs");
+    let names = ["cruise", "approach", "turbulent_cruise"];
+    let paths = names.map(|n| dir.join(format!("{n}.csv.gz"))).to_vec();
+    let mut harness = app(options(paths, WorkerMode::Synchronous));
+    harness.run_steps(2);
+    harness.get_by_label("Compare").click();
+    harness.run_steps(2);
+    for n in names {
+        harness.get_by_label(&format!("compare {n}.csv.gz")).click();
+        harness.run_steps(2);
+    }
+    assert_eq!(harness.state().comparison().expect("three runs").runs.len(), 3);
+    let results_left = harness.get_by_label("Results").rect().min.x;
+    let last = "turbulent_cruise.csv.gz - approach.csv.gz";
+    harness.get_by_label(last).scroll_to_me();
+    harness.run_steps(3);
+    let rect = harness.get_by_label(last).rect();
+    assert!(
+        rect.max.x <= results_left,
+        "the last column {rect:?} runs under Results (left edge {results_left})"
     );
 }
 

@@ -84,45 +84,10 @@ pub fn show(
         ui.colored_label(ui.visuals().warn_fg_color, ORDERS_DIFFER);
     }
     egui::ScrollArea::vertical().show(ui, |ui| {
-        egui::Grid::new("compare-figures").striped(true).show(ui, |ui| {
-            ui.strong("figure");
-            for r in &c.runs {
-                ui.strong(format!("{} ({})", r.source.file, r.source.regime));
-            }
-            for d in c.differences.iter().filter(|d| d.block == block) {
-                ui.strong(format!("{} - {}", d.regimes[1], d.regimes[0]));
-            }
-            ui.end_row();
-            ui.label("τ, ms");
-            for r in &c.runs {
-                let f = r.blocks.get(block);
-                ui.monospace(f.map_or_else(String::new, |f| format!("{:.3}", f.tau_s * 1e3)));
-            }
-            for d in c.differences.iter().filter(|d| d.block == block) {
-                ui.monospace(delta_text(&d.tau_s, 1e3));
-            }
-            ui.end_row();
-            ui.label("order");
-            for r in &c.runs {
-                let f = r.blocks.get(block);
-                ui.monospace(f.map_or_else(String::new, |f| f.order.to_string()));
-            }
-            ui.end_row();
-            let (inputs, outputs) = crate::ident::signals::channel_names(view.bode_block);
-            for i in 0..3 {
-                for j in 0..3 {
-                    ui.label(format!("K {}/{}", outputs[i], inputs[j]));
-                    for r in &c.runs {
-                        let f = r.blocks.get(block);
-                        ui.monospace(f.map_or_else(String::new, |f| format!("{:+.6}", f.k[i][j])));
-                    }
-                    for d in c.differences.iter().filter(|d| d.block == block) {
-                        ui.monospace(delta_text(&d.k[i][j], 1.0));
-                    }
-                    ui.end_row();
-                }
-            }
-        });
+        // Wider than the tab with three or more runs: scrolled sideways, never under Results.
+        egui::ScrollArea::horizontal()
+            .id_salt("compare-table")
+            .show(ui, |ui| figures(ui, c, block, view));
         ui.separator();
         let entries: Vec<BodeEntry<'_>> = compared
             .iter()
@@ -144,5 +109,55 @@ pub fn show(
             })
             .collect();
         grid(ui, &entries, "compare");
+    });
+}
+
+/// The difference column's header: `later - earlier`, by file (two runs of one regime differ).
+#[must_use]
+pub fn difference_header(c: &Comparison, d: &crate::compare::Difference) -> String {
+    let file = |i: usize| c.runs.get(i).map_or("?", |r| r.source.file.as_str());
+    format!("{} - {}", file(d.runs[1]), file(d.runs[0]))
+}
+
+/// The table: each run's figures, then each pair's difference.
+fn figures(ui: &mut egui::Ui, c: &Comparison, block: &str, view: &ViewState) {
+    egui::Grid::new("compare-figures").striped(true).show(ui, |ui| {
+        ui.strong("figure");
+        for r in &c.runs {
+            ui.strong(format!("{} ({})", r.source.file, r.source.regime));
+        }
+        for d in c.differences.iter().filter(|d| d.block == block) {
+            ui.strong(difference_header(c, d));
+        }
+        ui.end_row();
+        ui.label("τ, ms");
+        for r in &c.runs {
+            let f = r.blocks.get(block);
+            ui.monospace(f.map_or_else(String::new, |f| format!("{:.3}", f.tau_s * 1e3)));
+        }
+        for d in c.differences.iter().filter(|d| d.block == block) {
+            ui.monospace(delta_text(&d.tau_s, 1e3));
+        }
+        ui.end_row();
+        ui.label("order");
+        for r in &c.runs {
+            let f = r.blocks.get(block);
+            ui.monospace(f.map_or_else(String::new, |f| f.order.to_string()));
+        }
+        ui.end_row();
+        let (inputs, outputs) = crate::ident::signals::channel_names(view.bode_block);
+        for i in 0..3 {
+            for j in 0..3 {
+                ui.label(format!("K {}/{}", outputs[i], inputs[j]));
+                for r in &c.runs {
+                    let f = r.blocks.get(block);
+                    ui.monospace(f.map_or_else(String::new, |f| format!("{:+.6}", f.k[i][j])));
+                }
+                for d in c.differences.iter().filter(|d| d.block == block) {
+                    ui.monospace(delta_text(&d.k[i][j], 1.0));
+                }
+                ui.end_row();
+            }
+        }
     });
 }

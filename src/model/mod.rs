@@ -18,6 +18,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 pub mod effects;
+pub mod validation;
 
 pub use effects::ModelEffects;
 

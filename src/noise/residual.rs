@@ -55,6 +55,30 @@ pub fn residual(
         return [Vec::new(), Vec::new(), Vec::new()];
     }
     let mut fft = RecordFft::new(fast_len(len + settle + 16), sample_rate_hz);
+    let mut predicted = predicted_spectra(&mut fft, input, len, response);
+    std::array::from_fn(|i| {
+        let model = fft.inverse(std::mem::take(&mut predicted[i]));
+        let mut r: Vec<f64> = output[i][settle..len]
+            .iter()
+            .zip(&model[settle..len])
+            .map(|(x, m)| x - m)
+            .collect();
+        let mean = r.iter().sum::<f64>() / r.len() as f64;
+        for v in &mut r {
+            *v -= mean;
+        }
+        r
+    })
+}
+
+/// The spectra of `H u` on `fft`'s grid (zero-padded): the first `len` samples of each input,
+/// mean removed, transformed and multiplied by `response` (non-finite products count as 0).
+pub(crate) fn predicted_spectra(
+    fft: &mut RecordFft,
+    input: &[Vec<f64>; 3],
+    len: usize,
+    response: impl Fn(f64) -> Matrix3<Complex64>,
+) -> [Vec<Complex64>; 3] {
     let spectra: [Vec<Complex64>; 3] = std::array::from_fn(|j| {
         let mean = input[j][..len].iter().sum::<f64>() / len as f64;
         let centred: Vec<f64> = input[j][..len].iter().map(|v| v - mean).collect();
@@ -69,19 +93,7 @@ pub fn residual(
             p[k] = if v.is_finite() { v } else { Complex64::default() };
         }
     }
-    std::array::from_fn(|i| {
-        let model = fft.inverse(std::mem::take(&mut predicted[i]));
-        let mut r: Vec<f64> = output[i][settle..len]
-            .iter()
-            .zip(&model[settle..len])
-            .map(|(x, m)| x - m)
-            .collect();
-        let mean = r.iter().sum::<f64>() / r.len() as f64;
-        for v in &mut r {
-            *v -= mean;
-        }
-        r
-    })
+    predicted
 }
 
 #[cfg(test)]

@@ -1,0 +1,123 @@
+//! Closed forms: a delayed gain's exact prediction fits 100 %; a gain off by 10 % fits 90 %; with
+//! added white noise of known level the fit is what the noise's share below the band top says; the
+//! delay matters (a prediction half a period late fits worse than the mean).
+
+use std::path::Path;
+
+use super::*;
+use crate::ident::identify::identify_run;
+use crate::ident::settings::Settings;
+use crate::ident::signals::BlockSignals;
+use crate::model::Model;
+use crate::rng::Rng;
+use crate::run::{LoadOptions, load};
+
+/// The sample run's gyro model, made `K e^(-tau s)` in `band` (every other field as identified).
+fn delayed_gain(k: [[f64; 3]; 3], tau_s: f64, band: [f64; 2]) -> BlockModel {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("sample_runs/cruise.csv.gz");
+    let run = load(&path, &LoadOptions::default()).expect("sample run");
+    let settings = Settings::default();
+    let id = identify_run(&run, &settings).expect("identified");
+    let mut m = Model::from_identification(&run, &settings, &id).blocks["gyro"].clone();
+    m.k = k;
+    m.tau_s = tau_s;
+    m.order = 0;
+    m.numerator = vec![k];
+    m.denominator = Vec::new();
+    m.poles = Vec::new();
+    m.effects = None;
+    m.band_hz = band;
+    m
+}
+
+/// Three smooth random inputs (a random walk's increments, moving-averaged) and the outputs
+/// `K u(t - d)` for a whole number `d` of samples, plus white noise of `noise` rms.
+fn signals(k: [[f64; 3]; 3], delay: usize, noise: f64, seed: u64) -> BlockSignals {
+    let mut rng = Rng::new(seed);
+    let len = 20_000;
+    let input: [Vec<f64>; 3] = std::array::from_fn(|_| {
+        let white: Vec<f64> = (0..len + 40).map(|_| rng.normal()).collect();
+        (0..len)
+            .map(|i| white[i..i + 40].iter().sum::<f64>() / 40.0)
+            .collect()
+    });
+    let output = std::array::from_fn(|i| {
+        (0..len)
+            .map(|t| {
+                let u = |j: usize| if t >= delay { input[j][t - delay] } else { 0.0 };
+                (0..3).map(|j| k[i][j] * u(j)).sum::<f64>() + noise * rng.normal()
+            })
+            .collect()
+    });
+    BlockSignals {
+        block: crate::block::Block::Gyro,
+        input,
+        output,
+    }
+}
+
+const K: [[f64; 3]; 3] = [[1.01, 0.003, -0.002], [0.001, 0.99, 0.004], [-0.003, 0.002, 1.0]];
+const FS: f64 = 500.0;
+
+#[test]
+fn an_exact_model_fits_100_percent_and_a_gain_10_percent_low_fits_90() {
+    let delay = 3;
+    let tau = delay as f64 / FS;
+    let run = signals(K, delay, 0.0, 1);
+    let exact = validate(&delayed_gain(K, tau, [0.2, 40.0]), &run, 0..20_000, FS, 10.0).expect("validated");
+    for f in exact.fit_percent {
+        assert!((f - 100.0).abs() < 0.02, "{:?}", exact.fit_percent);
+    }
+    assert_eq!(exact.measured[0].len(), exact.predicted[0].len());
+    assert!(exact.t0_s > 10.0, "settling samples dropped: {}", exact.t0_s);
+    let low = K.map(|row| row.map(|v| 0.9 * v));
+    let off = validate(&delayed_gain(low, tau, [0.2, 40.0]), &run, 0..20_000, FS, 10.0).expect("validated");
+    for f in off.fit_percent {
+        assert!((f - 90.0).abs() < 0.02, "{:?}", off.fit_percent);
+    }
+}
+
+#[test]
+fn white_noise_lowers_the_fit_by_its_in_band_share_and_a_wrong_delay_fits_worse() {
+    let delay = 3;
+    let tau = delay as f64 / FS;
+    let noise = 0.05;
+    let run = signals(K, delay, noise, 2);
+    let band = [0.2, 40.0];
+    let v = validate(&delayed_gain(K, tau, band), &run, 0..20_000, FS, 0.0).expect("validated");
+    // The low-pass keeps (40 + 10 x 3/8) / 250 of the noise's variance (a raised cosine's mean
+    // square over its roll-off is 3/8); against the measured (filtered) signal's own power.
+    for i in 0..3 {
+        let power = v.measured[i].iter().map(|y| y * y).sum::<f64>() / v.measured[i].len() as f64;
+        let noise_in_band = noise * noise * (band[1] + 0.375 * 0.25 * band[1]) / (FS / 2.0);
+        let expected = 100.0 * (1.0 - (noise_in_band / power).sqrt());
+        assert!(
+            (v.fit_percent[i] - expected).abs() < 0.3,
+            "channel {i}: fit {} vs {expected}",
+            v.fit_percent[i]
+        );
+    }
+    // 25 ms late: beyond the motion's correlation time, no better than the mean.
+    let late = validate(&delayed_gain(K, tau + 0.025, band), &run, 0..20_000, FS, 0.0).expect("validated");
+    for i in 0..3 {
+        assert!(
+            late.fit_percent[i] < v.fit_percent[i] - 50.0,
+            "{:?}",
+            late.fit_percent
+        );
+    }
+}
+
+#[test]
+fn too_short_a_span_or_an_empty_band_gives_nothing() {
+    let run = signals(K, 0, 0.0, 3);
+    let m = delayed_gain(K, 0.0, [0.2, 40.0]);
+    assert!(validate(&m, &run, 0..5, FS, 0.0).is_none());
+    assert!(
+        validate(&m, &run, 0..30_000, FS, 0.0).is_none(),
+        "beyond the signals"
+    );
+    let nothing = delayed_gain(K, 0.0, [0.0, 0.0]);
+    assert!(validate(&nothing, &run, 0..20_000, FS, 0.0).is_none());
+    assert!(fit_percent(&[0.0, 0.0], &[1.0, 1.0]).is_nan());
+}

@@ -8,7 +8,7 @@ use super::prompt::{self, PathPurpose};
 use super::{App, RunEntry, RunState};
 use crate::block::Block;
 use crate::effect::Effect;
-use crate::gui::pipeline::{Job, JobKind, RunId, Stage};
+use crate::gui::pipeline::{Job, JobKind, RunId, Stage, ValidationKey};
 use crate::ident::settings::Settings;
 
 /// A request from the UI.
@@ -51,6 +51,16 @@ pub enum Command {
     PromptPath(PathPurpose),
     /// Close the typed-path window.
     ClosePrompt,
+    /// Predict this run's outputs of `block` with the model identified on `model_run` (itself
+    /// or another loaded run).
+    Validate {
+        /// The run whose outputs are predicted.
+        run: RunId,
+        /// The run whose model predicts them.
+        model_run: RunId,
+        /// The block.
+        block: Block,
+    },
     /// Fault injection: make the worker panic in `stage` of this run's analysis, as a bug would.
     InjectPanic(RunId, Stage),
 }
@@ -154,6 +164,11 @@ impl App {
                 }
             }
             Command::Diagnose(id) => self.diagnose(id),
+            Command::Validate {
+                run,
+                model_run,
+                block,
+            } => self.validate(run, model_run, block),
             Command::AcceptEffect(id, block, effect) => {
                 let pair = (block, effect);
                 if let Some(run) = self.run_mut(id)
@@ -226,6 +241,41 @@ impl App {
             run: id,
             generation,
             kind: JobKind::Diagnose { settings, rejected },
+        });
+    }
+
+    /// Submits the prediction of `id`'s outputs of `block` by `model_run`'s identified model (both
+    /// identified; otherwise nothing happens: the Validation tab says what it waits for).
+    fn validate(&mut self, id: RunId, model_run: RunId, block: Block) {
+        let Some((model, model_generation)) = self.run(model_run).and_then(|r| {
+            let id = r.identification.as_ref()?;
+            let m = id.model.blocks.get(block.name())?;
+            Some((Arc::new(m.clone()), r.identification.generation))
+        }) else {
+            return;
+        };
+        let settings = Box::new(self.prefs.settings.clone());
+        let generation = self.next_generation();
+        let Some(run) = self.run_mut(id) else { return };
+        let Some(data_generation) = run
+            .identification
+            .is_some()
+            .then_some(run.identification.generation)
+        else {
+            return;
+        };
+        let key = ValidationKey {
+            model_run,
+            block,
+            model_generation,
+            data_generation,
+        };
+        run.validation.request(generation);
+        run.validation_wanted = Some(key.clone());
+        self.worker.submit(Job {
+            run: id,
+            generation,
+            kind: JobKind::Validate { settings, model, key },
         });
     }
 

@@ -13,6 +13,8 @@ pub enum ErrorTopic {
     Analysis(RunId),
     /// A run's diagnosis: cleared by its next success.
     Diagnosis(RunId),
+    /// The Validation tab's prediction of a run.
+    Validation(RunId),
     /// A model or view export (stays until dismissed).
     Export,
 }

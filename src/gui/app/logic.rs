@@ -39,6 +39,7 @@ impl App {
         }
         self.drain_events(ctx);
         self.update_comparison();
+        self.update_validation();
         self.screenshot_pass(ctx);
         self.update_pair_texture(ctx);
     }
@@ -58,6 +59,38 @@ impl App {
             self.handle(event);
         }
         self.update_comparison();
+        self.update_validation();
+    }
+
+    /// On the Validation tab: asks for the prediction the tab should show (the selected run's
+    /// outputs of the shown block, by the chosen run's model) when it is not the one last asked
+    /// for, e.g. after a new identification of either run.
+    fn update_validation(&mut self) {
+        if self.prefs.view.tab != super::Tab::Validation {
+            return;
+        }
+        let Some(id) = self.selected else { return };
+        let block = self.prefs.view.bode_block;
+        let model_run = self.prefs.view.validation_model.unwrap_or(id);
+        let (Some(run), Some(model)) = (self.run(id), self.run(model_run)) else {
+            return;
+        };
+        if run.identification.is_none() || model.identification.is_none() {
+            return;
+        }
+        let wanted = crate::gui::pipeline::ValidationKey {
+            model_run,
+            block,
+            model_generation: model.identification.generation,
+            data_generation: run.identification.generation,
+        };
+        if run.validation_wanted.as_ref() != Some(&wanted) {
+            self.push_command(Command::Validate {
+                run: id,
+                model_run,
+                block,
+            });
+        }
     }
 
     /// Recomputes the comparison when the compared runs or their identifications changed.
@@ -156,6 +189,17 @@ impl App {
                     self.errors.clear(ErrorTopic::Diagnosis(run));
                 }
             }
+            Event::Validated {
+                run,
+                generation,
+                validation,
+            } => {
+                let Some(entry) = self.run_mut(run) else { return };
+                if generation >= entry.validation.requested {
+                    entry.validation.offer(generation, validation);
+                    self.errors.clear(ErrorTopic::Validation(run));
+                }
+            }
             Event::Written { what, path, .. } => {
                 self.status = Some(format!("{what} written to {}", path.display()));
             }
@@ -172,23 +216,31 @@ impl App {
                 );
             }
             Event::Failed {
-                stage: Stage::Diagnose,
+                stage: stage @ (Stage::Validate | Stage::Diagnose),
                 run,
                 generation,
                 message,
                 kind,
-                ..
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
                 let message = described(&message, kind);
-                if !entry.diagnosis.fail(generation, message.clone()) {
+                let (failed, topic) = if stage == Stage::Validate {
+                    (
+                        entry.validation.fail(generation, message.clone()),
+                        ErrorTopic::Validation(run),
+                    )
+                } else {
+                    (
+                        entry.diagnosis.fail(generation, message.clone()),
+                        ErrorTopic::Diagnosis(run),
+                    )
+                };
+                if !failed {
                     return;
                 }
                 let name = entry.name();
-                self.errors.push(
-                    ErrorTopic::Diagnosis(run),
-                    format!("{name}: diagnosis: {message}"),
-                );
+                self.errors
+                    .push(topic, format!("{name}: {}: {message}", stage.name()));
             }
             Event::Failed {
                 run,

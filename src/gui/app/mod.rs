@@ -28,7 +28,8 @@ use crate::compare::Comparison;
 use crate::diagnose::Report;
 use crate::effect::Effect;
 use crate::gui::pipeline::{
-    Identification, Measured, Motion, RunId, RunSummary, Spectra, Worker, WorkerMode,
+    Identification, Measured, Motion, RunId, RunSummary, Spectra, Validated, ValidationKey, Worker,
+    WorkerMode,
 };
 use crate::ident::settings::Settings;
 use crate::run::LoadOptions;
@@ -79,6 +80,8 @@ pub enum Tab {
     Diagnosis,
     /// Several runs side by side.
     Compare,
+    /// A model's predicted outputs over the measured ones.
+    Validation,
 }
 
 /// What the heatmaps show.
@@ -111,6 +114,9 @@ pub struct ViewState {
     /// persisted).
     #[serde(skip)]
     pub span_drag: Option<[f64; 2]>,
+    /// The Validation tab's model: this run's (`None`) or another loaded run's (not persisted).
+    #[serde(skip)]
+    pub validation_model: Option<RunId>,
 }
 
 impl Default for ViewState {
@@ -123,6 +129,7 @@ impl Default for ViewState {
             heatmap_frequency_hz: 5.0,
             bode_block: Block::Gyro,
             span_drag: None,
+            validation_model: None,
         }
     }
 }
@@ -174,6 +181,10 @@ pub struct RunEntry {
     pub identification: StageRecord<Identification>,
     /// The missing-effect report (the last good one; results of older requests are dropped).
     pub diagnosis: StageRecord<Report>,
+    /// A model's prediction of the outputs (the Validation tab; the last good one).
+    pub validation: StageRecord<Validated>,
+    /// What the latest validation request answers.
+    pub validation_wanted: Option<ValidationKey>,
     /// Effects the engineer accepted (kept in the model shown).
     pub accepted: Vec<(Block, Effect)>,
     /// Effects the engineer rejected (never offered again).
@@ -196,6 +207,8 @@ impl RunEntry {
             spectra: StageRecord::default(),
             identification: StageRecord::default(),
             diagnosis: StageRecord::default(),
+            validation: StageRecord::default(),
+            validation_wanted: None,
             accepted: Vec::new(),
             rejected: Vec::new(),
         }

@@ -4,7 +4,9 @@
 use eframe::egui;
 
 use super::{App, Command, Tab};
-use crate::gui::view::{bode, compare, controls, discrepancy, errors, results, runs, spectra, timeseries};
+use crate::gui::view::{
+    bode, compare, controls, discrepancy, errors, results, runs, spectra, timeseries, validation,
+};
 
 impl App {
     pub(super) fn draw(&mut self, ui: &mut egui::Ui) {
@@ -40,6 +42,7 @@ impl App {
                 ui.selectable_value(&mut view.tab, Tab::Spectra, "Spectra");
                 ui.selectable_value(&mut view.tab, Tab::Bode, "Bode");
                 ui.selectable_value(&mut view.tab, Tab::Diagnosis, "Missing effects");
+                ui.selectable_value(&mut view.tab, Tab::Validation, "Validation");
                 ui.selectable_value(&mut view.tab, Tab::Compare, "Compare");
                 if let Some(status) = &self.status {
                     ui.separator();
@@ -92,6 +95,7 @@ impl App {
                     egui::ScrollArea::vertical()
                         .show(ui, |ui| discrepancy::show(ui, Some(run), &mut commands));
                 }
+                Tab::Validation => validation::show(ui, run, &self.runs, view),
                 Tab::Compare => {}
             }
         });

@@ -28,6 +28,7 @@ mod display;
 mod identified;
 mod series;
 mod stages;
+mod validation;
 mod worker;
 
 use std::path::PathBuf;
@@ -106,6 +107,16 @@ pub enum JobKind {
         /// Where the HTML goes.
         path: PathBuf,
     },
+    /// Predict the run's outputs of `block` with `model` (identified on this run or another) and
+    /// compare them with the measured ones (`crate::model::validation`).
+    Validate {
+        /// The identifier settings (their span).
+        settings: Box<Settings>,
+        /// The model, and the file it was identified on.
+        model: Arc<crate::model::BlockModel>,
+        /// What the result answers (shown with it; tells a stale result from the wanted one).
+        key: ValidationKey,
+    },
     /// Drop the run's cached stages.
     Forget,
     /// Fault injection: panics inside the worker as a bug in `stage` would (tests of the panic
@@ -131,6 +142,8 @@ pub enum Stage {
     Identify,
     /// The missing-effect diagnosis.
     Diagnose,
+    /// A model's prediction of a run's outputs.
+    Validate,
     /// Writing a model file or the certificate.
     Export,
 }
@@ -146,9 +159,38 @@ impl Stage {
             Stage::Factorisation => "factorisation",
             Stage::Identify => "identification",
             Stage::Diagnose => "diagnosis",
+            Stage::Validate => "validation",
             Stage::Export => "export",
         }
     }
+}
+
+/// What a validation answers: which run's model, of which block, as identified when.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ValidationKey {
+    /// The run the model was identified on.
+    pub model_run: RunId,
+    /// The block.
+    pub block: Block,
+    /// The generation of the model run's identification used.
+    pub model_generation: u64,
+    /// The generation of the validated run's identification (its span and settings).
+    pub data_generation: u64,
+}
+
+/// A model's prediction of a run's outputs, ready to plot.
+#[derive(Debug)]
+pub struct Validated {
+    /// What it answers.
+    pub key: ValidationKey,
+    /// The file the model was identified on.
+    pub model_file: String,
+    /// The model's band, Hz (both signals low-passed at its top).
+    pub band_hz: [f64; 2],
+    /// Fit per output channel, percent.
+    pub fit_percent: [f64; 3],
+    /// Per output channel: measured, predicted and their difference (the residual).
+    pub channels: [[Series; 3]; 3],
 }
 
 /// What a loaded run is, for the run list.
@@ -235,6 +277,15 @@ pub enum Event {
         generation: u64,
         /// The report.
         report: Arc<Report>,
+    },
+    /// A model's prediction of the run's outputs ready.
+    Validated {
+        /// The run (whose outputs are predicted).
+        run: RunId,
+        /// The job's generation.
+        generation: u64,
+        /// The result.
+        validation: Arc<Validated>,
     },
     /// A file was written (a model file or the certificate).
     Written {

@@ -274,6 +274,32 @@ impl Pipeline {
                 };
                 self.send(event);
             }
+            JobKind::Validate { settings, model, key } => {
+                *stage = Stage::Validate;
+                let model_file = self
+                    .runs
+                    .get(&key.model_run)
+                    .map(|c| c.summary.file_name.clone())
+                    .unwrap_or_default();
+                let Some(cache) = self.runs.get_mut(&run) else {
+                    return;
+                };
+                let event = match super::validation::validated(cache, &settings, &model, model_file, key) {
+                    Ok(v) => Event::Validated {
+                        run,
+                        generation,
+                        validation: Arc::new(v),
+                    },
+                    Err((message, input)) => Event::Failed {
+                        run,
+                        generation,
+                        stage: Stage::Validate,
+                        message,
+                        kind: FailureKind::of(input),
+                    },
+                };
+                self.send(event);
+            }
             JobKind::ExportResults { runs, path } => {
                 *stage = Stage::Export;
                 let mut rows = Vec::new();
@@ -412,6 +438,7 @@ fn newest_only(batch: Vec<Job>) -> Vec<Job> {
     let merged = |job: &Job| match job.kind {
         JobKind::Analyse { .. } => Some(0_u8),
         JobKind::Diagnose { .. } => Some(1),
+        JobKind::Validate { .. } => Some(2),
         _ => None,
     };
     let mut newest: HashMap<(RunId, u8), u64> = HashMap::new();

@@ -13,6 +13,7 @@ pub mod runs;
 pub mod spectra;
 pub mod stationarity;
 pub mod timeseries;
+pub mod validation;
 
 use eframe::egui::Color32;
 

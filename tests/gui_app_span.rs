@@ -91,3 +91,22 @@ fn a_dragged_span_is_clamped_to_the_record_and_refused_when_shorter_than_16_samp
         "outside the record"
     );
 }
+
+/// The stretch belongs to the run it was chosen on: the preferences a new launch starts from
+/// keep every other setting but not the span.
+#[test]
+fn a_stretch_is_not_carried_into_the_next_launch() {
+    use imu_attest::gui::app::Prefs;
+    use imu_attest::ident::settings::OrderSetting;
+    let mut prefs = Prefs::default();
+    prefs.settings.span_s = Some([60.0, 110.0]);
+    prefs.settings.order = OrderSetting::Fixed(1).into();
+    let json = serde_json::to_string(&prefs).expect("serialises");
+    let back = Prefs::restored(&json).expect("reads back");
+    assert_eq!(back.settings.span_s, None);
+    assert_eq!(
+        back.settings.order, prefs.settings.order,
+        "the other settings are kept"
+    );
+    assert!(Prefs::restored("{not json").is_none());
+}

@@ -144,6 +144,18 @@ pub struct Prefs {
     pub view: ViewState,
 }
 
+impl Prefs {
+    /// The preferences a launch starts from, read back from `json`: the stretch to analyse
+    /// (`span_s`) is left out, since it belongs to the run it was chosen on, not to the next
+    /// launch's runs (a 50 s stretch of one run silently applied to another misleads).
+    #[must_use]
+    pub fn restored(json: &str) -> Option<Self> {
+        let mut prefs: Self = serde_json::from_str(json).ok()?;
+        prefs.settings.span_s = None;
+        Some(prefs)
+    }
+}
+
 /// Where a run is in its life.
 #[derive(Clone, Debug)]
 pub enum RunState {
@@ -268,7 +280,7 @@ impl App {
             .storage
             .filter(|_| options.persist)
             .and_then(|s| s.get_string(PREFS_KEY))
-            .and_then(|json| serde_json::from_str::<Prefs>(&json).ok())
+            .and_then(|json| Prefs::restored(&json))
             .unwrap_or_default();
         let ctx = cc.egui_ctx.clone();
         let worker = Worker::start_with(

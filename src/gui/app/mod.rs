@@ -117,6 +117,11 @@ pub struct ViewState {
     /// The Validation tab's model: this run's (`None`) or another loaded run's (not persisted).
     #[serde(skip)]
     pub validation_model: Option<RunId>,
+    /// Bode grids show the deviation from K (ppm, mrad) instead of the magnitude in dB.
+    pub bode_deviation: bool,
+    /// The Bode read-out of the element and frequency under the pointer (last frame's).
+    #[serde(skip)]
+    pub bode_readout: Option<String>,
 }
 
 impl Default for ViewState {
@@ -130,6 +135,8 @@ impl Default for ViewState {
             bode_block: Block::Gyro,
             span_drag: None,
             validation_model: None,
+            bode_deviation: false,
+            bode_readout: None,
         }
     }
 }
@@ -350,6 +357,12 @@ impl App {
     /// Runs the jobs queued by a [`WorkerMode::Manual`] worker; returns how many ran.
     pub fn run_worker_jobs(&mut self) -> usize {
         self.worker.run_queued()
+    }
+
+    /// The presentation state (tab, view choices).
+    #[must_use]
+    pub fn view(&self) -> &ViewState {
+        &self.prefs.view
     }
 
     /// The identifier settings in force.

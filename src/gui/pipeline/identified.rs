@@ -46,6 +46,24 @@ pub struct BodeElement {
     pub model_magnitude_db: Vec<PlotPoint>,
     /// The fitted structural model's phase, degrees.
     pub model_phase_deg: Vec<PlotPoint>,
+    /// The deviation from the static gain ([`deviation`]): ppm on the diagonal, mrad off it.
+    pub deviation: Vec<PlotPoint>,
+    /// Its confidence band (lower, upper).
+    pub deviation_band: (Vec<f64>, Vec<f64>),
+    /// The fitted model's deviation from its own `K`.
+    pub model_deviation: Vec<PlotPoint>,
+    /// `"ppm"` (a scale-factor element) or `"mrad"` (a cross-axis element).
+    pub deviation_unit: &'static str,
+}
+
+/// The deviation of `W_ij` at angular frequency `omega` (rad/s) from the static gain `k`: the
+/// in-phase part once the model's delay `tau_s` is taken out, `Re(W e^(j omega tau)) - k`, in ppm
+/// on the diagonal (a scale-factor error) and in mrad off it (a misalignment), so that errors of
+/// a few hundred ppm, invisible on a dB scale, show.
+#[must_use]
+pub fn deviation(w: Complex64, omega: f64, tau_s: f64, k: f64, diagonal: bool) -> f64 {
+    let scale = if diagonal { 1e6 } else { 1e3 };
+    ((w * Complex64::from_polar(1.0, omega * tau_s)).re - k) * scale
 }
 
 /// A block's curves.
@@ -179,7 +197,23 @@ fn element(m: &BlockModel, i: usize, j: usize) -> BodeElement {
             }
         })
         .collect();
+    let diagonal = i == j;
+    let omega = |k: usize| 2.0 * std::f64::consts::PI * m.frequency_hz[k];
+    let dev: Vec<f64> = (0..w.len())
+        .map(|k| deviation(w[k], omega(k), m.tau_s, m.k[i][j], diagonal))
+        .collect();
+    let scale = if diagonal { 1e6 } else { 1e3 };
+    let model_dev: Vec<f64> = (0..w.len())
+        .map(|k| deviation(fitted[k], omega(k), m.tau_s, m.k[i][j], diagonal))
+        .collect();
     BodeElement {
+        deviation: points(&dev),
+        deviation_band: (
+            dev.iter().zip(&std).map(|(d, s)| d - s * scale).collect(),
+            dev.iter().zip(&std).map(|(d, s)| d + s * scale).collect(),
+        ),
+        model_deviation: points(&model_dev),
+        deviation_unit: if diagonal { "ppm" } else { "mrad" },
         magnitude_db: points(&mag),
         magnitude_band_db: w.iter().zip(&std).map(|(z, &s)| band_db(z.norm(), s)).unzip(),
         phase_deg: points(&phase),

@@ -36,7 +36,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 pub use display::{BlockSpectra, NativeCsd, Spectra, decibels};
-pub use identified::{BAND_FLOOR_DB, BAND_SIGMAS, BlockBode, BodeElement, Identification};
+pub use identified::{BAND_FLOOR_DB, BAND_SIGMAS, BlockBode, BodeElement, Identification, deviation};
 pub use series::Series;
 pub use stages::{Measured, Motion};
 pub use worker::{Worker, WorkerMode};

@@ -48,11 +48,14 @@ fn plot(id: impl egui::AsIdSalt, width: f32, height: f32, group: &str) -> Plot<'
         .allow_scroll(false)
 }
 
-/// Draws the 3x3 `W_u` grid for `entries` (all of the same block).
-pub fn grid(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], group: &str) {
-    let Some(first) = entries.first() else { return };
+/// Draws the 3x3 `W_u` grid for `entries` (all of the same block): magnitude in dB, or with
+/// `deviation` the deviation from K (ppm on the diagonal, mrad off it), over the phase. Returns
+/// the read-out of the first entry at the element and frequency under the pointer.
+pub fn grid(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], group: &str, deviation: bool) -> Option<String> {
+    let first = entries.first()?;
     let width = ((ui.available_width() - 24.0) / 3.0).max(120.0);
     let height = (width * 0.42).clamp(80.0, 170.0);
+    let mut hovered = None;
     egui::Grid::new((group, "bode"))
         .spacing([6.0, 6.0])
         .show(ui, |ui| {
@@ -60,12 +63,44 @@ pub fn grid(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], group: &str) {
                 for j in 0..3 {
                     ui.vertical(|ui| {
                         ui.strong(format!("{} from {}", first.bode.outputs[i], first.bode.inputs[j]));
-                        cell(ui, entries, 3 * i + j, width, height, group);
+                        let e = 3 * i + j;
+                        if let Some(x) = cell(ui, entries, e, [width, height], group, deviation) {
+                            hovered = Some((e, x));
+                        }
                     });
                 }
                 ui.end_row();
             }
         });
+    let (e, x) = hovered?;
+    readout(first.bode, e, x)
+}
+
+/// The read-out of element `e` of `bode` at the band bin nearest `log10 f = x`: the estimate's
+/// gain, phase and deviation from K with its ±2σ, and the fitted model's.
+#[must_use]
+pub fn readout(bode: &BlockBode, e: usize, x: f64) -> Option<String> {
+    let el = bode.elements.get(e)?;
+    let k =
+        (0..el.log_f.len()).min_by(|&a, &b| (el.log_f[a] - x).abs().total_cmp(&(el.log_f[b] - x).abs()))?;
+    let (i, j) = (e / 3, e % 3);
+    let unit = el.deviation_unit;
+    let digits = if unit == "ppm" { 0 } else { 3 };
+    let half = 0.5 * (el.deviation_band.1[k] - el.deviation_band.0[k]);
+    Some(format!(
+        "read-out: {} from {} at {:.3} Hz: {:+.3} dB, {:+.2}°, deviation from K {:+.digits$} ± {:.digits$} {unit} \
+         (model {:+.3} dB, {:+.2}°, {:+.digits$} {unit})",
+        bode.outputs[i],
+        bode.inputs[j],
+        10f64.powf(el.log_f[k]),
+        el.magnitude_db[k].y,
+        el.phase_deg[k].y,
+        el.deviation[k].y,
+        half,
+        el.model_magnitude_db[k].y,
+        el.model_phase_deg[k].y,
+        el.model_deviation[k].y,
+    ))
 }
 
 /// The curves of one quantity: the estimate, its band, the fitted model.
@@ -108,28 +143,54 @@ fn mark_band(p: &mut PlotUi<'_>, band_hz: [f64; 2]) {
     }
 }
 
-fn cell(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], e: usize, width: f32, height: f32, group: &str) {
-    let mag = plot((group, "mag", e), width, height, group).y_axis_label("dB");
+/// One element's magnitude (or deviation) and phase plots; the `log10 f` under the pointer.
+fn cell(
+    ui: &mut egui::Ui,
+    entries: &[BodeEntry<'_>],
+    e: usize,
+    [width, height]: [f32; 2],
+    group: &str,
+    deviation: bool,
+) -> Option<f64> {
+    let unit = entries.first().map_or("dB", |f| {
+        if deviation {
+            f.bode.elements[e].deviation_unit
+        } else {
+            "dB"
+        }
+    });
+    let mag = plot((group, "mag", e, deviation), width, height, group).y_axis_label(unit);
     let mag = if e == 0 {
         mag.legend(Legend::default())
     } else {
         mag
     };
-    mag.show(ui, |p| {
-        if let Some(first) = entries.first() {
-            mark_band(p, first.bode.band_hz);
-        }
-        for entry in entries {
-            let el = &entry.bode.elements[e];
-            let curves = Curves {
-                estimate: &el.magnitude_db,
-                band: &el.magnitude_band_db,
-                model: &el.model_magnitude_db,
-            };
-            draw(p, entry, &el.log_f, curves);
-        }
-    });
-    plot((group, "phase", e), width, height * 0.6, group)
+    let hovered_mag = mag
+        .show(ui, |p| {
+            if let Some(first) = entries.first() {
+                mark_band(p, first.bode.band_hz);
+            }
+            for entry in entries {
+                let el = &entry.bode.elements[e];
+                let curves = if deviation {
+                    Curves {
+                        estimate: &el.deviation,
+                        band: &el.deviation_band,
+                        model: &el.model_deviation,
+                    }
+                } else {
+                    Curves {
+                        estimate: &el.magnitude_db,
+                        band: &el.magnitude_band_db,
+                        model: &el.model_magnitude_db,
+                    }
+                };
+                draw(p, entry, &el.log_f, curves);
+            }
+            pointer_x(p)
+        })
+        .inner;
+    let hovered_phase = plot((group, "phase", e), width, height * 0.6, group)
         .y_axis_label("deg")
         .show(ui, |p| {
             for entry in entries {
@@ -141,7 +202,19 @@ fn cell(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], e: usize, width: f32, heig
                 };
                 draw(p, entry, &el.log_f, curves);
             }
-        });
+            pointer_x(p)
+        })
+        .inner;
+    hovered_mag.or(hovered_phase)
+}
+
+/// The `x` under the pointer when it hovers the plot.
+fn pointer_x(p: &PlotUi<'_>) -> Option<f64> {
+    p.response()
+        .hovered()
+        .then(|| p.pointer_coordinate())
+        .flatten()
+        .map(|c| c.x)
 }
 
 /// Multiple coherence of each output, and the disturbance PSD matrix `|S_psi,ij|` in dB.
@@ -209,6 +282,12 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
         }
         ui.separator();
         ui.label("W_u: estimate (colour), ±2σ band (shaded), fitted structural model (dashed)");
+        ui.checkbox(&mut view.bode_deviation, "deviation from K")
+            .on_hover_text(
+                "instead of the gain in dB: Re(W e^(jωτ)) - K, the in-phase part with the model's \
+                 delay taken out, in ppm on the diagonal (scale factor) and mrad off it \
+                 (misalignment), so that errors of a few hundred ppm show",
+            );
         if run.busy() {
             ui.spinner();
             ui.label("recomputing…");
@@ -222,6 +301,12 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
     else {
         return;
     };
+    // One line kept for the read-out, so the grid does not jump when it appears.
+    ui.label(
+        view.bode_readout
+            .as_deref()
+            .unwrap_or("read-out: hover a plot for the gain, phase and deviation from K at a frequency"),
+    );
     egui::ScrollArea::vertical().show(ui, |ui| {
         let entry = BodeEntry {
             label: run.name(),
@@ -230,7 +315,11 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
             details: true,
         };
         // Per run: each run keeps its own zoom, and a run shown first starts from its own extent.
-        grid(ui, &[entry], &format!("bode-{}", run.id));
+        let readout = grid(ui, &[entry], &format!("bode-{}", run.id), view.bode_deviation);
+        if readout != view.bode_readout {
+            view.bode_readout = readout;
+            ui.ctx().request_repaint();
+        }
         ui.separator();
         coherence_and_noise(ui, bode);
     });

@@ -73,6 +73,7 @@ pub fn show(
                 ui.selectable_value(&mut view.bode_block, b, b.name());
             }
         }
+        ui.checkbox(&mut view.bode_deviation, "deviation from K");
         ui.separator();
         ui.label(format!(
             "differences are later run minus earlier; * marks |diff| > {SIGNIFICANCE_SIGMAS} combined std"
@@ -108,7 +109,7 @@ pub fn show(
                 })
             })
             .collect();
-        grid(ui, &entries, "compare");
+        grid(ui, &entries, "compare", view.bode_deviation);
     });
 }
 

@@ -1,0 +1,50 @@
+//! The Bode tab's read-out and deviation view (issue 16): hovering a plot names the element and
+//! frequency with its gain, phase and deviation from K; "deviation from K" plots that deviation
+//! in ppm (diagonal) and mrad (cross-axis) instead of dB. AccessKit (`egui_kittest`) with raw
+//! pointer events, no GPU; the worker runs synchronously.
+
+use eframe::egui::{self, Pos2};
+use egui_kittest::kittest::Queryable as _;
+use imu_attest::gui::view::bode::readout;
+use imu_attest::gui::{WorkerMode, sample_run_path};
+
+#[path = "common/gui.rs"]
+mod gui_common;
+
+#[test]
+fn hovering_a_bode_plot_reads_out_gain_phase_and_deviation_from_k() {
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    harness.get_by_label("Bode").click();
+    harness.run_steps(3);
+    harness.get_by_label_contains("read-out: hover a plot");
+    // Into the gx-from-wx magnitude plot, just under its title.
+    let title = harness.get_by_label("gx from wx").rect();
+    let pos = Pos2::new(title.min.x + 120.0, title.max.y + 50.0);
+    harness.input_mut().events.push(egui::Event::PointerMoved(pos));
+    harness.run_steps(3);
+    let shown = harness.state().view().bode_readout.clone().unwrap_or_default();
+    assert!(shown.starts_with("read-out: gx from wx at"), "{shown}");
+    harness.get_by_label(&shown);
+    assert!(
+        shown.contains(" ppm") && shown.contains("dB") && shown.contains('°'),
+        "{shown}"
+    );
+    // The line is the identification's own numbers at that bin.
+    let run = &harness.state().runs()[0];
+    let id = run.identification.as_ref().expect("identified");
+    let bode = id.bode.iter().find(|b| b.block.name() == "gyro").expect("gyro");
+    let hz: f64 = shown
+        .split(" at ")
+        .nth(1)
+        .and_then(|t| t.split(" Hz").next())
+        .and_then(|t| t.parse().ok())
+        .expect("a frequency");
+    assert_eq!(readout(bode, 0, hz.log10()).as_deref(), Some(shown.as_str()));
+
+    harness.get_by_label("deviation from K").click();
+    harness.run_steps(2);
+    assert!(harness.state().view().bode_deviation);
+}

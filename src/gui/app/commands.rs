@@ -19,6 +19,10 @@ pub enum Command {
     OpenDialog,
     /// Load these run files.
     Open(Vec<PathBuf>),
+    /// Write the session (runs, settings, effects, view) here (`None`: ask with a save dialog).
+    SaveSession(Option<PathBuf>),
+    /// Reopen the session saved here (`None`: ask with a dialog).
+    OpenSession(Option<PathBuf>),
     /// Stop loading a run.
     CancelLoad(RunId),
     /// Remove a run from the list.
@@ -92,7 +96,24 @@ impl App {
             }
             Command::PromptPath(purpose) => self.prompt_path(purpose, None),
             Command::ClosePrompt => self.prompt = None,
-            Command::Open(paths) => paths.into_iter().for_each(|p| self.open(p)),
+            Command::Open(paths) => {
+                for p in paths {
+                    self.open(p);
+                }
+            }
+            Command::SaveSession(path) => {
+                let path =
+                    path.or_else(|| self.save_dialog(PathPurpose::SaveSession, "json", "_session.json"));
+                if let Some(path) = path {
+                    self.save_session(&path);
+                }
+            }
+            Command::OpenSession(path) => {
+                let path = path.or_else(|| self.open_dialog(PathPurpose::OpenSession));
+                if let Some(path) = path {
+                    self.open_session(&path);
+                }
+            }
             Command::CancelLoad(id) => {
                 if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
                     cancel.store(true, Ordering::Relaxed);
@@ -204,7 +225,7 @@ impl App {
         }
     }
 
-    fn open(&mut self, path: PathBuf) {
+    pub(super) fn open(&mut self, path: PathBuf) -> RunId {
         let id = self.next_run;
         self.next_run += 1;
         let generation = self.next_generation();
@@ -219,6 +240,7 @@ impl App {
             generation,
             kind: JobKind::Load { path, cancel },
         });
+        id
     }
 
     /// Asks the worker to bring a loaded run's stages up to date with the current settings.

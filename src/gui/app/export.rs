@@ -56,6 +56,24 @@ impl App {
     /// The system's save dialog for `purpose`; where none can be shown (or
     /// [`super::prompt::NO_DIALOG_VAR`] is set) the typed-path window opens instead, its field
     /// holding the proposed file name, and `None` is returned.
+    /// Asks for one file to read for `purpose` (a JSON file): the system's dialog, or the typed
+    /// path prompt where there is none (then `None`: the prompt sends the command).
+    pub(super) fn open_dialog(&mut self, purpose: PathPurpose) -> Option<PathBuf> {
+        if super::prompt::dialogs_disabled() {
+            self.prompt_path(purpose, None);
+            return None;
+        }
+        let start = std::time::Instant::now();
+        let picked = rfd::FileDialog::new()
+            .set_title(purpose.title())
+            .add_filter("json", &["json"])
+            .pick_file();
+        if super::prompt::dialog_never_shown(picked.is_none(), start.elapsed()) {
+            self.prompt_path(purpose, Some(super::prompt::NO_DIALOG_NOTE));
+        }
+        picked
+    }
+
     pub(super) fn save_dialog(
         &mut self,
         purpose: PathPurpose,

@@ -144,8 +144,21 @@ impl App {
                     return;
                 };
                 entry.state = RunState::Loaded;
+                let changed = entry
+                    .expected_sha256
+                    .take()
+                    .filter(|sha| *sha != summary.sha256)
+                    .map(|_| format!(
+                        "{}: the file has changed since the session was saved (its SHA-256 differs): the results are not the session's",
+                        summary.file_name
+                    ));
+                let path = summary.path.clone();
                 entry.summary = Some(summary);
                 entry.measured = Some(measured);
+                if let Some(message) = changed {
+                    self.errors.push(ErrorTopic::Load, message);
+                }
+                self.remember_recent(&path);
                 self.analyse(run);
             }
             Event::Motion { run, motion, .. } => {

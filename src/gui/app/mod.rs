@@ -11,6 +11,7 @@ mod export;
 mod logic;
 pub mod prompt;
 mod record;
+pub mod session_file;
 mod ui;
 
 use std::path::PathBuf;
@@ -149,6 +150,8 @@ pub struct Prefs {
     pub settings: Settings,
     /// Presentation.
     pub view: ViewState,
+    /// Recently opened runs, newest first (File > Open recent).
+    pub recent: Vec<PathBuf>,
 }
 
 impl Prefs {
@@ -204,6 +207,8 @@ pub struct RunEntry {
     pub validation: StageRecord<Validated>,
     /// What the latest validation request answers.
     pub validation_wanted: Option<ValidationKey>,
+    /// The SHA-256 a reopened session recorded for the file (checked when it loads).
+    pub expected_sha256: Option<String>,
     /// Effects the engineer accepted (kept in the model shown).
     pub accepted: Vec<(Block, Effect)>,
     /// Effects the engineer rejected (never offered again).
@@ -228,6 +233,7 @@ impl RunEntry {
             diagnosis: StageRecord::default(),
             validation: StageRecord::default(),
             validation_wanted: None,
+            expected_sha256: None,
             accepted: Vec::new(),
             rejected: Vec::new(),
         }
@@ -334,6 +340,12 @@ impl App {
     #[must_use]
     pub fn errors(&self) -> Vec<String> {
         self.errors.lines()
+    }
+
+    /// What is kept between launches (settings, view, recent runs).
+    #[must_use]
+    pub fn prefs(&self) -> &Prefs {
+        &self.prefs
     }
 
     /// The runs chosen for comparison, in the order chosen.

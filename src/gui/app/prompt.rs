@@ -38,6 +38,10 @@ pub enum PathPurpose {
     ExportReport,
     /// Write the results table.
     ExportResults,
+    /// Write the session file.
+    SaveSession,
+    /// Read a session file.
+    OpenSession,
 }
 
 impl PathPurpose {
@@ -50,6 +54,8 @@ impl PathPurpose {
             PathPurpose::ExportPng => "Save view as PNG",
             PathPurpose::ExportReport => "Save report (HTML)",
             PathPurpose::ExportResults => "Save results table (CSV or JSON)",
+            PathPurpose::SaveSession => "Save session",
+            PathPurpose::OpenSession => "Open session",
         }
     }
 
@@ -69,6 +75,8 @@ impl PathPurpose {
             PathPurpose::ExportPng => one.map(|p| Command::ExportPng(Some(p))),
             PathPurpose::ExportReport => one.map(|p| Command::ExportReport(Some(p))),
             PathPurpose::ExportResults => one.map(|p| Command::ExportResults(Some(p))),
+            PathPurpose::SaveSession => one.map(|p| Command::SaveSession(Some(p))),
+            PathPurpose::OpenSession => one.map(|p| Command::OpenSession(Some(p))),
         }
     }
 }

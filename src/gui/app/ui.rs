@@ -21,6 +21,23 @@ impl App {
                     if ui.button("Open by typing a path…").clicked() {
                         commands.push(Command::PromptPath(super::PathPurpose::Open));
                     }
+                    ui.menu_button("Open recent", |ui| {
+                        if self.prefs.recent.is_empty() {
+                            ui.weak("no run opened yet");
+                        }
+                        for path in &self.prefs.recent {
+                            if ui.button(path.display().to_string()).clicked() {
+                                commands.push(Command::Open(vec![path.clone()]));
+                            }
+                        }
+                    });
+                    if ui.button("Open session…").clicked() {
+                        commands.push(Command::OpenSession(None));
+                    }
+                    if ui.button("Save session…").clicked() {
+                        commands.push(Command::SaveSession(None));
+                    }
+                    ui.separator();
                     if ui.button("Export model JSON…").clicked() {
                         commands.push(Command::ExportModel(None));
                     }

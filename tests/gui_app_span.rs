@@ -110,3 +110,36 @@ fn a_stretch_is_not_carried_into_the_next_launch() {
     );
     assert!(Prefs::restored("{not json").is_none());
 }
+
+/// Right-click sets cursor A; hovering elsewhere reads the time since A and each value's change
+/// from it; Esc clears A.
+#[test]
+fn a_right_click_sets_cursor_a_and_the_read_out_gives_the_differences() {
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    let (a, b) = (Pos2::new(560.0, 160.0), Pos2::new(820.0, 160.0));
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: PointerButton::Secondary,
+        pressed,
+        modifiers: Modifiers::NONE,
+    };
+    harness.input_mut().events.push(egui::Event::PointerMoved(a));
+    harness.run_steps(1);
+    harness.input_mut().events.push(button(a, true));
+    harness.input_mut().events.push(button(a, false));
+    harness.run_steps(2);
+    let t_a = harness.state().view().reference_t.expect("cursor A set");
+    harness.input_mut().events.push(egui::Event::PointerMoved(b));
+    harness.run_steps(2);
+    harness.get_by_label_contains("Δt from A = +");
+    harness.get_by_label_contains("(Δ ");
+    // The pointer right of A: a positive interval; A inside the record.
+    let summary = harness.state().runs()[0].summary.clone().expect("loaded");
+    assert!(t_a > summary.start_s && t_a < summary.start_s + summary.duration_s);
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert_eq!(harness.state().view().reference_t, None);
+}

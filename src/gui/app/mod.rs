@@ -123,6 +123,9 @@ pub struct ViewState {
     /// The Bode read-out of the element and frequency under the pointer (last frame's).
     #[serde(skip)]
     pub bode_readout: Option<String>,
+    /// The Time series' reference cursor A, s (right-click; the read-out gives differences to it).
+    #[serde(skip)]
+    pub reference_t: Option<f64>,
 }
 
 impl Default for ViewState {
@@ -138,6 +141,7 @@ impl Default for ViewState {
             validation_model: None,
             bode_deviation: false,
             bode_readout: None,
+            reference_t: None,
         }
     }
 }

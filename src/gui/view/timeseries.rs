@@ -12,7 +12,7 @@ use crate::gui::pipeline::{Measured, Motion, Series};
 use crate::ident::settings::Settings;
 
 /// One plot: a title and its series (`true` = plain differentiation, drawn dashed).
-type Group<'a> = (&'static str, Vec<(&'a Series, bool)>);
+pub type Group<'a> = (&'static str, Vec<(&'a Series, bool)>);
 
 fn groups<'a>(measured: &'a Measured, motion: Option<&'a Motion>, with_diff: bool) -> Vec<Group<'a>> {
     let solid = |s: &'a [Series; 3]| s.iter().map(|s| (s, false)).collect::<Vec<_>>();
@@ -151,6 +151,9 @@ pub fn show(
             }
             mark_faults(plot, series, faults);
             mark_span(plot, settings.span_s, view.span_drag);
+            if let Some(t) = view.reference_t {
+                plot.vline(VLine::new("cursor A", t).color(egui::Color32::from_rgb(240, 200, 80)));
+            }
             let pointer = plot.pointer_coordinate().map(|p| p.x);
             let cursor = plot.response().hovered().then_some(pointer).flatten();
             let r = plot.response();
@@ -160,10 +163,14 @@ pub fn show(
                 _ if r.drag_stopped() && view.span_drag.is_some() => Some(DragEvent::Stop),
                 _ => None,
             };
-            (cursor, lo, hi, event)
+            let placed = r.secondary_clicked().then_some(pointer).flatten();
+            (cursor, lo, hi, event, placed)
         });
-        let (cursor, lo, hi, event) = response.inner;
+        let (cursor, lo, hi, event, placed) = response.inner;
         drag = drag.or(event);
+        if placed.is_some() {
+            view.reference_t = placed;
+        }
         // Pan and zoom move the bounds after the points were chosen: draw once more for them.
         let shown = response.transform.bounds();
         if (shown.min()[0] - lo).abs() > 1e-9 * (hi - lo) || (shown.max()[0] - hi).abs() > 1e-9 * (hi - lo) {
@@ -185,7 +192,10 @@ pub fn show(
         }
         _ => {}
     }
-    readout(ui, &groups, cursor_t);
+    if ui.input(|i| i.key_pressed(egui::Key::Escape)) {
+        view.reference_t = None;
+    }
+    ui.label(readout(&groups, cursor_t, view.reference_t));
 }
 
 /// The analysed stretch (`span_s`), shaded, and a selection under way.
@@ -226,18 +236,44 @@ fn mark_faults(plot: &mut PlotUi<'_>, series: &[(&Series, bool)], faults: &[Reco
     }
 }
 
-fn readout(ui: &mut egui::Ui, groups: &[Group<'_>], t: Option<f64>) {
-    let Some(t) = t else {
-        ui.weak(
+/// The read-out line: the values at the hovered time `t`, and with a reference cursor A the time
+/// since it and each value's change from it.
+#[must_use]
+pub fn readout(groups: &[Group<'_>], t: Option<f64>, reference: Option<f64>) -> String {
+    let series = || groups.iter().flat_map(|(_, series)| series.iter());
+    match (t, reference) {
+        (None, None) => {
             "hover a plot for a read-out; drag to pan, ctrl+scroll to zoom time, double-click to \
-             reset; shift+drag to analyse only that stretch",
-        );
-        return;
-    };
-    let values: Vec<String> = groups
-        .iter()
-        .flat_map(|(_, series)| series.iter())
-        .filter_map(|(s, _)| s.value_at(t).map(|v| format!("{} {v:+.4e}", s.name)))
-        .collect();
-    ui.label(format!("t = {t:.4} s   {}", values.join("   ")));
+             reset; shift+drag to analyse only that stretch; right-click to set cursor A"
+                .to_owned()
+        }
+        (None, Some(a)) => {
+            let values: Vec<String> = series()
+                .filter_map(|(s, _)| s.value_at(a).map(|v| format!("{} {v:+.4e}", s.name)))
+                .collect();
+            format!(
+                "cursor A at t = {a:.4} s   {}   (hover for the differences; right-click moves A, Esc clears it)",
+                values.join("   ")
+            )
+        }
+        (Some(t), None) => {
+            let values: Vec<String> = series()
+                .filter_map(|(s, _)| s.value_at(t).map(|v| format!("{} {v:+.4e}", s.name)))
+                .collect();
+            format!("t = {t:.4} s   {}", values.join("   "))
+        }
+        (Some(t), Some(a)) => {
+            let values: Vec<String> = series()
+                .filter_map(|(s, _)| {
+                    let (v, va) = (s.value_at(t)?, s.value_at(a)?);
+                    Some(format!("{} {v:+.4e} (Δ {:+.4e})", s.name, v - va))
+                })
+                .collect();
+            format!(
+                "t = {t:.4} s, Δt from A = {:+.4} s   {}",
+                t - a,
+                values.join("   ")
+            )
+        }
+    }
 }

@@ -51,7 +51,19 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState, texture: Op
         w.detrend
     ));
     let psd_height = (ui.available_height() * 0.45).max(160.0);
-    psd_plot(ui, block, psd_height, block.matrix.frequency_hz[bin], run.id);
+    let band_hz = run
+        .identification
+        .as_ref()
+        .and_then(|id| id.model.blocks.get(block.block.name()))
+        .map(|m| m.band_hz);
+    psd_plot(
+        ui,
+        block,
+        psd_height,
+        block.matrix.frequency_hz[bin],
+        band_hz,
+        run.id,
+    );
     ui.separator();
     let range = super::colormap::value_range(block, view.heatmap_mode);
     ui.horizontal_top(|ui| {
@@ -124,6 +136,7 @@ fn psd_plot(
     block: &BlockSpectra,
     height: f32,
     marker_hz: f64,
+    band_hz: Option<[f64; 2]>,
     run: crate::gui::pipeline::RunId,
 ) {
     Plot::new(("psd", block.block, run))
@@ -154,5 +167,13 @@ fn psd_plot(
                 );
             }
             plot.add(VLine::new("heatmap frequency", marker_hz.log10()).color(egui::Color32::GRAY));
+            // The identification's band, as on the Bode tab.
+            for edge in band_hz.into_iter().flatten().filter(|f| *f > 0.0) {
+                plot.vline(
+                    VLine::new("band used", edge.log10())
+                        .color(egui::Color32::from_gray(150))
+                        .style(egui_plot::LineStyle::dashed_loose()),
+                );
+            }
         });
 }

@@ -143,3 +143,72 @@ fn a_right_click_sets_cursor_a_and_the_read_out_gives_the_differences() {
     harness.run_steps(2);
     assert_eq!(harness.state().view().reference_t, None);
 }
+
+/// A right-drag over the angles plot zooms it to that box: its time range and its value range
+/// both shrink to inside what was shown; a right-click alone still only sets cursor A.
+#[test]
+fn a_right_drag_zooms_the_time_series_to_a_box() {
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    let before = harness.state().view().time_series_bounds.expect("shown");
+    let (from, to) = (Pos2::new(560.0, 100.0), Pos2::new(760.0, 170.0));
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: PointerButton::Secondary,
+        pressed,
+        modifiers: Modifiers::NONE,
+    };
+    harness.input_mut().events.push(egui::Event::PointerMoved(from));
+    harness.run_steps(1);
+    harness.input_mut().events.push(button(from, true));
+    harness.run_steps(1);
+    for step in 1..=4 {
+        let pos = from + (to - from) * (step as f32 / 4.0);
+        harness.input_mut().events.push(egui::Event::PointerMoved(pos));
+        harness.run_steps(1);
+    }
+    harness.input_mut().events.push(button(to, false));
+    harness.run_steps(3);
+    let after = harness.state().view().time_series_bounds.expect("shown");
+    let inside = |a: f64, b: f64, lo: f64, hi: f64| lo <= a && a < b && b <= hi;
+    assert!(
+        inside(after[0], after[1], before[0], before[1])
+            && after[1] - after[0] < 0.5 * (before[1] - before[0]),
+        "time {before:?} -> {after:?}"
+    );
+    assert!(
+        inside(after[2], after[3], before[2], before[3])
+            && after[3] - after[2] < 0.7 * (before[3] - before[2]),
+        "values {before:?} -> {after:?}"
+    );
+    assert_eq!(harness.state().view().reference_t, None, "a drag is not a click");
+}
+
+/// Dragging the value axis of the angles plot zooms its values only: the time range stays.
+#[test]
+fn dragging_the_value_axis_zooms_the_values_only() {
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    let before = harness.state().view().time_series_bounds.expect("shown");
+    // On the y axis, left of the plot frame (its tick labels), dragged up.
+    drag(
+        &mut harness,
+        Pos2::new(420.0, 150.0),
+        Pos2::new(420.0, 100.0),
+        Modifiers::NONE,
+    );
+    let after = harness.state().view().time_series_bounds.expect("shown");
+    assert!(
+        (after[0] - before[0]).abs() < 1e-9 && (after[1] - before[1]).abs() < 1e-9,
+        "{before:?} -> {after:?}"
+    );
+    let (span0, span1) = (before[3] - before[2], after[3] - after[2]);
+    assert!(
+        (span1 / span0 - 1.0).abs() > 0.05,
+        "values zoomed: {before:?} -> {after:?}"
+    );
+}

@@ -126,6 +126,9 @@ pub struct ViewState {
     /// The Time series' reference cursor A, s (right-click; the read-out gives differences to it).
     #[serde(skip)]
     pub reference_t: Option<f64>,
+    /// What the Time series' first plot shows, `[t_min, t_max, y_min, y_max]` (last frame's).
+    #[serde(skip)]
+    pub time_series_bounds: Option<[f64; 4]>,
 }
 
 impl Default for ViewState {
@@ -142,6 +145,7 @@ impl Default for ViewState {
             bode_deviation: false,
             bode_readout: None,
             reference_t: None,
+            time_series_bounds: None,
         }
     }
 }

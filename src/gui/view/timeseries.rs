@@ -115,7 +115,9 @@ pub fn show(
             .allow_drag([!selecting, false])
             .allow_zoom([true, false])
             .allow_scroll(false)
-            .allow_boxed_zoom(false)
+            // Right-drag: zoom to a box (both axes; the time axis of every plot follows);
+            // right-click alone sets cursor A. Dragging an axis zooms that axis.
+            .allow_boxed_zoom(true)
             .legend(Legend::default())
             .y_axis_label(*title)
             .y_axis_min_width(64.0)
@@ -173,6 +175,9 @@ pub fn show(
         }
         // Pan and zoom move the bounds after the points were chosen: draw once more for them.
         let shown = response.transform.bounds();
+        if k == 0 {
+            view.time_series_bounds = Some([shown.min()[0], shown.max()[0], shown.min()[1], shown.max()[1]]);
+        }
         if (shown.min()[0] - lo).abs() > 1e-9 * (hi - lo) || (shown.max()[0] - hi).abs() > 1e-9 * (hi - lo) {
             ui.ctx().request_repaint();
         }
@@ -244,7 +249,8 @@ pub fn readout(groups: &[Group<'_>], t: Option<f64>, reference: Option<f64>) -> 
     match (t, reference) {
         (None, None) => {
             "hover a plot for a read-out; drag to pan, ctrl+scroll to zoom time, double-click to \
-             reset; shift+drag to analyse only that stretch; right-click to set cursor A"
+             reset; shift+drag to analyse only that stretch; right-click to set cursor A, right-drag to \
+             zoom to a box, drag an axis to zoom it"
                 .to_owned()
         }
         (None, Some(a)) => {

@@ -14,9 +14,20 @@ mod gui_common;
 
 /// Presses at `from`, moves to `to` in four steps and releases, with `modifiers` held.
 fn drag(harness: &mut Harness<'_, App>, from: Pos2, to: Pos2, modifiers: Modifiers) {
+    drag_with(harness, from, to, modifiers, PointerButton::Primary);
+}
+
+/// [`drag`] with `button`.
+fn drag_with(
+    harness: &mut Harness<'_, App>,
+    from: Pos2,
+    to: Pos2,
+    modifiers: Modifiers,
+    button: PointerButton,
+) {
     let button = |pos, pressed| egui::Event::PointerButton {
         pos,
-        button: PointerButton::Primary,
+        button,
         pressed,
         modifiers,
     };
@@ -154,23 +165,7 @@ fn a_right_drag_zooms_the_time_series_to_a_box() {
     );
     let before = harness.state().view().time_series_bounds.expect("shown");
     let (from, to) = (Pos2::new(560.0, 100.0), Pos2::new(760.0, 170.0));
-    let button = |pos, pressed| egui::Event::PointerButton {
-        pos,
-        button: PointerButton::Secondary,
-        pressed,
-        modifiers: Modifiers::NONE,
-    };
-    harness.input_mut().events.push(egui::Event::PointerMoved(from));
-    harness.run_steps(1);
-    harness.input_mut().events.push(button(from, true));
-    harness.run_steps(1);
-    for step in 1..=4 {
-        let pos = from + (to - from) * (step as f32 / 4.0);
-        harness.input_mut().events.push(egui::Event::PointerMoved(pos));
-        harness.run_steps(1);
-    }
-    harness.input_mut().events.push(button(to, false));
-    harness.run_steps(3);
+    drag_with(&mut harness, from, to, Modifiers::NONE, PointerButton::Secondary);
     let after = harness.state().view().time_series_bounds.expect("shown");
     let inside = |a: f64, b: f64, lo: f64, hi: f64| lo <= a && a < b && b <= hi;
     assert!(

@@ -20,6 +20,9 @@ fn hovering_a_bode_plot_reads_out_gain_phase_and_deviation_from_k() {
     harness.get_by_label("Bode").click();
     harness.run_steps(3);
     harness.get_by_label_contains("read-out: hover a plot");
+    // The key is above the grid (a legend inside the small plots covered their data).
+    harness.get_by_label("— cruise.csv.gz");
+    harness.get_by_label("white dashed: fitted model; shaded: ±2σ; grey dashed: band used");
     // Into the gx-from-wx magnitude plot, just under its title.
     let title = harness.get_by_label("gx from wx").rect();
     let pos = Pos2::new(title.min.x + 120.0, title.max.y + 50.0);

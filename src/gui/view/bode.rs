@@ -55,6 +55,17 @@ pub fn grid(ui: &mut egui::Ui, entries: &[BodeEntry<'_>], group: &str, deviation
     let first = entries.first()?;
     let width = ((ui.available_width() - 24.0) / 3.0).max(120.0);
     let height = (width * 0.42).clamp(80.0, 170.0);
+    // The key above the grid, not inside a plot (a legend in a plot this small covers its data).
+    ui.horizontal_wrapped(|ui| {
+        for entry in entries {
+            ui.colored_label(entry.colour, format!("— {}", entry.label));
+        }
+        ui.weak(if entries.iter().any(|e| e.details) {
+            "white dashed: fitted model; shaded: ±2σ; grey dashed: band used"
+        } else {
+            "grey dashed: band used"
+        });
+    });
     let mut hovered = None;
     egui::Grid::new((group, "bode"))
         .spacing([6.0, 6.0])
@@ -160,11 +171,6 @@ fn cell(
         }
     });
     let mag = plot((group, "mag", e, deviation), width, height, group).y_axis_label(unit);
-    let mag = if e == 0 {
-        mag.legend(Legend::default())
-    } else {
-        mag
-    };
     let hovered_mag = mag
         .show(ui, |p| {
             if let Some(first) = entries.first() {
@@ -225,7 +231,8 @@ pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
         bode.band_hz[0], bode.band_hz[1]
     ));
     plot("coherence", 3.0 * width, 150.0, "bode")
-        .legend(Legend::default())
+        // Bottom left: where the coherence is high (the band), the lower half is empty.
+        .legend(Legend::default().position(egui_plot::Corner::LeftBottom))
         .include_y(0.0)
         .include_y(1.0)
         .show(ui, |p| {

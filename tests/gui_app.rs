@@ -79,7 +79,7 @@ fn a_broken_file_shows_an_error_and_the_app_keeps_working() {
     // Still usable: switch tab and dismiss the error.
     harness.get_by_label("Spectra").click();
     harness.run_steps(2);
-    harness.get_by_label("frequency × channel pair");
+    harness.get_by_label("frequency × channel pair: |S_ij|, dB");
     harness.get_by_label("dismiss").click();
     harness.run_steps(2);
     assert!(harness.state().errors().is_empty());
@@ -239,4 +239,35 @@ fn the_worker_thread_delivers_the_newest_analysis() {
             _ => {}
         }
     }
+}
+
+/// The single-frequency CSD matrix is coloured on its own cells' range (the whole spectrum's put
+/// one frequency's cells in a few shades), and both heatmaps are titled by what they show.
+#[test]
+fn the_csd_matrix_has_its_own_colour_scale_and_titles_say_the_mode() {
+    use imu_attest::gui::app::HeatmapMode;
+    use imu_attest::gui::view::colormap::value_range;
+    use imu_attest::gui::view::heatmap::matrix_range;
+    let mut harness = app_on_sample();
+    harness.get_by_label("Spectra").click();
+    harness.run_steps(2);
+    harness.get_by_label_contains("|S_ij|, dB, at ");
+    let app = harness.state();
+    let spectra = app.runs()[0].spectra.as_ref().expect("spectra");
+    let block = &spectra.blocks[0];
+    let df = block.matrix.df_hz();
+    let bin = ((app.view().heatmap_frequency_hz / df).round() as usize).clamp(1, block.matrix.n_bins() - 1);
+    let own = matrix_range(block, bin, HeatmapMode::Magnitude);
+    let whole = value_range(block, HeatmapMode::Magnitude);
+    assert!(own.1 - own.0 < 0.8 * (whole.1 - whole.0), "{own:?} vs {whole:?}");
+    assert!(own.0 < own.1);
+    let top = format!("{:.1} dB", own.1);
+    assert!(
+        harness.get_all_by_label(&top).count() >= 1,
+        "the matrix's legend ends at {top}"
+    );
+    harness.get_by_label("coherence").click();
+    harness.run_steps(2);
+    harness.get_by_label_contains("coherence |S_ij|² / (S_ii S_jj) at ");
+    harness.get_by_label("frequency × channel pair: coherence");
 }

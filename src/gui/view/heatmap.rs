@@ -55,10 +55,42 @@ pub fn legend(ui: &mut egui::Ui, range: (f32, f32), mode: HeatmapMode) {
     });
 }
 
+/// The colour scale of the single-frequency matrix at bin `f`: its own cells' range in dB
+/// (whole dB, at least 1 dB wide), or `[0, 1]` for the coherence. The whole spectrum's range put
+/// every cell of one frequency in two or three shades of one colour.
+#[must_use]
+pub fn matrix_range(block: &BlockSpectra, f: usize, mode: HeatmapMode) -> (f32, f32) {
+    if mode == HeatmapMode::Coherence {
+        return (0.0, 1.0);
+    }
+    let n = block.channels.len();
+    let values = (0..n * n)
+        .map(|e| cell_value(block, f, e / n, e % n, mode) as f32)
+        .filter(|v| v.is_finite());
+    let (low, high) = values.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    if !(low.is_finite() && high.is_finite()) {
+        return value_range(block, mode);
+    }
+    // `+ 0.0` turns a -0.0 (the ceiling of -0.3) into 0.0, which prints without a sign.
+    let (low, high) = (low.floor() + 0.0, high.ceil() + 0.0);
+    (low, high.max(low + 1.0))
+}
+
+/// Title of the single-frequency matrix at `f_hz`.
+#[must_use]
+pub fn matrix_title(mode: HeatmapMode, f_hz: f64) -> String {
+    match mode {
+        HeatmapMode::Magnitude => format!("|S_ij|, dB, at {f_hz:.3} Hz"),
+        HeatmapMode::Coherence => format!("coherence |S_ij|² / (S_ii S_jj) at {f_hz:.3} Hz"),
+    }
+}
+
 /// The 6x6 CSD matrix of `block` at bin `f`.
 pub fn matrix(ui: &mut egui::Ui, block: &BlockSpectra, f: usize, mode: HeatmapMode) {
     let n = block.channels.len();
-    let range = value_range(block, mode);
+    let range = matrix_range(block, f, mode);
     let size = vec2(LABEL + CELL * n as f32, LABEL + CELL * n as f32);
     let (response, painter) = ui.allocate_painter(size, Sense::hover());
     let origin = response.rect.min + vec2(LABEL, LABEL);

@@ -68,13 +68,23 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState, texture: Op
     let range = super::colormap::value_range(block, view.heatmap_mode);
     ui.horizontal_top(|ui| {
         ui.vertical(|ui| {
-            ui.strong(format!("S(f) at {:.3} Hz", block.matrix.frequency_hz[bin]));
+            ui.strong(heatmap::matrix_title(
+                view.heatmap_mode,
+                block.matrix.frequency_hz[bin],
+            ));
             heatmap::matrix(ui, block, bin, view.heatmap_mode);
-            heatmap::legend(ui, range, view.heatmap_mode);
+            heatmap::legend(
+                ui,
+                heatmap::matrix_range(block, bin, view.heatmap_mode),
+                view.heatmap_mode,
+            );
         });
         ui.separator();
         ui.vertical(|ui| {
-            ui.strong("frequency × channel pair");
+            ui.strong(match view.heatmap_mode {
+                HeatmapMode::Magnitude => "frequency × channel pair: |S_ij|, dB",
+                HeatmapMode::Coherence => "frequency × channel pair: coherence",
+            });
             if let Some(texture) = texture {
                 heatmap::pair_grid(ui, block, view.heatmap_mode, texture);
             }

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::{App, Command, ErrorTopic, ViewState};
 use crate::block::Block;
 use crate::effect::Effect;
-use crate::ident::settings::Settings;
+use crate::ident::settings::{Settings, json_problem};
 
 /// The session file's schema.
 pub const SESSION_SCHEMA: &str = "imu-attest/session/1";
@@ -98,12 +98,20 @@ pub fn read_session(path: &Path) -> Result<SessionFile, SessionError> {
         path: name.clone(),
         source,
     })?;
-    let file: SessionFile = serde_json::from_str(&text).map_err(|e| SessionError::Parse {
-        path: name.clone(),
-        line: e.line(),
-        column: e.column(),
-        message: e.to_string(),
-    })?;
+    // As the settings and effects files: the JSON path of the problem in the message.
+    let parse_error = |path: String, inner: &serde_json::Error| {
+        let (line, column, message) = json_problem(&path, inner);
+        SessionError::Parse {
+            path: name.clone(),
+            line,
+            column,
+            message,
+        }
+    };
+    let mut de = serde_json::Deserializer::from_str(&text);
+    let file: SessionFile = serde_path_to_error::deserialize(&mut de)
+        .map_err(|e| parse_error(e.path().to_string(), e.inner()))?;
+    de.end().map_err(|e| parse_error(".".into(), &e))?;
     if file.schema != SESSION_SCHEMA {
         return Err(SessionError::Schema {
             path: name,

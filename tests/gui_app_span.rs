@@ -83,6 +83,10 @@ fn a_shift_drag_over_the_time_series_selects_the_stretch_the_run_is_identified_o
         "gyro analysed over t = {:.2} to {:.2} s of the record",
         span[0], span[1]
     ));
+    // The shading is named in the first plot's key, with its times.
+    harness.get_by_label("Time series").click();
+    harness.run_steps(2);
+    harness.get_by_label(&imu_attest::gui::view::timeseries::span_key(span));
 
     // A plain drag pans the time axis and leaves the stretch as it is.
     drag(&mut harness, to, from, Modifiers::NONE);
@@ -206,4 +210,29 @@ fn dragging_the_value_axis_zooms_the_values_only() {
         (span1 / span0 - 1.0).abs() > 0.05,
         "values zoomed: {before:?} -> {after:?}"
     );
+}
+
+/// Each Time series plot is keyed by a row above it, every trace in its colour: a legend inside
+/// the plot covered the traces' top right (issue 16). The key of the angles sits above the key of
+/// the gyro outputs, each above its own plot.
+#[test]
+fn the_time_series_key_sits_above_each_plot() {
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    harness.get_by_label("Time series").click();
+    harness.run_steps(3);
+    let roll = harness.get_by_label("— roll").rect();
+    for name in ["yaw", "pitch", "wx", "wy", "wz", "gy", "gz", "fx", "ax", "az"] {
+        harness.get_by_label(&format!("— {name}"));
+    }
+    let gx = harness.get_by_label("— gx").rect();
+    let wx = harness.get_by_label("— wx").rect();
+    assert!(
+        roll.bottom() <= wx.top() && wx.bottom() <= gx.top(),
+        "{roll:?} {wx:?} {gx:?}"
+    );
+    // Between two keys there is a whole plot, not just the next row.
+    assert!(wx.top() - roll.bottom() > 60.0, "{roll:?} {wx:?}");
 }

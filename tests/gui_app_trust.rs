@@ -1,5 +1,6 @@
 //! The app shows what the identifier can and cannot vouch for (issue 13): the self-check's
-//! warnings in Results, the band used, why each order candidate was rejected, and the same
+//! warnings in Results, the band used, why each order candidate was rejected (and its held-out
+//! chi2), and the same
 //! refusal as `identify` for a run whose stand axis was held still. AccessKit (`egui_kittest`),
 //! no GPU; the worker runs synchronously.
 
@@ -68,6 +69,16 @@ fn results_show_the_band_the_warnings_and_the_rejected_orders_of_a_real_run() {
         .find_map(|c| c.rejected.clone())
         .expect("a rejected candidate");
     assert!(harness.get_all_by_label(&format!("no: {rejected}")).count() >= 1);
+    // Each candidate's held-out chi2 (fitted to one half of the record, predicting the other).
+    harness.get_by_label("held-out χ²");
+    for c in &m.fit.candidates {
+        let h = c.held_out_chi2.expect("the record is halved");
+        assert!(
+            harness.get_all_by_label(&format!("{h:.1}")).count() >= 1,
+            "order {}",
+            c.order
+        );
+    }
     harness.get_by_label_contains("auto: lowest BIC among the admissible orders");
 }
 
@@ -178,7 +189,7 @@ fn a_recording_fault_is_shown_and_exported() {
     let sentence = summary.recording_faults[0].to_string();
     assert!(sentence.contains("gy"), "{sentence}");
     harness.get_by_label(&format!("recording fault: {sentence}"));
-    // The Time series view marks it on its channel's plot (a named line in the legend).
+    // The Time series view marks it on its channel's plot (named in the key above the plot).
     harness.get_by_label("Time series").click();
     harness.run_steps(3);
     harness.get_by_label(&summary.recording_faults[0].short_label());

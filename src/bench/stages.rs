@@ -177,13 +177,15 @@ fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
         });
     }
     for ((block, sp, f), w) in cached.iter().zip(&state.wiener) {
-        let band = native_bins(sp, resolve_band(sp, *block, state.settings.band_hz)?);
+        let band_hz = resolve_band(sp, *block, state.settings.band_hz)?;
+        let band = native_bins(sp, band_hz);
         std::hint::black_box(structural_fit(
             sp,
             f,
             w,
             &band,
             state.settings.order.of(*block),
+            crate::ident::holdout::cached_held_out(sp, band_hz).as_deref(),
             None,
         )?);
     }

@@ -275,7 +275,7 @@ fn block_design(
 /// underestimate it.
 fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
     let psd = &b.factorisation.noise_psd;
-    let half = 4 * (b.spectra.fft_len / b.spectra.segment_len.max(1)).max(1);
+    let half = 4 * b.spectra.native_step();
     // S_psi is a regression residual of n_eq averages less the three inputs' degrees of freedom,
     // so its mean is (n_eq - 3) / n_eq of the disturbance's; the median of its scaled
     // chi-squared(2 (n_eq - 3)) distribution lies a further (1 - 1/(9 (n_eq - 3)))^3 below

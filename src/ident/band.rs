@@ -90,7 +90,7 @@ pub fn auto_limits(sample_rate_hz: f64) -> [f64; 2] {
 /// evidence by the padding factor.
 #[must_use]
 pub fn native_bins(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
-    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
+    let step = spectra.native_step();
     (0..spectra.frequency_hz.len())
         .step_by(step)
         .filter(|&k| spectra.frequency_hz[k] >= band_hz[0] && spectra.frequency_hz[k] <= band_hz[1])

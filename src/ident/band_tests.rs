@@ -30,6 +30,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
         bin_correlation: 1.0,
         stretches: Vec::new(),
         stationarity_cache: crate::ident::stretches::StationarityCache::default(),
+        held_out_cache: crate::ident::holdout::HeldOutCache::default(),
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,

@@ -36,6 +36,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
         bin_correlation: 1.0,
         stretches: Vec::new(),
         stationarity_cache: crate::ident::stretches::StationarityCache::default(),
+        held_out_cache: crate::ident::holdout::HeldOutCache::default(),
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,

@@ -6,8 +6,8 @@
 //!   white noise of unit two-sided intensity);
 //! - the causal multichannel Wiener filter `W0 = [S_xu D_u^-H]_+ D_u^-1` (Lambda = 0).
 //!
-//! Three numerical choices make the causal stage exact on sampled, estimated spectra; each was
-//! found necessary on simulated stand runs (issue 3's notes) and is tested:
+//! Four numerical choices make the causal stage exact on sampled, estimated spectra; each was
+//! found necessary on simulated stand runs (issue 3's and issue 13's notes) and is tested:
 //! 1. **Zero-padded spectra** (`spectra::ZERO_PAD`): the Welch estimate's correlation then fits the
 //!    grid, so its minimum-phase factor is an exact causal FIR, free of wrap-around.
 //! 2. **Uniform loading** `S_uu + eps I` with `eps = loading * max_f tr S_uu / 3`, added on the
@@ -21,6 +21,23 @@
 //!    lags; `g = 0` is the paper's strict `[.]_+` and cuts that tail, biasing K by up to ~0.7 % on the
 //!    accelerometer. With `g = 64`, `tests/identify_accuracy.rs` finds K within
 //!    0.1 % on simulated runs whose delays are not whole samples.
+//! 4. **A grid fine enough for the input factor**: Wilson's iteration works through the factor's
+//!    inverse, whose impulse response is long when `S_uu` has a large dynamic range (the
+//!    approach regime's slow path deviations, a real stand's low-frequency manoeuvres); on a grid
+//!    too short for it the factor comes out with energy at negative lags (8.7e-5 of it on a
+//!    simulated approach run at 4x zero padding), `[S_xu D_u^-H]_+` then cuts part of the gain
+//!    itself, and `W0` was 2-5 % off the true K at 0.1-0.5 Hz, 5-20 of its own standard
+//!    deviations, on a noise-free system where `H1` is exact. So the spectra are interpolated
+//!    exactly (`spectral::refine`: they are trigonometric polynomials) onto a grid 2, 4, ... up
+//!    to [`FactorisationSettings::max_refinement`] times finer until the factor's negative-lag
+//!    energy is below [`FactorisationSettings::causality_tolerance`] (from 2x: no run measured,
+//!    simulated or real, was causal on the spectra's own grid, 1e-6 to 1e-4 of the energy at
+//!    negative lags, and each level is factored from Wilson's standard start, because an iterate
+//!    from a coarser grid keeps its wrapped part: after only 4 coarse steps the finer grid's
+//!    result had 8e-5 at negative lags); `D_u`, the projection and
+//!    `W0` are computed there and `W0` is read back at the spectra's bins. Where even the finest
+//!    grid does not hold it, [`Factorisation::input_factor_negative_lags`] says so and the
+//!    warnings report it.
 
 use std::sync::Arc;
 
@@ -33,6 +50,7 @@ use super::spectra::BlockSpectra;
 use crate::spectral::causal::CausalProjector;
 use crate::spectral::factor::{SpectralFactor, WilsonSettings, wilson_from};
 use crate::spectral::grid::two_sided_from_one_sided;
+use crate::spectral::refine::refined;
 
 /// Relative eigenvalue floor used to invert `S_uu` bin by bin for H1 and the residual.
 pub const INVERSE_FLOOR: f64 = 1e-9;
@@ -47,6 +65,14 @@ pub struct FactorisationSettings {
     pub loading: f64,
     /// Fixed-lag allowance of the causal projection, samples.
     pub lag_allowance: usize,
+    /// Largest fraction of the input factor's energy allowed at negative lags before the causal
+    /// stage moves to a finer grid (module docs, item 4).
+    pub causality_tolerance: f64,
+    /// First grid of the causal stage tried, as a multiple of the spectra's grid (a power of 2):
+    /// 2, as no run measured was causal on the spectra's own grid (module docs, item 4).
+    pub min_refinement: usize,
+    /// Finest grid of the causal stage, as a multiple of the spectra's grid (a power of 2).
+    pub max_refinement: usize,
 }
 
 impl Default for FactorisationSettings {
@@ -58,6 +84,9 @@ impl Default for FactorisationSettings {
             },
             loading: 1e-9,
             lag_allowance: 64,
+            causality_tolerance: 1e-9,
+            min_refinement: 2,
+            max_refinement: 16,
         }
     }
 }
@@ -88,8 +117,14 @@ pub struct Factorisation {
     pub noise_factor_error: f64,
     /// Bins whose `S_uu` needed the eigenvalue floor to be inverted for H1.
     pub floored_input_bins: usize,
-    /// `D_u` on the whole two-sided grid: the start of a refactorisation ([`factorise_from`]).
+    /// `D_u` on the whole two-sided grid of the causal stage (the spectra's, refined
+    /// `input_refinement` times): the start of a refactorisation ([`factorise_from`]).
     pub input_factor: Vec<Matrix3<Complex64>>,
+    /// How many times finer than the spectra's the causal stage's grid is (module docs, item 4).
+    pub input_refinement: usize,
+    /// The fraction of `D_u`'s energy at negative lags on that grid (0 for an exactly causal
+    /// factor; above the settings' tolerance only when the finest grid was not fine enough).
+    pub input_factor_negative_lags: f64,
     /// `W_psi` on the whole two-sided grid: the start of a refactorisation.
     pub noise_factor: Vec<Matrix3<Complex64>>,
     /// Whether both factors were computed from Wilson's standard start, i.e. this is what
@@ -160,37 +195,55 @@ pub fn factorise_from(
     // The two factorisations are independent: one per core.
     let residual_eps = residual_loading(spectra, &noise_psd, settings);
     let starts = previous.map(|p| (p.input_factor.as_slice(), p.noise_factor.as_slice()));
+    let start_refinement = previous.map_or(1, |p| p.input_refinement);
     let (d_u, w_psi) = rayon::join(
-        || loaded_factor(&spectra.s_uu, eps, &settings.wilson, starts.map(|s| s.0)),
+        || {
+            causal_input_factor(
+                &spectra.s_uu,
+                eps,
+                settings,
+                starts.map(|s| s.0),
+                start_refinement,
+            )
+        },
         || loaded_factor(&noise_psd, residual_eps, &settings.wilson, starts.map(|s| s.1)),
     );
-    let (d_u, w_psi) = (d_u?, w_psi?);
+    let ((d_u, input_refinement, input_factor_negative_lags), w_psi) = (d_u?, w_psi?);
     let d_u_inv = d_u.inverse().map_err(factor_error)?;
 
-    // Consistent loading: (S_xu + eps H1) = H1 (S_uu + eps I) on every bin of the two-sided grid.
-    let mut s_xu_two = two_sided_from_one_sided(&spectra.s_xu).map_err(factor_error)?;
-    let h1_two = two_sided_from_one_sided(&h1).map_err(factor_error)?;
+    // Consistent loading: (S_xu + eps H1) = H1 (S_uu + eps I) on every bin of the two-sided grid
+    // (the refined grid's H1 from the refined spectra, so the identity holds there too).
+    let s_xu_two = refined(
+        &two_sided_from_one_sided(&spectra.s_xu).map_err(factor_error)?,
+        input_refinement,
+    )
+    .map_err(factor_error)?;
+    let s_uu_two = refined(
+        &two_sided_from_one_sided(&spectra.s_uu).map_err(factor_error)?,
+        input_refinement,
+    )
+    .map_err(factor_error)?;
     let n = s_xu_two.len();
-    for (k, (s, h)) in s_xu_two.iter_mut().zip(&h1_two).enumerate() {
-        // `two_sided_from_one_sided` halves interior bins; H1 is a ratio and must not be halved.
-        let unhalved = if k == 0 || k == n / 2 {
-            *h
-        } else {
-            h * Complex64::from(2.0)
-        };
-        *s += unhalved * Complex64::from(eps);
-    }
     let mut g: Vec<Matrix3<Complex64>> = s_xu_two
         .iter()
+        .zip(&s_uu_two)
         .zip(&d_u_inv)
-        .map(|(s, di)| s * di.adjoint())
+        .map(|((s, suu), di)| {
+            let h = s * floored_inverse(suu, floor * 0.5).0;
+            (s + h * Complex64::from(eps)) * di.adjoint()
+        })
         .collect();
     let mut projector = CausalProjector::new(n).map_err(factor_error)?;
-    shift_lags(&mut g, settings.lag_allowance as f64);
+    // The refined grid has the same lag spacing (one sample), only more lags: the allowance in
+    // samples is unchanged.
+    let lag = settings.lag_allowance as f64;
+    shift_lags(&mut g, lag);
     projector.causal_part(&mut g).map_err(factor_error)?;
-    shift_lags(&mut g, -(settings.lag_allowance as f64));
+    shift_lags(&mut g, -lag);
     let bins = spectra.frequency_hz.len();
-    let causal_wiener = (0..bins).map(|k| g[k] * d_u_inv[k]).collect();
+    let causal_wiener = (0..bins)
+        .map(|k| g[k * input_refinement] * d_u_inv[k * input_refinement])
+        .collect();
     let estimate_std = Arc::new(estimate_std(spectra, &noise_psd, &s_uu_inv));
     let coherence = Arc::new(coherence(spectra, &noise_psd));
     Ok(Factorisation {
@@ -207,6 +260,8 @@ pub fn factorise_from(
         converged: d_u.converged && w_psi.converged,
         from_scratch: !(d_u.from_start || w_psi.from_start),
         input_factor: d_u.factor,
+        input_refinement,
+        input_factor_negative_lags,
         noise_factor: w_psi.factor,
     })
 }
@@ -268,12 +323,64 @@ fn loaded_factor(
     settings: &WilsonSettings,
     start: Option<&[Matrix3<Complex64>]>,
 ) -> Result<SpectralFactor<3>, IdentError> {
+    wilson_from(&loaded_two_sided(one_sided, eps)?, settings, start).map_err(factor_error)
+}
+
+/// The two-sided `s + eps I` (loading added after the one-/two-sided conversion, so it is exactly
+/// a lag-0 term).
+fn loaded_two_sided(
+    one_sided: &[Matrix3<Complex64>],
+    eps: f64,
+) -> Result<Vec<Matrix3<Complex64>>, IdentError> {
     let mut two = two_sided_from_one_sided(one_sided).map_err(factor_error)?;
     let load = Matrix3::identity() * Complex64::from(eps.max(f64::MIN_POSITIVE));
     for s in &mut two {
         *s += load;
     }
-    wilson_from(&two, settings, start).map_err(factor_error)
+    Ok(two)
+}
+
+/// Wilson factor of the two-sided `S_uu + eps I` on the spectra's grid refined `min_refinement`,
+/// twice that, ... times (from `start_refinement`, a previous factorisation's, when its factor
+/// fits that grid; the result is then marked as started from it) until its
+/// negative-lag energy is within the settings' tolerance or the finest grid is reached (module
+/// docs, item 4). Returns the factor on its grid, the refinement and the negative-lag fraction.
+fn causal_input_factor(
+    one_sided: &[Matrix3<Complex64>],
+    eps: f64,
+    settings: &FactorisationSettings,
+    start: Option<&[Matrix3<Complex64>]>,
+    start_refinement: usize,
+) -> Result<(SpectralFactor<3>, usize, f64), IdentError> {
+    let two = loaded_two_sided(one_sided, eps)?;
+    let max_refinement = settings.max_refinement.max(1);
+    let min_refinement = settings.min_refinement.clamp(1, max_refinement);
+    // A previous factorisation's grid is reused only when its factor fits this grid refined as
+    // often (a Welch change of segment length changes the grid).
+    let start_r = start_refinement.clamp(min_refinement, max_refinement);
+    let (mut r, mut start) = match start {
+        Some(f) if f.len() == start_r * two.len() => (start_r, Some(f)),
+        _ => (min_refinement, None),
+    };
+    // Another path than `factorise`'s (another first grid) is not its result: provisional.
+    let other_path = r != min_refinement;
+    loop {
+        let grid = refined(&two, r).map_err(factor_error)?;
+        let mut factor = wilson_from(&grid, &settings.wilson, start).map_err(factor_error)?;
+        let negative = CausalProjector::new(grid.len())
+            .and_then(|mut p| p.negative_lag_fraction(&factor.factor))
+            .map_err(factor_error)?;
+        if negative <= settings.causality_tolerance || r >= max_refinement {
+            factor.from_start |= other_path;
+            return Ok((factor, r, negative));
+        }
+        // From Wilson's standard start again: started from the coarse factor, the iteration keeps
+        // its negative lags (on a finite grid the fixed point is not unique at that level), and
+        // from the coarse factor's causal part it can take a hundred times longer (measured on a
+        // 30-minute run).
+        start = None;
+        r = (r * 2).min(max_refinement);
+    }
 }
 
 /// Delays a function on the two-sided grid by `lag` samples (`F[k] e^{-2 pi i k lag / N}`, `k`

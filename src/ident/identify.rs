@@ -19,6 +19,7 @@ use super::band::{
 };
 use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings};
+use super::holdout::{HeldOut, cached_held_out};
 use super::selfcheck::self_check;
 use super::session::{Session, Start};
 use super::settings::{OrderSetting, Settings};
@@ -142,12 +143,14 @@ pub fn identify_block_from(
     )?);
     let band = native_bins(&spectra, band_hz);
     let mut warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
+    let held_out = cached_held_out(&spectra, band_hz);
     let structural = Arc::new(structural_fit(
         &spectra,
         &factorisation,
         &wiener,
         &band,
         settings.order.of(block),
+        held_out.as_deref(),
         previous,
     )?);
     let stationarity = cached_stationarity(&spectra, band_hz);
@@ -235,7 +238,9 @@ pub fn row_weights(
 /// `Omega_i = (n_eq - 3) S_uu / S_psi,ii`, which weighs collinear inputs correctly (the
 /// accelerometer's x and y specific forces are nearly collinear at high frequency).
 ///
-/// With `previous`, the fit starts from it ([`refit_structure`]).
+/// With `held_out` (the halves' figures, [`cached_held_out`]), `auto` admits an order above 0 only
+/// when it predicts held-out data better than every lower order (admissibility rule 7). With
+/// `previous`, the fit starts from it ([`refit_structure`]).
 ///
 /// # Errors
 /// [`IdentError::Structural`] when the fit refuses its input or fails numerically.
@@ -245,6 +250,7 @@ pub fn structural_fit(
     wiener: &WienerEstimate,
     band: &[usize],
     order: OrderSetting,
+    held_out: Option<&HeldOut>,
     previous: Option<&StructuralFit>,
 ) -> Result<StructuralFit, IdentError> {
     let frequency_hz: Vec<f64> = band.iter().map(|&k| spectra.frequency_hz[k]).collect();
@@ -265,6 +271,7 @@ pub fn structural_fit(
     };
     let settings = StructuralSettings {
         bin_correlation: spectra.bin_correlation,
+        held_out_chi2: held_out.map(|h| h.chi2),
         ..StructuralSettings::default()
     };
     match previous {

@@ -6,9 +6,11 @@
 //! structural fit (order).
 
 pub mod band;
+pub mod band_cache;
 pub mod block_orders;
 pub mod excitation;
 pub mod factorisation;
+pub mod holdout;
 pub mod identify;
 pub mod selfcheck;
 pub mod session;
@@ -107,6 +109,9 @@ pub enum FactorStageError {
     /// The causal projection.
     #[error(transparent)]
     Causal(#[from] crate::spectral::causal::CausalError),
+    /// The finer grid of the causal stage.
+    #[error(transparent)]
+    Refine(#[from] crate::spectral::refine::RefineError),
 }
 
 impl IdentError {
@@ -138,3 +143,7 @@ mod tests;
 #[cfg(test)]
 #[path = "edges_tests.rs"]
 mod edges_tests;
+
+#[cfg(test)]
+#[path = "causal_grid_tests.rs"]
+mod causal_grid_tests;

@@ -25,11 +25,14 @@ pub struct BlockSpectra {
     pub n_averages: usize,
     /// Equivalent number of independent averages (overlap-corrected).
     pub equivalent_averages: f64,
-    /// Each stretch's spectral matrices (the stationarity check, [`super::stretches`]); empty
-    /// for a record too short to cut.
+    /// Each stretch's spectral matrices (the stationarity check, [`super::stretches`], and the
+    /// halves of the held-out validation, [`super::holdout`]); two halves for a record too short
+    /// for the stationarity check, empty for one too short to halve.
     pub stretches: Vec<StretchSpectra>,
     /// The stretches' fits for the last band asked ([`super::stretches::cached_stationarity`]).
     pub stationarity_cache: StationarityCache,
+    /// The held-out figures for the last band asked ([`super::holdout::cached_held_out`]).
+    pub held_out_cache: super::holdout::HeldOutCache,
     /// Variance inflation from the correlation of neighbouring native bins ([`bin_correlation`]).
     pub bin_correlation: f64,
     /// Sample rate, Hz.
@@ -39,6 +42,15 @@ pub struct BlockSpectra {
     /// Welch segment length, samples: bins `k fft_len / segment_len` are the estimate's native,
     /// roughly independent resolution.
     pub segment_len: usize,
+}
+
+impl BlockSpectra {
+    /// Bins between two native (un-padded) bins: `fft_len / segment_len`, at least 1. Native bin
+    /// `b` is bin `b * native_step()` of the padded grid.
+    #[must_use]
+    pub fn native_step(&self) -> usize {
+        (self.fft_len / self.segment_len.max(1)).max(1)
+    }
 }
 
 /// Zero-padding factor of the identifier's spectra when the settings give no `fft_len`. The Welch
@@ -87,6 +99,7 @@ pub fn block_spectra(
     Ok(BlockSpectra {
         stretches,
         stationarity_cache: StationarityCache::default(),
+        held_out_cache: super::holdout::HeldOutCache::default(),
         frequency_hz: m.frequency_hz.clone(),
         s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
         s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),

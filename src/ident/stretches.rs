@@ -16,7 +16,8 @@
 //!   (temperature, a loose mount) as a spread well beyond the stretches' own uncertainties.
 //!
 //! Units: s, Hz, `K` in block units over input units. A stretch whose fit fails is left out; fewer
-//! than [`MIN_STRETCHES`] fitted stretches give no summary.
+//! than [`MIN_STRETCHES`] stretches (a short record cut only into halves) or fitted stretches give
+//! no summary.
 
 use serde::{Deserialize, Serialize};
 
@@ -48,11 +49,21 @@ pub struct StretchSpectra {
     pub equivalent_averages: f64,
 }
 
-/// How many stretches a record of `n_segments` Welch segments (`step` apart) is cut into.
+/// How many stretches a record of `n_segments` Welch segments (`step` apart) is cut into: up to
+/// [`MAX_STRETCHES`] of at least [`MIN_SEGMENTS`] segments each; a record too short for
+/// [`MIN_STRETCHES`] of them is cut into its two halves when each has [`MIN_SEGMENTS`] (the
+/// held-out validation of the order, [`super::holdout`], needs only those; the stationarity check
+/// then has too few stretches and is not made), and not at all when shorter still.
 #[must_use]
 pub fn stretch_count(n_segments: usize) -> usize {
     let m = (n_segments / MIN_SEGMENTS).min(MAX_STRETCHES);
-    if m >= MIN_STRETCHES { m } else { 0 }
+    if m >= MIN_STRETCHES {
+        m
+    } else if m >= 2 {
+        2
+    } else {
+        0
+    }
 }
 
 /// One stretch's order-0 fit.
@@ -116,8 +127,11 @@ const STRETCH_DELAY_REACH_S: f64 = 0.3;
 /// or with fewer than [`MIN_STRETCHES`] fitted.
 #[must_use]
 pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Stationarity> {
+    if spectra.stretches.len() < MIN_STRETCHES {
+        return None;
+    }
     let native = native_bins(spectra, band_hz);
-    let step = (spectra.fft_len / spectra.segment_len.max(1)).max(1);
+    let step = spectra.native_step();
     let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
     let stretches: Vec<StretchFit> = spectra
         .stretches
@@ -175,18 +189,7 @@ fn fit_stretch(
     step: usize,
     frequency_hz: &[f64],
 ) -> Option<StretchFit> {
-    let dof = (s.equivalent_averages - 3.0).max(1.0);
-    let mut response = Vec::with_capacity(native.len());
-    let mut weights = Vec::with_capacity(native.len());
-    for &k in native {
-        let b = k / step;
-        let s_uu = (s.s_uu.get(b)? + s.s_uu.get(b)?.adjoint()) * Complex64::from(0.5);
-        let inv = s_uu.try_inverse()?;
-        let w = s.s_xu[b] * inv;
-        let residual = s.s_xx[b] - w * s.s_xu[b].adjoint();
-        response.push(w);
-        weights.push(super::identify::row_weights(&s_uu, &residual, dof));
-    }
+    let (response, weights) = h1_estimate(s, native, step)?;
     let input = ResponseEstimate {
         frequency_hz,
         response: &response,
@@ -204,6 +207,28 @@ fn fit_stretch(
         tau_s: fit.tau_s,
         tau_std_s: fit.tau_std_s,
     })
+}
+
+/// An `H1` estimate over the band's native bins and each bin's three row weights.
+pub(super) type H1Estimate = (Vec<Matrix3<Complex64>>, Vec<[Matrix3<Complex64>; 3]>);
+
+/// The `H1` estimate `S_xu S_uu^-1` of a stretch (or of any run of stretches merged) at the native
+/// band bins (`native` indexes the padded grid, `step` apart), with the generalised least-squares
+/// row weights of its residual; `None` when a bin is missing or `S_uu` singular there.
+pub(super) fn h1_estimate(s: &StretchSpectra, native: &[usize], step: usize) -> Option<H1Estimate> {
+    let dof = (s.equivalent_averages - 3.0).max(1.0);
+    let mut response = Vec::with_capacity(native.len());
+    let mut weights = Vec::with_capacity(native.len());
+    for &k in native {
+        let b = k / step;
+        let s_uu = (s.s_uu.get(b)? + s.s_uu.get(b)?.adjoint()) * Complex64::from(0.5);
+        let inv = s_uu.try_inverse()?;
+        let w = s.s_xu[b] * inv;
+        let residual = s.s_xx[b] - w * s.s_xu[b].adjoint();
+        response.push(w);
+        weights.push(super::identify::row_weights(&s_uu, &residual, dof));
+    }
+    Some((response, weights))
 }
 
 /// Widens `fit`'s standard deviations of `K` and `tau` (and their ppm and mrad) to at least what
@@ -225,17 +250,7 @@ pub fn widen(fit: &mut super::structural::StructuralFit, st: &Stationarity) {
 
 /// The stationarity of a block's spectra for the last band asked, kept with the spectra: it does
 /// not depend on A, Lambda or the order, so a retune reuses it.
-#[derive(Debug, Default)]
-pub struct StationarityCache(std::sync::Mutex<Option<CachedStationarity>>);
-
-/// The band's bits and the stationarity found for it.
-type CachedStationarity = ([u64; 2], Option<std::sync::Arc<Stationarity>>);
-
-impl Clone for StationarityCache {
-    fn clone(&self) -> Self {
-        Self(std::sync::Mutex::new(self.0.lock().ok().and_then(|g| g.clone())))
-    }
-}
+pub type StationarityCache = super::band_cache::BandCache<Stationarity>;
 
 /// [`stationarity`], cached in `spectra` per band.
 #[must_use]
@@ -243,16 +258,7 @@ pub fn cached_stationarity(
     spectra: &BlockSpectra,
     band_hz: [f64; 2],
 ) -> Option<std::sync::Arc<Stationarity>> {
-    let key = band_hz.map(f64::to_bits);
-    if let Ok(guard) = spectra.stationarity_cache.0.lock()
-        && let Some((k, value)) = guard.as_ref()
-        && *k == key
-    {
-        return value.clone();
-    }
-    let value = stationarity(spectra, band_hz).map(std::sync::Arc::new);
-    if let Ok(mut guard) = spectra.stationarity_cache.0.lock() {
-        *guard = Some((key, value.clone()));
-    }
-    value
+    spectra
+        .stationarity_cache
+        .get_or(band_hz, || stationarity(spectra, band_hz))
 }

@@ -116,6 +116,15 @@ pub enum IdentWarning {
         /// Whether both factorisations converged.
         converged: bool,
     },
+    /// The input's spectral factor keeps energy at negative lags even on the causal stage's
+    /// finest grid: the causal projection then cuts part of the gain (mostly at the lowest
+    /// frequencies), so `W_u` and everything fitted to it may be off there.
+    FactorNotCausal {
+        /// Fraction of the factor's energy at negative lags.
+        negative_lags: f64,
+        /// How many times finer than the spectra's the grid was.
+        refinement: usize,
+    },
 }
 
 impl fmt::Display for IdentWarning {
@@ -195,6 +204,15 @@ impl fmt::Display for IdentWarning {
                 spectrum.name(),
                 if *converged { "" } else { " (not converged)" }
             ),
+            IdentWarning::FactorNotCausal {
+                negative_lags,
+                refinement,
+            } => write!(
+                f,
+                "the input spectrum's factor is not causal even on a grid {refinement} times finer \
+                 ({negative_lags:.1e} of its energy at negative lags): the gain estimate may be off \
+                 at the lowest frequencies (a shorter Welch segment or a higher band start avoids it)"
+            ),
         }
     }
 }
@@ -258,6 +276,13 @@ pub fn block_warnings(
                 converged: fact.converged,
             });
         }
+    }
+    let negative = fact.input_factor_negative_lags;
+    if negative.is_nan() || negative > settings.causality_tolerance {
+        warnings.push(IdentWarning::FactorNotCausal {
+            negative_lags: fact.input_factor_negative_lags,
+            refinement: fact.input_refinement,
+        });
     }
     warnings
 }

@@ -199,6 +199,10 @@ pub struct Fit {
     pub equivalent_averages: f64,
     /// Reconstruction errors of the input and disturbance spectral factors.
     pub factor_errors: [f64; 2],
+    /// How many times finer than the spectra's the causal stage's grid was
+    /// (`ident::factorisation`, item 4).
+    #[serde(default)]
+    pub causal_grid_refinement: usize,
     /// What was regularised or is inexact (absent or empty when all is well).
     #[serde(default)]
     pub warnings: Vec<IdentWarning>,
@@ -274,6 +278,7 @@ impl BlockModel {
                 constraint_residual: w.constraint_residual,
                 equivalent_averages: b.spectra.equivalent_averages,
                 factor_errors: [f.input_factor_error, f.noise_factor_error],
+                causal_grid_refinement: f.input_refinement,
                 warnings: b.warnings.clone(),
             },
         }

@@ -1,7 +1,7 @@
 //! Spectral estimation and factorisation: Welch estimates of one-sided cross-spectral density
 //! matrices (this page), and on the two-sided FFT grid the matrix spectral factorisation
 //! ([`factor`], Wilson), the causal projection `[.]_+` ([`causal`]), one-/two-sided conversion
-//! ([`grid`]) and the scalar cepstral reference ([`cepstral`]); each states its conventions.
+//! ([`grid`]), interpolation onto a finer grid ([`refine`]) and the scalar cepstral reference ([`cepstral`]); each states its conventions.
 //!
 //! # Conventions
 //! - **Estimate.** The run is cut into segments of `N = segment_len` samples starting at sample 0
@@ -49,6 +49,7 @@ pub mod factor;
 pub mod grid;
 mod matrix;
 mod pad;
+pub mod refine;
 mod settings;
 pub mod welch;
 mod window;

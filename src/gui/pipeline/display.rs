@@ -30,7 +30,7 @@ impl NativeCsd {
     /// Wraps `core`.
     #[must_use]
     pub fn new(core: Arc<CoreSpectra>) -> Self {
-        let step = (core.fft_len / core.segment_len.max(1)).max(1);
+        let step = core.native_step();
         let frequency_hz = core.frequency_hz.iter().step_by(step).copied().collect();
         Self {
             n_averages: core.n_averages,

@@ -227,7 +227,15 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     egui::Grid::new(("candidates", name))
         .striped(true)
         .show(ui, |ui| {
-            for h in ["order", "params", "χ²", "BIC", "τ, ms", "admissible"] {
+            for h in [
+                "order",
+                "params",
+                "χ²",
+                "BIC",
+                "held-out χ²",
+                "τ, ms",
+                "admissible",
+            ] {
                 ui.strong(h);
             }
             ui.end_row();
@@ -239,6 +247,11 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 ui.monospace(c.parameters.to_string());
                 ui.monospace(format!("{:.1}", c.chi2));
                 ui.monospace(format!("{:.1}", c.criterion));
+                // Fitted to each half of the record, predicting the other (admissibility rule 7).
+                ui.monospace(
+                    c.held_out_chi2
+                        .map_or_else(|| "–".to_owned(), |h| format!("{h:.1}")),
+                );
                 ui.monospace(format!("{:.3}", c.tau_s * 1e3));
                 ui.monospace(if c.rejected.is_some() { "no (below)" } else { "yes" });
                 ui.end_row();
@@ -276,7 +289,11 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, lambda_auto: bool) {
         f.constraint_residual, f.equivalent_averages
     ));
     ui.label(format!(
-        "factor errors: input {:.1e}, disturbance {:.1e}",
-        f.factor_errors[0], f.factor_errors[1]
-    ));
+        "factor errors: input {:.1e}, disturbance {:.1e}; causal stage on a grid {}x finer than the spectra's",
+        f.factor_errors[0], f.factor_errors[1], f.causal_grid_refinement
+    ))
+    .on_hover_text(
+        "the input's spectral factor must be causal for the causal Wiener estimate; a steep input \
+         spectrum (slow manoeuvres) needs a finer grid for that (identifier, fourth numerical choice)",
+    );
 }

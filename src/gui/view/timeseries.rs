@@ -3,7 +3,7 @@
 //! of the record to analyse (`span_s`, sent as new settings); the analysed stretch is shaded.
 
 use eframe::egui;
-use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, PlotUi, Span, VLine};
+use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoints, PlotUi, Span, VLine};
 
 use super::palette;
 use crate::faults::RecordingFault;
@@ -100,12 +100,23 @@ pub fn show(
     // Per run: switching runs shows the new run's whole time span, not the last one's zoom.
     let link = egui::Id::unique(("time-series-link", run.id));
     let readout_height = 22.0;
-    let height = ((ui.available_height() - readout_height) / groups.len() as f32 - 4.0).max(80.0);
+    // Each plot's key is a row above it (a legend inside covered the traces' top right).
+    let key_height = 18.0;
+    let height =
+        ((ui.available_height() - readout_height) / groups.len() as f32 - 4.0 - key_height).max(80.0);
     let mut cursor_t = None;
     let mut drag = None;
     // Shift held (or a selection under way): a drag selects a stretch instead of panning.
     let selecting = view.span_drag.is_some() || ui.input(|i| i.modifiers.shift);
     for (k, (title, series)) in groups.iter().enumerate() {
+        let first_plot = k == 0;
+        key(
+            ui,
+            series,
+            faults,
+            first_plot.then_some(settings.span_s).flatten(),
+            view.reference_t.is_some() && first_plot,
+        );
         let mut plot = Plot::new(("ts", *title, run.id))
             .height(height)
             .link_axis(link, [true, false])
@@ -118,7 +129,6 @@ pub fn show(
             // Right-drag: zoom to a box (both axes; the time axis of every plot follows);
             // right-click alone sets cursor A. Dragging an axis zooms that axis.
             .allow_boxed_zoom(true)
-            .legend(Legend::default())
             .y_axis_label(*title)
             .y_axis_min_width(64.0)
             .x_grid_spacer(super::grid::nice_grid_spacer())
@@ -203,12 +213,19 @@ pub fn show(
     ui.label(readout(&groups, cursor_t, view.reference_t));
 }
 
+/// The analysed stretch's hue: its key in full, its shading faint.
+const SPAN_HUE: egui::Color32 = egui::Color32::from_rgb(90, 140, 255);
+const SPAN_FILL: egui::Color32 = egui::Color32::from_rgba_unmultiplied_const(90, 140, 255, 28);
+
+/// Recording faults: magenta, apart from every trace colour of the palette (its first is a red).
+const FAULT_COLOUR: egui::Color32 = egui::Color32::from_rgb(230, 40, 200);
+
 /// The analysed stretch (`span_s`), shaded, and a selection under way.
 fn mark_span(plot: &mut PlotUi<'_>, span: Option<[f64; 2]>, dragging: Option<[f64; 2]>) {
     if let Some([from, to]) = span {
         plot.span(
             Span::new("analysed stretch", from..=to)
-                .fill(egui::Color32::from_rgba_unmultiplied(90, 140, 255, 28))
+                .fill(SPAN_FILL)
                 .border_width(1.0),
         );
     }
@@ -221,22 +238,66 @@ fn mark_span(plot: &mut PlotUi<'_>, span: Option<[f64; 2]>, dragging: Option<[f6
     }
 }
 
-/// The recording faults of the plot's channels: a red line where each starts (named in the
-/// legend), and a clipping's level.
-fn mark_faults(plot: &mut PlotUi<'_>, series: &[(&Series, bool)], faults: &[RecordingFault]) {
-    let red = egui::Color32::from_rgb(220, 40, 40);
-    for fault in faults {
+/// The recording faults that concern the plot's channels.
+fn faults_of<'f>(
+    series: &[(&Series, bool)],
+    faults: &'f [RecordingFault],
+) -> impl Iterator<Item = &'f RecordingFault> {
+    faults.iter().filter(|fault| {
         let channel = fault.channel().name();
-        if !series.iter().any(|(s, diff)| !diff && s.name == channel) {
-            continue;
+        series.iter().any(|(s, diff)| !diff && s.name == channel)
+    })
+}
+
+/// A plot's key, one row above it: each trace in its colour (dashed ones said so), the recording
+/// faults marked on it in magenta, and (on the first plot only) the analysed stretch's shading
+/// and cursor A.
+fn key(
+    ui: &mut egui::Ui,
+    series: &[(&Series, bool)],
+    faults: &[RecordingFault],
+    span: Option<[f64; 2]>,
+    cursor_a: bool,
+) {
+    ui.horizontal(|ui| {
+        for (n, (s, diff)) in series.iter().enumerate() {
+            let text = if *diff {
+                format!("- - {} (differentiated)", s.name)
+            } else {
+                format!("— {}", s.name)
+            };
+            ui.colored_label(palette(n % 3), text);
         }
+        for fault in faults_of(series, faults) {
+            ui.colored_label(FAULT_COLOUR, fault.short_label());
+        }
+        if let Some(span) = span {
+            ui.colored_label(SPAN_HUE, span_key(span));
+        }
+        if cursor_a {
+            ui.colored_label(egui::Color32::from_rgb(240, 200, 80), "| cursor A");
+        }
+    });
+}
+
+/// The key's words for the shaded stretch.
+#[must_use]
+pub fn span_key(span: [f64; 2]) -> String {
+    format!("shaded: analysed stretch {:.2}-{:.2} s", span[0], span[1])
+}
+
+/// The recording faults of the plot's channels: a magenta line where each starts (named in the
+/// key above the plot), and a clipping's level.
+fn mark_faults(plot: &mut PlotUi<'_>, series: &[(&Series, bool)], faults: &[RecordingFault]) {
+    let colour = FAULT_COLOUR;
+    for fault in faults_of(series, faults) {
         plot.vline(
             VLine::new(fault.short_label(), fault.time_s())
-                .color(red)
+                .color(colour)
                 .style(LineStyle::dashed_loose()),
         );
         if let RecordingFault::Clipping { level, .. } = fault {
-            plot.hline(HLine::new(fault.short_label(), *level).color(red));
+            plot.hline(HLine::new(fault.short_label(), *level).color(colour));
         }
     }
 }

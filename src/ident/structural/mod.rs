@@ -54,6 +54,7 @@
 
 pub mod admissible;
 mod gain_delay;
+mod holdout;
 mod model;
 mod order;
 mod phasor;
@@ -65,12 +66,15 @@ mod tests;
 #[cfg(test)]
 mod tests_gls;
 #[cfg(test)]
+mod tests_holdout;
+#[cfg(test)]
 mod tests_noise;
 #[cfg(test)]
 mod tests_warm;
 mod warm;
 mod weights;
 
+pub use holdout::held_out_chi2;
 pub use warm::{FittedOrders, refit_structure};
 
 use nalgebra::Matrix3;
@@ -158,6 +162,10 @@ pub struct StructuralSettings {
     /// ([`crate::ident::spectra::bin_correlation`]; 1 for independent bins): the parameter
     /// covariance is multiplied by it, and the criterion's chi2 and number of data divided by it.
     pub bin_correlation: f64,
+    /// Each order's held-out chi2 ([`held_out_chi2`]; index = order, `None` where not fitted to
+    /// both halves). With it, [`OrderChoice::Auto`] applies admissibility rule 7 (an order must
+    /// predict the other half of the record better than every lower order); `None` skips it.
+    pub held_out_chi2: Option<[Option<f64>; MAX_ORDER + 1]>,
 }
 
 impl Default for StructuralSettings {
@@ -168,6 +176,7 @@ impl Default for StructuralSettings {
             max_iterations: 100,
             criterion: InformationCriterion::Bic,
             bin_correlation: 1.0,
+            held_out_chi2: None,
         }
     }
 }
@@ -190,6 +199,10 @@ pub struct OrderCandidate {
     /// Why the order may not be chosen (absent: admissible; order 0 always is).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rejected: Option<admissible::Rejection>,
+    /// Its held-out chi2: fitted to each half of the record, predicting the other, summed
+    /// (absent when the record was not halved or the order not fitted to both halves).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_out_chi2: Option<f64>,
 }
 
 /// `N(s) / d(s) e^(-tau s)` at `s = j 2 pi f_hz`, with `N(s) = sum_m N_m s^m` and

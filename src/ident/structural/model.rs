@@ -159,6 +159,26 @@ impl Model {
         self.den.len()
     }
 
+    /// The same physical model normalised with `ratio` times the reference frequency: `den[m]`
+    /// multiplies `sigma^(m + 1)` and `num[m]` multiplies `sigma^m`, `sigma = s / omega_ref`.
+    pub fn rescaled(&self, ratio: f64) -> Self {
+        Self {
+            num: self
+                .num
+                .iter()
+                .zip(0_i32..)
+                .map(|(c, p)| c.map(|v| v * ratio.powi(p)))
+                .collect(),
+            den: self
+                .den
+                .iter()
+                .zip(1_i32..)
+                .map(|(d, p)| d * ratio.powi(p))
+                .collect(),
+            tau: self.tau,
+        }
+    }
+
     /// `sum_m c[m] sigma^(m + offset)` at `sigma = j x`.
     pub fn poly(c: impl Iterator<Item = f64>, x: f64, offset: i32) -> Complex64 {
         let sigma = Complex64::new(0.0, x);

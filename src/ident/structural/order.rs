@@ -155,7 +155,15 @@ pub(super) fn fit_orders(
             criterion: value,
             tau_s: model.tau,
             stable: rational::is_stable(&model.den),
-            rejected: admissible::rejection(data, model, (per_dof(i).max(1.0) * correlation).sqrt()),
+            rejected: admissible::rejection(
+                data,
+                model,
+                (per_dof(i).max(1.0) * correlation).sqrt(),
+                settings.held_out_chi2.as_ref().map(|h| &h[..]),
+            ),
+            held_out_chi2: settings
+                .held_out_chi2
+                .and_then(|h| h.get(model.order()).copied().flatten()),
         });
     }
     let pick = match choice {

@@ -79,24 +79,7 @@ impl FittedOrders {
     /// multiplies `sigma^m`, `sigma = s / omega_ref`.
     fn rescaled(&self, omega_ref: f64) -> Vec<Model> {
         let ratio = omega_ref / self.omega_ref;
-        self.models
-            .iter()
-            .map(|m| Model {
-                num: m
-                    .num
-                    .iter()
-                    .zip(0_i32..)
-                    .map(|(c, p)| c.map(|v| v * ratio.powi(p)))
-                    .collect(),
-                den: m
-                    .den
-                    .iter()
-                    .zip(1_i32..)
-                    .map(|(d, p)| d * ratio.powi(p))
-                    .collect(),
-                tau: m.tau,
-            })
-            .collect()
+        self.models.iter().map(|m| m.rescaled(ratio)).collect()
     }
 }
 

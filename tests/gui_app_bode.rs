@@ -51,3 +51,52 @@ fn hovering_a_bode_plot_reads_out_gain_phase_and_deviation_from_k() {
     harness.run_steps(2);
     assert!(harness.state().view().bode_deviation);
 }
+
+/// The disturbance PSD says what it is made of: the reference's angle error through the model
+/// (dashed on each diagonal cell) and, in a sentence above the grid, where it is half of the
+/// disturbance or more. On the sample run the gyro's disturbance at the top of the band is the
+/// differentiated angle noise (`tests/noise_reference_share.rs` checks the line's level).
+#[test]
+fn the_disturbance_psd_names_where_it_is_the_references_angle_error() {
+    use imu_attest::gui::view::bode::reference_explanation;
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    harness.get_by_label("Bode").click();
+    harness.run_steps(3);
+    for block in ["gyro", "accel"] {
+        // The Bode tab's block selector (the side panels name the blocks too).
+        harness
+            .get_all_by_label(block)
+            .find(|n| (340.0..1100.0).contains(&n.rect().center().x))
+            .expect("the tab's block selector")
+            .click();
+        harness.run_steps(3);
+        let bode = {
+            let run = &harness.state().runs()[0];
+            let id = run.identification.as_ref().expect("identified");
+            let b = id.bode.iter().find(|b| b.block.name() == block).expect("block");
+            assert!(b.reference_psd_db.iter().all(|line| line.len() > 10), "{block}");
+            reference_explanation(b)
+        };
+        // Exactly one such sentence, and it is this block's.
+        harness.get_by_label_contains("Dashed on the diagonal");
+        harness.get_by_label(&bode);
+        let shown = bode;
+        let how = if block == "gyro" {
+            "differentiated into a rate error"
+        } else {
+            "as tilt against gravity and lever-arm acceleration"
+        };
+        assert!(shown.contains(how), "{shown}");
+        if block == "gyro" {
+            // White angle noise of 1e-5 rad at 500 Hz outgrows the gyro's noise at the band's top.
+            assert!(shown.contains("not the sensor's noise: gx "), "{shown}");
+            assert!(
+                shown.contains("gy ") && shown.contains("gz ") && shown.contains(" Hz"),
+                "{shown}"
+            );
+        }
+    }
+}

@@ -17,6 +17,7 @@ pub mod chi2;
 pub mod of_model;
 pub mod reference;
 pub mod residual;
+pub mod share;
 pub mod terms;
 
 use serde::{Deserialize, Serialize};

@@ -97,10 +97,7 @@ pub fn attach_noise(model: &mut Model, session: &mut Session, settings: &Setting
     let span = session.span(settings)?;
     let run = session.run().clone();
     let motion = session.motion()?;
-    let geometry = AccelGeometry {
-        g_mps2: run.sidecar.g_mps2,
-        lever_arm_m: run.sidecar.accel_lever_arm_m,
-    };
+    let geometry = AccelGeometry::of(&run);
     let mut jobs = Vec::new();
     for block in Block::BOTH {
         if model.blocks.contains_key(block.name()) {

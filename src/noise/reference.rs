@@ -37,6 +37,17 @@ pub struct AccelGeometry {
     pub lever_arm_m: [f64; 3],
 }
 
+impl AccelGeometry {
+    /// The geometry declared in `run`'s sidecar.
+    #[must_use]
+    pub fn of(run: &crate::run::Run) -> Self {
+        Self {
+            g_mps2: run.sidecar.g_mps2,
+            lever_arm_m: run.sidecar.accel_lever_arm_m,
+        }
+    }
+}
+
 /// Instants the Jacobians are averaged over.
 const INSTANTS: usize = 256;
 

@@ -19,6 +19,7 @@ use crate::ident::identify::RunIdentification;
 use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
 use crate::model::Model;
+use crate::noise::reference::AccelGeometry;
 
 /// The accepted effects' starting points with the settings and effects they were made for.
 pub(super) type EffectStart = (Settings, Vec<(Block, Effect)>, Arc<Vec<Prepared>>);
@@ -211,7 +212,14 @@ impl Analysis<'_> {
             let extension = prepared
                 .as_deref()
                 .map(|p| (p.as_slice(), cache.accepted.as_slice()));
-            let i = Arc::new(Identification::extended(settings, core.clone(), model, extension));
+            let geometry = AccelGeometry::of(cache.session.run());
+            let i = Arc::new(Identification::extended(
+                settings,
+                core.clone(),
+                model,
+                extension,
+                geometry,
+            ));
             cache.identification = Some(i.clone());
             i
         };

@@ -21,6 +21,8 @@ use crate::ident::band::{AUTO_LIMITS_HZ, multiple_coherence, native_bins};
 use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::Settings;
 use crate::model::{BlockModel, Model};
+use crate::noise::reference::AccelGeometry;
+use crate::noise::share::{ReferenceShare, reference_share};
 use crate::run::Run;
 
 /// Number of standard deviations of the confidence bands.
@@ -83,6 +85,11 @@ pub struct BlockBode {
     pub noise_psd_db: Vec<Vec<PlotPoint>>,
     /// The analysis band used, Hz (marked on the plots).
     pub band_hz: [f64; 2],
+    /// The reference's angle error through the model in each output's disturbance,
+    /// `(log10 f, 10 log10 S)` per output, dB re 1 unit^2/Hz (`crate::noise::share`).
+    pub reference_psd_db: [Vec<PlotPoint>; 3],
+    /// Per output, where that is at least half the disturbance, Hz.
+    pub reference_dominated_hz: [Vec<[f64; 2]>; 3],
 }
 
 /// The starting points of accepted effects' fits and the effects (`crate::diagnose::extend`).
@@ -108,18 +115,20 @@ impl Identification {
     #[must_use]
     pub fn new(run: &Run, settings: Settings, core: Arc<RunIdentification>) -> Self {
         let model = Model::from_identification(run, &settings, &core);
-        Self::extended(settings, core, model, None)
+        Self::extended(settings, core, model, None, AccelGeometry::of(run))
     }
 
     /// [`Identification::new`] from its model file (`Model::from_identification` of `core`), the
     /// model extended by accepted effects, from the diagnosis's
-    /// starting point of the same run and settings (`crate::diagnose::extend`).
+    /// starting point of the same run and settings (`crate::diagnose::extend`); `geometry` is
+    /// the run's, for the reference's share of the disturbance.
     #[must_use]
     pub fn extended(
         settings: Settings,
         core: Arc<RunIdentification>,
         mut model: Model,
         extension: Option<Extension<'_>>,
+        geometry: AccelGeometry,
     ) -> Self {
         if let Some((prepared, accepted)) = extension {
             apply_effects(&mut model, prepared, accepted);
@@ -127,7 +136,10 @@ impl Identification {
         let bode = core
             .blocks
             .iter()
-            .filter_map(|b| model.blocks.get(b.block.name()).map(|m| bode(b, m)))
+            .filter_map(|b| {
+                let m = model.blocks.get(b.block.name())?;
+                Some(bode(b, m, &reference_share(b.block, m, &core.motion, geometry)))
+            })
             .collect();
         Self {
             settings,
@@ -227,7 +239,7 @@ fn element(m: &BlockModel, i: usize, j: usize) -> BodeElement {
     }
 }
 
-fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
+fn bode(b: &BlockIdentification, m: &BlockModel, reference: &ReferenceShare) -> BlockBode {
     let log_f: Vec<f64> = m.frequency_hz.iter().map(|f| f.log10()).collect();
     let elements = (0..9).map(|e| element(m, e / 3, e % 3)).collect();
     // Coherence over the whole usable range, not only the band, so the band's edges can be
@@ -262,6 +274,15 @@ fn bode(b: &BlockIdentification, m: &BlockModel) -> BlockBode {
         coherence,
         noise_psd_db,
         band_hz: m.band_hz,
+        reference_psd_db: std::array::from_fn(|i| {
+            log_f
+                .iter()
+                .zip(&reference.psd[i])
+                .filter(|(_, s)| **s > 0.0)
+                .map(|(&x, s)| PlotPoint::new(x, 10.0 * s.log10()))
+                .collect()
+        }),
+        reference_dominated_hz: reference.dominated_hz.clone(),
     }
 }
 

@@ -8,6 +8,7 @@ use egui_plot::{
 };
 
 use super::palette;
+use crate::block::Block;
 use crate::gui::app::{RunEntry, ViewState};
 use crate::gui::pipeline::BlockBode;
 
@@ -250,7 +251,8 @@ pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
                 );
             }
         });
-    ui.strong("disturbance PSD matrix |S_ψ,ij|, dB re 1 unit²/Hz");
+    ui.strong("disturbance PSD matrix |S_ψ,ij|, dB re 1 unit²/Hz: what the model does not explain");
+    ui.label(reference_explanation(bode));
     egui::Grid::new("noise-psd").spacing([6.0, 6.0]).show(ui, |ui| {
         for i in 0..3 {
             for j in 0..3 {
@@ -262,12 +264,56 @@ pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
                                 .color(palette(3 + i.min(j)))
                                 .width(1.2),
                         );
+                        if i == j {
+                            p.line(
+                                Line::new(
+                                    "reference's angle error",
+                                    PlotPoints::Borrowed(&bode.reference_psd_db[i]),
+                                )
+                                .color(Color32::GRAY)
+                                .style(LineStyle::dashed_dense())
+                                .width(1.2),
+                            );
+                        }
                     });
                 });
             }
             ui.end_row();
         }
     });
+}
+
+/// What the disturbance PSD is made of: the reference's angle error (dashed on the diagonal)
+/// and where it is at least half of it, per output.
+#[must_use]
+pub fn reference_explanation(bode: &BlockBode) -> String {
+    let how = match bode.block {
+        Block::Gyro => "differentiated into a rate error",
+        Block::Accel => "as tilt against gravity and lever-arm acceleration",
+    };
+    let ranges: Vec<String> = (0..3)
+        .filter(|&i| !bode.reference_dominated_hz[i].is_empty())
+        .map(|i| {
+            let spans: Vec<String> = bode.reference_dominated_hz[i]
+                .iter()
+                .map(|[a, b]| format!("{a:.2}-{b:.2} Hz"))
+                .collect();
+            format!("{} {}", bode.outputs[i], spans.join(", "))
+        })
+        .collect();
+    if ranges.is_empty() {
+        format!(
+            "Dashed on the diagonal: the stand's angle-measurement error through the model ({how}). \
+             It stays below half of the disturbance at every frequency: the disturbance is the sensor's."
+        )
+    } else {
+        format!(
+            "Dashed on the diagonal: the stand's angle-measurement error through the model ({how}). \
+             Where it is half of the disturbance or more, the disturbance is the reference's, not the \
+             sensor's noise: {}.",
+            ranges.join("; ")
+        )
+    }
 }
 
 /// The Bode tab for `run`.

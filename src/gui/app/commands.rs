@@ -4,12 +4,15 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::prompt::{self, PathPurpose};
+use super::prompt::PathPurpose;
 use super::{App, RunEntry, RunState};
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::gui::pipeline::{Job, JobKind, RunId, Stage, ValidationKey};
 use crate::ident::settings::Settings;
+
+/// The JSON files' dialog filter.
+const JSON: (&str, &[&str]) = ("json", &["json"]);
 
 /// A request from the UI.
 #[derive(Debug)]
@@ -77,23 +80,7 @@ impl App {
 
     pub(super) fn apply(&mut self, command: Command) {
         match command {
-            Command::OpenDialog => {
-                if prompt::dialogs_disabled() {
-                    self.prompt_path(PathPurpose::Open, None);
-                    return;
-                }
-                let start = std::time::Instant::now();
-                let picked = rfd::FileDialog::new()
-                    .set_title("Open stand runs")
-                    .add_filter("stand run (.csv, .csv.gz)", &["csv", "gz"])
-                    .pick_files();
-                if prompt::dialog_never_shown(picked.is_none(), start.elapsed()) {
-                    self.prompt_path(PathPurpose::Open, Some(prompt::NO_DIALOG_NOTE));
-                }
-                for path in picked.unwrap_or_default() {
-                    self.open(path);
-                }
-            }
+            Command::OpenDialog => self.ask(super::dialog::DialogRequest::open_runs()),
             Command::PromptPath(purpose) => self.prompt_path(purpose, None),
             Command::ClosePrompt => self.prompt = None,
             Command::Open(paths) => {
@@ -101,19 +88,14 @@ impl App {
                     self.open(p);
                 }
             }
-            Command::SaveSession(path) => {
-                let path =
-                    path.or_else(|| self.save_dialog(PathPurpose::SaveSession, "json", "_session.json"));
-                if let Some(path) = path {
-                    self.save_session(&path);
-                }
-            }
-            Command::OpenSession(path) => {
-                let path = path.or_else(|| self.open_dialog(PathPurpose::OpenSession));
-                if let Some(path) = path {
-                    self.open_session(&path);
-                }
-            }
+            Command::SaveSession(path) => match path {
+                Some(path) => self.save_session(&path),
+                None => self.save_dialog(PathPurpose::SaveSession, JSON, "_session.json"),
+            },
+            Command::OpenSession(path) => match path {
+                Some(path) => self.open_session(&path),
+                None => self.open_dialog(PathPurpose::OpenSession),
+            },
             Command::CancelLoad(id) => {
                 if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
                     cancel.store(true, Ordering::Relaxed);
@@ -153,30 +135,22 @@ impl App {
                     }
                 }
             }
-            Command::ExportModel(path) => {
-                let path = path.or_else(|| self.save_dialog(PathPurpose::ExportModel, "json", "_model.json"));
-                if let Some(path) = path {
-                    self.export_model(&path);
-                }
-            }
-            Command::ExportResults(path) => {
-                let path =
-                    path.or_else(|| self.save_dialog(PathPurpose::ExportResults, "csv", "_results.csv"));
-                if let Some(path) = path {
-                    self.export_results(path);
-                }
-            }
-            Command::ExportReport(path) => {
-                let path =
-                    path.or_else(|| self.save_dialog(PathPurpose::ExportReport, "html", "_report.html"));
-                if let Some(path) = path {
-                    self.export_report(path);
-                }
-            }
-            Command::ExportPng(path) => {
-                let path = path.or_else(|| self.save_dialog(PathPurpose::ExportPng, "png", "_view.png"));
-                self.screenshots.pending = path;
-            }
+            Command::ExportModel(path) => match path {
+                Some(path) => self.export_model(&path),
+                None => self.save_dialog(PathPurpose::ExportModel, JSON, "_model.json"),
+            },
+            Command::ExportResults(path) => match path {
+                Some(path) => self.export_results(path),
+                None => self.save_dialog(PathPurpose::ExportResults, ("csv", &["csv"]), "_results.csv"),
+            },
+            Command::ExportReport(path) => match path {
+                Some(path) => self.export_report(path),
+                None => self.save_dialog(PathPurpose::ExportReport, ("html", &["html"]), "_report.html"),
+            },
+            Command::ExportPng(path) => match path {
+                Some(path) => self.screenshots.pending = Some(path),
+                None => self.save_dialog(PathPurpose::ExportPng, ("png", &["png"]), "_view.png"),
+            },
             Command::ToggleCompare(id) => {
                 if self.compared.contains(&id) {
                     self.compared.retain(|r| *r != id);

@@ -34,6 +34,7 @@ impl App {
         if !dropped.is_empty() {
             self.push_command(Command::Open(dropped));
         }
+        self.poll_dialog();
         for command in std::mem::take(&mut self.commands) {
             self.apply(command);
         }

@@ -6,6 +6,7 @@
 //! directly; everything that reaches the pipeline goes through a [`Command`].
 
 mod commands;
+pub mod dialog;
 mod errors;
 mod export;
 mod logic;
@@ -22,6 +23,7 @@ use eframe::egui;
 use serde::{Deserialize, Serialize};
 
 pub use commands::Command;
+pub use dialog::{DialogRequest, FilePicker};
 pub use prompt::PathPurpose;
 
 use crate::block::Block;
@@ -52,6 +54,8 @@ pub struct AppOptions {
     pub persist: bool,
     /// How runs are loaded (memory limit, chunk size).
     pub load: LoadOptions,
+    /// How files are picked: the system's dialog, on its own thread.
+    pub file_picker: FilePicker,
 }
 
 impl AppOptions {
@@ -63,6 +67,7 @@ impl AppOptions {
             mode: WorkerMode::Thread,
             persist: true,
             load: LoadOptions::default(),
+            file_picker: FilePicker::system(),
         }
     }
 }
@@ -283,6 +288,12 @@ pub struct App {
     screenshots: export::Screenshots,
     /// The typed-path window, when open (File > Type a path, or no file dialog available).
     prompt: Option<prompt::PathPrompt>,
+    /// The system's file dialog, when one is open (on its own thread).
+    dialog: Option<dialog::PendingDialog>,
+    /// What shows it.
+    picker: FilePicker,
+    /// The context, to wake the app from other threads.
+    ctx: egui::Context,
     /// CPU time of the previous frame (the app's `ui` and rendering), s.
     frame_cpu_s: Option<f32>,
     /// Print every frame's CPU time to stderr (environment variable [`FRAME_LOG_VAR`] set).
@@ -325,6 +336,9 @@ impl App {
             status: None,
             screenshots: export::Screenshots::default(),
             prompt: None,
+            dialog: None,
+            picker: options.file_picker,
+            ctx: cc.egui_ctx.clone(),
             frame_cpu_s: None,
             frame_log: std::env::var_os(FRAME_LOG_VAR).is_some(),
         };

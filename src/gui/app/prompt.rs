@@ -68,6 +68,12 @@ impl PathPurpose {
             .filter(|p| !p.is_empty())
             .map(PathBuf::from)
             .collect();
+        self.command_for(paths)
+    }
+
+    /// The command for the picked `paths` (`None` for none; one path for all but Open).
+    #[must_use]
+    pub fn command_for(self, paths: Vec<PathBuf>) -> Option<Command> {
         let one = paths.first().cloned();
         match self {
             PathPurpose::Open => (!paths.is_empty()).then_some(Command::Open(paths)),

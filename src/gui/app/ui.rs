@@ -61,6 +61,14 @@ impl App {
                 ui.selectable_value(&mut view.tab, Tab::Diagnosis, "Missing effects");
                 ui.selectable_value(&mut view.tab, Tab::Validation, "Validation");
                 ui.selectable_value(&mut view.tab, Tab::Compare, "Compare");
+                if let Some(dialog) = &self.dialog {
+                    ui.separator();
+                    // No spinner: it would repaint every frame while the user reads the dialog.
+                    ui.label(format!(
+                        "file dialog open: {} (answer it; the app keeps working)",
+                        dialog.request.purpose.title()
+                    ));
+                }
                 if let Some(status) = &self.status {
                     ui.separator();
                     ui.weak(status);

@@ -301,16 +301,20 @@ pub fn reference_explanation(bode: &BlockBode) -> String {
             format!("{} {}", bode.outputs[i], spans.join(", "))
         })
         .collect();
+    let line = format!(
+        "Dashed on the diagonal: the white noise of the stand's angle measurement (the sidecar's \
+         or the angles' floor) through the observer and the model ({how})."
+    );
     if ranges.is_empty() {
         format!(
-            "Dashed on the diagonal: the stand's angle-measurement error through the model ({how}). \
-             It stays below half of the disturbance at every frequency: the disturbance is the sensor's."
+            "{line} It stays below half of the disturbance at every frequency: what the model does \
+             not explain is not that noise (the reference's coloured noise, band limit or latency \
+             cannot be told from the sensor's own noise with one block: see Missing effects)."
         )
     } else {
         format!(
-            "Dashed on the diagonal: the stand's angle-measurement error through the model ({how}). \
-             Where it is half of the disturbance or more, the disturbance is the reference's, not the \
-             sensor's noise: {}.",
+            "{line} Where it is half of the disturbance or more, the disturbance is the reference's, \
+             not the sensor's noise: {}.",
             ranges.join("; ")
         )
     }

@@ -58,7 +58,7 @@ fn hovering_a_bode_plot_reads_out_gain_phase_and_deviation_from_k() {
 /// differentiated angle noise (`tests/noise_reference_share.rs` checks the line's level).
 #[test]
 fn the_disturbance_psd_names_where_it_is_the_references_angle_error() {
-    use imu_attest::gui::view::bode::reference_explanation;
+    use imu_attest::gui::view::disturbance::reference_explanation;
     let mut harness = gui_common::app(
         gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
         4,

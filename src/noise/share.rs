@@ -62,8 +62,8 @@ pub fn reference_share(
 }
 
 /// The ranges of `frequency_hz` where `reference >= DOMINANT_SHARE * disturbance`: runs of at
-/// least [`MIN_RANGE_BINS`] such bins, gaps of up to [`MAX_GAP_BINS`] bins bridged, most of
-/// each range's bins above the share.
+/// least [`MIN_RANGE_BINS`] such bins, gaps of up to [`MAX_GAP_BINS`] bins bridged, each range
+/// ending at its last bin where most of its bins are above the share.
 #[must_use]
 pub fn dominated_ranges(frequency_hz: &[f64], disturbance: &[f64], reference: &[f64]) -> Vec<[f64; 2]> {
     let n = frequency_hz.len().min(disturbance.len()).min(reference.len());
@@ -80,25 +80,22 @@ pub fn dominated_ranges(frequency_hz: &[f64], disturbance: &[f64], reference: &[
             k += 1;
             continue;
         }
-        let (start, mut end, mut count) = (k, k, 1);
-        let mut next = k + 1;
-        while next < n {
-            if dominated[next] {
-                end = next;
-                count += 1;
-                next += 1;
-            } else if let Some(gap) = (1..=MAX_GAP_BINS).find(|g| next + g < n && dominated[next + g]) {
-                // A few bins below the share between bins above it: the estimates' scatter.
-                next += gap;
-            } else {
-                break;
+        // Extend over gaps of up to MAX_GAP_BINS; the range ends at the last bin where most of
+        // its bins so far are above the share (scattered bins after a solid run do not sink it).
+        let start = k;
+        let (mut end, mut count, mut best) = (k, 1, (k, 1));
+        while let Some(gap) = (1..=MAX_GAP_BINS + 1).find(|g| end + g < n && dominated[end + g]) {
+            end += gap;
+            count += 1;
+            if 2 * count > end - start + 1 {
+                best = (end, count);
             }
         }
-        // Most of a range's bins are above the share (bridged gaps are not most of it).
-        if count >= MIN_RANGE_BINS && 2 * count > end - start + 1 {
-            ranges.push([frequency_hz[start], frequency_hz[end]]);
+        let (last, held) = best;
+        if held >= MIN_RANGE_BINS {
+            ranges.push([frequency_hz[start], frequency_hz[last]]);
         }
-        k = end + 1;
+        k = last + 1;
     }
     ranges
 }
@@ -156,6 +153,19 @@ mod tests {
         // Bins above the share scattered among more below it are no range.
         let sparse: Vec<f64> = (0..20).map(|k| if k % 3 == 0 { 3.0 } else { 1.0 }).collect();
         assert!(dominated_ranges(&f, &disturbance, &sparse).is_empty());
+        // ... nor do they hide a solid run after them: scattered bins at 1 and 5 Hz bridged to
+        // 9-12 Hz fail as one range (6 of 12 bins), 5-12 Hz does not (5 of 8).
+        let mut late = vec![1.0; 20];
+        for k in [0, 4, 8, 9, 10, 11] {
+            late[k] = 3.0;
+        }
+        assert_eq!(dominated_ranges(&f, &disturbance, &late), vec![[5.0, 12.0]]);
+        // ... or one before them: 1-4 Hz, then every fourth bin to the top.
+        let early: Vec<f64> = (0..20)
+            .map(|k| if k < 4 || k % 4 == 3 { 3.0 } else { 1.0 })
+            .collect();
+        // (1-8 Hz: 5 of its 8 bins; the scattered rest is no range.)
+        assert_eq!(dominated_ranges(&f, &disturbance, &early), vec![[1.0, 8.0]]);
         // Four bins below break the run: 12-14 Hz stays, two bins at 19-20 Hz are too few.
         reference[17] = 1.0;
         assert_eq!(dominated_ranges(&f, &disturbance, &reference), vec![[12.0, 14.0]]);

@@ -10,10 +10,11 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::time::{Duration, Instant};
 
 use super::prompt::PathPurpose;
+use crate::gui::pipeline::RunId;
 
 /// What to ask the user for.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -24,6 +25,8 @@ pub struct DialogRequest {
     pub filter: (&'static str, &'static [&'static str]),
     /// The proposed file name, for a file to write.
     pub file_name: Option<String>,
+    /// The run selected when it was asked (its name proposed).
+    pub selected: Option<RunId>,
 }
 
 impl DialogRequest {
@@ -34,6 +37,7 @@ impl DialogRequest {
             purpose: PathPurpose::Open,
             filter: ("stand run (.csv, .csv.gz)", &["csv", "gz"]),
             file_name: None,
+            selected: None,
         }
     }
 
@@ -44,6 +48,7 @@ impl DialogRequest {
             purpose,
             filter: ("json", &["json"]),
             file_name: None,
+            selected: None,
         }
     }
 
@@ -58,6 +63,7 @@ impl DialogRequest {
             purpose,
             filter,
             file_name: Some(file_name),
+            selected: None,
         }
     }
 }
@@ -103,6 +109,19 @@ impl std::fmt::Debug for FilePicker {
     }
 }
 
+/// The answer's channel and the app's waker: dropped, it closes the channel, then wakes.
+struct Answer<F: Fn()> {
+    send: Option<Sender<(Option<Vec<PathBuf>>, Duration)>>,
+    wake: F,
+}
+
+impl<F: Fn()> Drop for Answer<F> {
+    fn drop(&mut self) {
+        self.send = None;
+        (self.wake)();
+    }
+}
+
 /// A dialog being shown.
 pub(super) struct PendingDialog {
     /// What was asked.
@@ -120,8 +139,10 @@ pub(super) enum DialogOutcome {
     Picked(Vec<PathBuf>),
     /// The user cancelled it.
     Cancelled,
-    /// It returned nothing at once (or its thread died): never shown.
+    /// It returned nothing at once: never shown.
     NeverShown,
+    /// Its thread stopped without an answer (the picker panicked).
+    Stopped,
 }
 
 impl PendingDialog {
@@ -140,10 +161,17 @@ impl PendingDialog {
         std::thread::Builder::new()
             .name("file-dialog".into())
             .spawn(move || {
+                // Wakes the app when dropped: after the answer is sent or, if the picker
+                // panics, after the channel is closed.
+                let answer = Answer {
+                    send: Some(send),
+                    wake,
+                };
                 let start = Instant::now();
                 let picked = (picker.0)(&asked);
-                let _ = send.send((picked, start.elapsed()));
-                wake();
+                if let Some(send) = &answer.send {
+                    let _ = send.send((picked, start.elapsed()));
+                }
             })?;
         Ok(Self { request, answer })
     }
@@ -152,7 +180,7 @@ impl PendingDialog {
     pub fn poll(&self) -> DialogOutcome {
         match self.answer.try_recv() {
             Err(TryRecvError::Empty) => DialogOutcome::Open,
-            Err(TryRecvError::Disconnected) => DialogOutcome::NeverShown,
+            Err(TryRecvError::Disconnected) => DialogOutcome::Stopped,
             Ok((picked, elapsed)) => {
                 let picked = picked.filter(|p| !p.is_empty());
                 if super::prompt::dialog_never_shown(picked.is_none(), elapsed) {
@@ -182,10 +210,19 @@ mod tests {
         }
     }
 
+    /// Waits until `count` reaches `n` (or 10 s pass) and returns it.
+    fn woken(count: &AtomicUsize, n: usize) -> usize {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while count.load(Ordering::SeqCst) < n && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        count.load(Ordering::SeqCst)
+    }
+
     #[test]
     fn a_slow_dialog_answers_on_its_own_thread_and_wakes_the_app() {
-        let woken = Arc::new(AtomicUsize::new(0));
-        let w = woken.clone();
+        let count = Arc::new(AtomicUsize::new(0));
+        let c = count.clone();
         let picker = FilePicker::new(|r: &DialogRequest| {
             assert_eq!(std::thread::current().name(), Some("file-dialog"));
             std::thread::sleep(Duration::from_millis(300));
@@ -193,7 +230,7 @@ mod tests {
         });
         let request = DialogRequest::save(PathPurpose::ExportModel, ("json", &["json"]), "m.json".into());
         let pending = PendingDialog::start(picker, request, move || {
-            w.fetch_add(1, Ordering::SeqCst);
+            c.fetch_add(1, Ordering::SeqCst);
         })
         .expect("thread");
         // The caller is not blocked: the dialog is still open right after it was started.
@@ -202,7 +239,7 @@ mod tests {
             wait(&pending),
             DialogOutcome::Picked(vec![PathBuf::from("m.json")])
         );
-        assert_eq!(woken.load(Ordering::SeqCst), 1);
+        assert_eq!(woken(&count, 1), 1);
     }
 
     #[test]
@@ -219,9 +256,18 @@ mod tests {
         });
         let pending = PendingDialog::start(cancelled, DialogRequest::open_runs(), || {}).expect("thread");
         assert_eq!(wait(&pending), DialogOutcome::Cancelled);
-        // A picker that panics is a dialog never shown, not a hang.
+    }
+
+    #[test]
+    fn a_picker_that_panics_stops_the_dialog_and_still_wakes_the_app() {
+        let count = Arc::new(AtomicUsize::new(0));
+        let c = count.clone();
         let broken = FilePicker::new(|_: &DialogRequest| panic!("no display"));
-        let pending = PendingDialog::start(broken, DialogRequest::open_runs(), || {}).expect("thread");
-        assert_eq!(wait(&pending), DialogOutcome::NeverShown);
+        let pending = PendingDialog::start(broken, DialogRequest::open_runs(), move || {
+            c.fetch_add(1, Ordering::SeqCst);
+        })
+        .expect("thread");
+        assert_eq!(woken(&count, 1), 1, "woken although the picker panicked");
+        assert_eq!(wait(&pending), DialogOutcome::Stopped);
     }
 }

@@ -11,7 +11,6 @@ use eframe::egui::{self, ColorImage};
 use super::App;
 use super::ErrorTopic;
 use super::PathPurpose;
-use super::dialog::{DialogOutcome, DialogRequest, PendingDialog};
 use crate::output::{OutputError, ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
 
@@ -54,75 +53,6 @@ pub fn write_png(path: &Path, image: &ColorImage) -> Result<(), OutputError> {
 }
 
 impl App {
-    /// Asks for one file to read for `purpose` (a JSON file) with the system's dialog on its own
-    /// thread; its answer sends the command ([`super::dialog`]).
-    pub(super) fn open_dialog(&mut self, purpose: PathPurpose) {
-        self.ask(DialogRequest::open_json(purpose));
-    }
-
-    /// Asks where to write for `purpose`, proposing the selected run's name with `suffix`.
-    pub(super) fn save_dialog(
-        &mut self,
-        purpose: PathPurpose,
-        filter: (&'static str, &'static [&'static str]),
-        suffix: &str,
-    ) {
-        let stem = self
-            .selected()
-            .and_then(|r| r.summary.as_ref())
-            .map_or_else(|| "imu-attest".to_owned(), |s| crate::run::run_stem(&s.path));
-        self.ask(DialogRequest::save(purpose, filter, format!("{stem}{suffix}")));
-    }
-
-    /// Shows `request`'s dialog on the `file-dialog` thread; where dialogs are disabled
-    /// ([`super::prompt::NO_DIALOG_VAR`]) or the thread cannot start, the typed-path window
-    /// opens instead, its field holding the proposed file name. One dialog at a time.
-    pub(super) fn ask(&mut self, request: DialogRequest) {
-        if self.dialog.is_some() {
-            self.status = Some("a file dialog is already open: answer it first".to_owned());
-            return;
-        }
-        if super::prompt::dialogs_disabled() {
-            self.prompt_instead(&request, None);
-            return;
-        }
-        let ctx = self.ctx.clone();
-        let fallback = request.clone();
-        match PendingDialog::start(self.picker.clone(), request, move || ctx.request_repaint()) {
-            Ok(pending) => self.dialog = Some(pending),
-            Err(_) => self.prompt_instead(&fallback, Some(super::prompt::NO_DIALOG_NOTE)),
-        }
-    }
-
-    /// Takes the open dialog's answer, if it has come: the command it asks for, the typed-path
-    /// window if it was never shown, nothing if cancelled.
-    pub(super) fn poll_dialog(&mut self) {
-        let Some(pending) = &self.dialog else { return };
-        let outcome = pending.poll();
-        if outcome == DialogOutcome::Open {
-            return;
-        }
-        let request = pending.request.clone();
-        self.dialog = None;
-        match outcome {
-            DialogOutcome::Open | DialogOutcome::Cancelled => {}
-            DialogOutcome::NeverShown => self.prompt_instead(&request, Some(super::prompt::NO_DIALOG_NOTE)),
-            DialogOutcome::Picked(paths) => {
-                if let Some(command) = request.purpose.command_for(paths) {
-                    self.push_command(command);
-                }
-            }
-        }
-    }
-
-    /// The typed-path window for `request`, its field holding the proposed file name.
-    fn prompt_instead(&mut self, request: &DialogRequest, note: Option<&str>) {
-        self.prompt_path(request.purpose, note);
-        if let (Some(p), Some(name)) = (self.prompt.as_mut(), &request.file_name) {
-            p.text.clone_from(name);
-        }
-    }
-
     /// Every file the loaded runs were read from (runs and sidecars): no export goes over one.
     fn input_files(&self) -> Vec<PathBuf> {
         self.runs

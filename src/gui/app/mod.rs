@@ -5,6 +5,7 @@
 //! (tab, overlay toggle, heatmap mode) lives in [`ViewState`] and is edited by the widgets
 //! directly; everything that reaches the pipeline goes through a [`Command`].
 
+mod ask;
 mod commands;
 pub mod dialog;
 mod errors;

@@ -59,6 +59,15 @@ impl PathPurpose {
         }
     }
 
+    /// Whether the file is the selected run's (its model, certificate or view), not every run's.
+    #[must_use]
+    pub fn of_selected_run(self) -> bool {
+        matches!(
+            self,
+            PathPurpose::ExportModel | PathPurpose::ExportReport | PathPurpose::ExportPng
+        )
+    }
+
     /// The command the dialog would have sent for `text` (`None` for an empty path).
     #[must_use]
     pub fn command(self, text: &str) -> Option<Command> {

@@ -3,12 +3,9 @@
 //! disturbance PSD matrix. The same grid overlays several runs on the Compare tab.
 
 use eframe::egui::{self, Color32, Id};
-use egui_plot::{
-    FilledArea, GridMark, HLine, Legend, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi, VLine,
-};
+use egui_plot::{FilledArea, GridMark, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi, VLine};
 
 use super::palette;
-use crate::block::Block;
 use crate::gui::app::{RunEntry, ViewState};
 use crate::gui::pipeline::BlockBode;
 
@@ -37,7 +34,7 @@ pub fn hz_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> Strin
     }
 }
 
-fn plot(id: impl egui::AsIdSalt, width: f32, height: f32, group: &str) -> Plot<'static> {
+pub(super) fn plot(id: impl egui::AsIdSalt, width: f32, height: f32, group: &str) -> Plot<'static> {
     Plot::new(id)
         .width(width)
         .height(height)
@@ -143,7 +140,7 @@ fn draw<'a>(p: &mut PlotUi<'a>, entry: &BodeEntry<'_>, log_f: &'a [f64], c: Curv
 }
 
 /// Dashed vertical lines at the band's edges (log10 frequency axis).
-fn mark_band(p: &mut PlotUi<'_>, band_hz: [f64; 2]) {
+pub(super) fn mark_band(p: &mut PlotUi<'_>, band_hz: [f64; 2]) {
     for edge in band_hz {
         if edge > 0.0 {
             p.vline(
@@ -224,102 +221,6 @@ fn pointer_x(p: &PlotUi<'_>) -> Option<f64> {
         .map(|c| c.x)
 }
 
-/// Multiple coherence of each output, and the disturbance PSD matrix `|S_psi,ij|` in dB.
-pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
-    let width = ((ui.available_width() - 24.0) / 3.0).max(120.0);
-    ui.strong(format!(
-        "multiple coherence of each output with the three inputs; band used {:.2}-{:.2} Hz (dashed), 0.9 dotted",
-        bode.band_hz[0], bode.band_hz[1]
-    ));
-    plot("coherence", 3.0 * width, 150.0, "bode")
-        // Bottom left: where the coherence is high (the band), the lower half is empty.
-        .legend(Legend::default().position(egui_plot::Corner::LeftBottom))
-        .include_y(0.0)
-        .include_y(1.0)
-        .show(ui, |p| {
-            mark_band(p, bode.band_hz);
-            p.hline(
-                HLine::new("usable (0.9)", crate::ident::band::MIN_COHERENCE)
-                    .color(Color32::GRAY)
-                    .style(LineStyle::dotted_dense()),
-            );
-            for (i, points) in bode.coherence.iter().enumerate() {
-                p.line(
-                    Line::new(bode.outputs[i].clone(), PlotPoints::Borrowed(points))
-                        .color(palette(i + 3))
-                        .width(1.4),
-                );
-            }
-        });
-    ui.strong("disturbance PSD matrix |S_ψ,ij|, dB re 1 unit²/Hz: what the model does not explain");
-    ui.label(reference_explanation(bode));
-    egui::Grid::new("noise-psd").spacing([6.0, 6.0]).show(ui, |ui| {
-        for i in 0..3 {
-            for j in 0..3 {
-                ui.vertical(|ui| {
-                    ui.label(format!("{} × {}", bode.outputs[i], bode.outputs[j]));
-                    plot(("noise", i, j), width, 90.0, "bode").show(ui, |p| {
-                        p.line(
-                            Line::new("S_ψ", PlotPoints::Borrowed(&bode.noise_psd_db[3 * i + j]))
-                                .color(palette(3 + i.min(j)))
-                                .width(1.2),
-                        );
-                        if i == j {
-                            p.line(
-                                Line::new(
-                                    "reference's angle error",
-                                    PlotPoints::Borrowed(&bode.reference_psd_db[i]),
-                                )
-                                .color(Color32::GRAY)
-                                .style(LineStyle::dashed_dense())
-                                .width(1.2),
-                            );
-                        }
-                    });
-                });
-            }
-            ui.end_row();
-        }
-    });
-}
-
-/// What the disturbance PSD is made of: the reference's angle error (dashed on the diagonal)
-/// and where it is at least half of it, per output.
-#[must_use]
-pub fn reference_explanation(bode: &BlockBode) -> String {
-    let how = match bode.block {
-        Block::Gyro => "differentiated into a rate error",
-        Block::Accel => "as tilt against gravity and lever-arm acceleration",
-    };
-    let ranges: Vec<String> = (0..3)
-        .filter(|&i| !bode.reference_dominated_hz[i].is_empty())
-        .map(|i| {
-            let spans: Vec<String> = bode.reference_dominated_hz[i]
-                .iter()
-                .map(|[a, b]| format!("{a:.2}-{b:.2} Hz"))
-                .collect();
-            format!("{} {}", bode.outputs[i], spans.join(", "))
-        })
-        .collect();
-    let line = format!(
-        "Dashed on the diagonal: the white noise of the stand's angle measurement (the sidecar's \
-         or the angles' floor) through the observer and the model ({how})."
-    );
-    if ranges.is_empty() {
-        format!(
-            "{line} It stays below half of the disturbance at every frequency: what the model does \
-             not explain is not that noise (the reference's coloured noise, band limit or latency \
-             cannot be told from the sensor's own noise with one block: see Missing effects)."
-        )
-    } else {
-        format!(
-            "{line} Where it is half of the disturbance or more, the disturbance is the reference's, \
-             not the sensor's noise: {}.",
-            ranges.join("; ")
-        )
-    }
-}
-
 /// The Bode tab for `run`.
 pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
     let Some(id) = run.identification.as_ref() else {
@@ -378,6 +279,6 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
             ui.ctx().request_repaint();
         }
         ui.separator();
-        coherence_and_noise(ui, bode);
+        super::disturbance::coherence_and_noise(ui, bode);
     });
 }

@@ -5,6 +5,7 @@ pub mod colormap;
 pub mod compare;
 pub mod controls;
 pub mod discrepancy;
+pub mod disturbance;
 pub mod errors;
 pub mod grid;
 pub mod heatmap;

@@ -78,6 +78,12 @@ fn report_names_the_hidden_effect_with_the_contract_fields() {
         (Some("accel"), Some("sensor_lag"))
     );
     assert!(first["gap_after_db"].as_f64().unwrap() < first["gap_before_db"].as_f64().unwrap());
+    // The evidence says how much of the misfit the hidden lag is: most of it, not a sliver.
+    let evidence = first["evidence"].as_str().unwrap_or_default();
+    assert!(
+        evidence.contains("% of the misfit's power") && !evidence.contains("small"),
+        "{evidence}"
+    );
     // The given model's own gap, as it is, is reported per channel.
     let given = &v["blocks"]["accel"]["given_model_gap_db"];
     assert_eq!(given.as_array().map(Vec::len), Some(3), "{given}");

@@ -175,6 +175,27 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
     lines.unwrap_or_default()
 }
 
+/// Below this share of the misfit's power a finding is called small in its evidence.
+pub const SMALL_SHARE: f64 = 0.01;
+
+/// What a finding closes of the block's misfit, in words: the share of the misfit's power (all
+/// channels) it removes, from the total gaps before and after it (dB), and, below
+/// [`SMALL_SHARE`], that it is small: significant by its chi-square, yet most of the misfit is
+/// something else (on real runs often the reference's part: the Bode tab's disturbance PSD).
+#[must_use]
+pub fn misfit_closed(before_total_db: f64, after_total_db: f64) -> String {
+    let share = 1.0 - 10f64.powf((after_total_db - before_total_db) / 10.0);
+    let percent = 100.0 * share;
+    if share < SMALL_SHARE {
+        format!(
+            "it removes {percent:.3} % of the misfit's power: significant but small, most of the misfit \
+             is something else"
+        )
+    } else {
+        format!("it removes {percent:.1} % of the misfit's power")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use serde_json::json;
@@ -279,5 +300,19 @@ mod tests {
         assert!(describe(&f).is_empty());
         let f = finding(Block::Gyro, Effect::VibrationTone, Value::Null);
         assert!(describe(&f).is_empty());
+    }
+
+    #[test]
+    fn the_share_of_the_misfit_closed_is_said_in_percent() {
+        // Half the power: 3.0103 dB.
+        let half = super::misfit_closed(-10.0, -10.0 - 10.0 * 2f64.log10());
+        assert_eq!(half, "it removes 50.0 % of the misfit's power");
+        // 0.0004 dB: 0.0092 %, small.
+        let tiny = super::misfit_closed(-13.235, -13.2354);
+        assert!(
+            tiny.starts_with("it removes 0.009 % of the misfit's power: significant but small"),
+            "{tiny}"
+        );
+        assert!(!super::misfit_closed(-20.0, -20.1).contains("small"));
     }
 }

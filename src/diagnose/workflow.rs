@@ -372,6 +372,7 @@ fn diagnose_block(
         let threshold = rule.threshold(added);
         let gain = delta - threshold;
         let after = next.worst_gap_db();
+        let closed = super::describe::misfit_closed(state.total_gap_db(), next.total_gap_db());
         let finding = Finding {
             block: b.block,
             effect: best.effect,
@@ -383,7 +384,7 @@ fn diagnose_block(
             gap_after_db: after,
             evidence: format!(
                 "removes chi2 {delta:.1} with {added} added parameters (threshold {threshold:.1}: BIC plus the \
-                 look-elsewhere cost; gain {gain:.1}); worst-channel gap {before:.2} dB -> {after:.2} dB"
+                 look-elsewhere cost; gain {gain:.1}); worst-channel gap {before:.2} dB -> {after:.2} dB; {closed}"
             ),
             delta_chi2: delta,
             added_parameters: added,

@@ -58,7 +58,6 @@ fn hovering_a_bode_plot_reads_out_gain_phase_and_deviation_from_k() {
 /// differentiated angle noise (`tests/noise_reference_share.rs` checks the line's level).
 #[test]
 fn the_disturbance_psd_names_where_it_is_the_references_angle_error() {
-    use imu_attest::gui::view::disturbance::reference_explanation;
     let mut harness = gui_common::app(
         gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
         4,
@@ -78,7 +77,7 @@ fn the_disturbance_psd_names_where_it_is_the_references_angle_error() {
             let id = run.identification.as_ref().expect("identified");
             let b = id.bode.iter().find(|b| b.block.name() == block).expect("block");
             assert!(b.reference_psd_db.iter().all(|line| line.len() > 10), "{block}");
-            reference_explanation(b)
+            b.reference_explanation.clone()
         };
         // Exactly one such sentence, and it is this block's.
         harness.get_by_label_contains("Dashed on the diagonal");

@@ -280,7 +280,7 @@ pub fn block_warnings(
     let negative = fact.input_factor_negative_lags;
     if negative.is_nan() || negative > settings.causality_tolerance {
         warnings.push(IdentWarning::FactorNotCausal {
-            negative_lags: fact.input_factor_negative_lags,
+            negative_lags: negative,
             refinement: fact.input_refinement,
         });
     }

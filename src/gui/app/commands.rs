@@ -4,15 +4,13 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use super::dialog::JSON;
 use super::prompt::PathPurpose;
 use super::{App, RunEntry, RunState};
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::gui::pipeline::{Job, JobKind, RunId, Stage, ValidationKey};
 use crate::ident::settings::Settings;
-
-/// The JSON files' dialog filter.
-const JSON: (&str, &[&str]) = ("json", &["json"]);
 
 /// A request from the UI.
 #[derive(Debug)]

@@ -16,6 +16,9 @@ use std::time::{Duration, Instant};
 use super::prompt::PathPurpose;
 use crate::gui::pipeline::RunId;
 
+/// The JSON files' dialog filter.
+pub(super) const JSON: (&str, &[&str]) = ("json", &["json"]);
+
 /// What to ask the user for.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DialogRequest {
@@ -46,7 +49,7 @@ impl DialogRequest {
     pub fn open_json(purpose: PathPurpose) -> Self {
         Self {
             purpose,
-            filter: ("json", &["json"]),
+            filter: JSON,
             file_name: None,
             selected: None,
         }
@@ -94,12 +97,6 @@ impl FilePicker {
                 (_, None) => dialog.pick_file().map(|p| vec![p]),
             }
         })
-    }
-}
-
-impl Default for FilePicker {
-    fn default() -> Self {
-        Self::system()
     }
 }
 

@@ -90,6 +90,8 @@ pub struct BlockBode {
     pub reference_psd_db: [Vec<PlotPoint>; 3],
     /// Per output, where that is at least half the disturbance, Hz.
     pub reference_dominated_hz: [Vec<[f64; 2]>; 3],
+    /// That in words, shown above the disturbance PSD matrix.
+    pub reference_explanation: String,
 }
 
 /// The starting points of accepted effects' fits and the effects (`crate::diagnose::extend`).
@@ -266,6 +268,14 @@ fn bode(b: &BlockIdentification, m: &BlockModel, reference: &ReferenceShare) -> 
                 .collect()
         })
         .collect();
+    let reference_psd_db = std::array::from_fn(|i| {
+        log_f
+            .iter()
+            .zip(&reference.psd[i])
+            .filter(|(_, s)| **s > 0.0)
+            .map(|(&x, s)| PlotPoint::new(x, 10.0 * s.log10()))
+            .collect()
+    });
     BlockBode {
         block: b.block,
         inputs: m.inputs.clone(),
@@ -274,15 +284,61 @@ fn bode(b: &BlockIdentification, m: &BlockModel, reference: &ReferenceShare) -> 
         coherence,
         noise_psd_db,
         band_hz: m.band_hz,
-        reference_psd_db: std::array::from_fn(|i| {
-            log_f
-                .iter()
-                .zip(&reference.psd[i])
-                .filter(|(_, s)| **s > 0.0)
-                .map(|(&x, s)| PlotPoint::new(x, 10.0 * s.log10()))
-                .collect()
-        }),
+        reference_explanation: reference_explanation(
+            b.block,
+            &m.outputs,
+            &reference_psd_db,
+            &reference.dominated_hz,
+        ),
+        reference_psd_db,
         reference_dominated_hz: reference.dominated_hz.clone(),
+    }
+}
+
+/// What the disturbance PSD is made of: the reference's angle error (dashed on the diagonal)
+/// and where it is at least half of it, per output.
+#[must_use]
+fn reference_explanation(
+    block: Block,
+    outputs: &[String; 3],
+    reference_psd_db: &[Vec<PlotPoint>; 3],
+    dominated_hz: &[Vec<[f64; 2]>; 3],
+) -> String {
+    let how = match block {
+        Block::Gyro => "differentiated into a rate error",
+        Block::Accel => "as tilt against gravity and lever-arm acceleration",
+    };
+    if reference_psd_db.iter().all(Vec::is_empty) {
+        return "No density of the stand's angle noise is known for this run's band (no dashed line): \
+                the disturbance cannot be split between the reference and the sensor here."
+            .to_owned();
+    }
+    let ranges: Vec<String> = (0..3)
+        .filter(|&i| !dominated_hz[i].is_empty())
+        .map(|i| {
+            let spans: Vec<String> = dominated_hz[i]
+                .iter()
+                .map(|[a, b]| format!("{a:.2}-{b:.2} Hz"))
+                .collect();
+            format!("{} {}", outputs[i], spans.join(", "))
+        })
+        .collect();
+    let line = format!(
+        "Dashed on the diagonal: the white noise of the stand's angle measurement (the sidecar's \
+         or the angles' floor) through the observer and the model ({how})."
+    );
+    if ranges.is_empty() {
+        format!(
+            "{line} It stays below half of the disturbance at every frequency: what the model does \
+             not explain is not that noise (the reference's coloured noise, band limit or latency \
+             cannot be told from the sensor's own noise with one block: see Missing effects)."
+        )
+    } else {
+        format!(
+            "{line} Where it is half of the disturbance or more, the disturbance is the reference's, \
+             not the sensor's noise: {}.",
+            ranges.join("; ")
+        )
     }
 }
 

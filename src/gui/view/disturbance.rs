@@ -8,7 +8,6 @@ use egui_plot::{HLine, Legend, Line, LineStyle, PlotPoints};
 
 use super::bode::{mark_band, plot};
 use super::palette;
-use crate::block::Block;
 use crate::gui::pipeline::BlockBode;
 
 /// Multiple coherence of each output, and the disturbance PSD matrix `|S_psi,ij|` in dB.
@@ -39,7 +38,7 @@ pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
             }
         });
     ui.strong("disturbance PSD matrix |S_ψ,ij|, dB re 1 unit²/Hz: what the model does not explain");
-    ui.label(reference_explanation(bode));
+    ui.label(&bode.reference_explanation);
     egui::Grid::new("noise-psd").spacing([6.0, 6.0]).show(ui, |ui| {
         for i in 0..3 {
             for j in 0..3 {
@@ -68,46 +67,4 @@ pub fn coherence_and_noise(ui: &mut egui::Ui, bode: &BlockBode) {
             ui.end_row();
         }
     });
-}
-
-/// What the disturbance PSD is made of: the reference's angle error (dashed on the diagonal)
-/// and where it is at least half of it, per output.
-#[must_use]
-pub fn reference_explanation(bode: &BlockBode) -> String {
-    let how = match bode.block {
-        Block::Gyro => "differentiated into a rate error",
-        Block::Accel => "as tilt against gravity and lever-arm acceleration",
-    };
-    let ranges: Vec<String> = (0..3)
-        .filter(|&i| !bode.reference_dominated_hz[i].is_empty())
-        .map(|i| {
-            let spans: Vec<String> = bode.reference_dominated_hz[i]
-                .iter()
-                .map(|[a, b]| format!("{a:.2}-{b:.2} Hz"))
-                .collect();
-            format!("{} {}", bode.outputs[i], spans.join(", "))
-        })
-        .collect();
-    if bode.reference_psd_db.iter().all(Vec::is_empty) {
-        return "No density of the stand's angle noise is known for this run's band (no dashed line): \
-                the disturbance cannot be split between the reference and the sensor here."
-            .to_owned();
-    }
-    let line = format!(
-        "Dashed on the diagonal: the white noise of the stand's angle measurement (the sidecar's \
-         or the angles' floor) through the observer and the model ({how})."
-    );
-    if ranges.is_empty() {
-        format!(
-            "{line} It stays below half of the disturbance at every frequency: what the model does \
-             not explain is not that noise (the reference's coloured noise, band limit or latency \
-             cannot be told from the sensor's own noise with one block: see Missing effects)."
-        )
-    } else {
-        format!(
-            "{line} Where it is half of the disturbance or more, the disturbance is the reference's, \
-             not the sensor's noise: {}.",
-            ranges.join("; ")
-        )
-    }
 }

@@ -90,7 +90,7 @@ fn a_new_segment_length_recomputes_the_spectra_only() {
     let mut harness = app_on_sample();
     let (g0, motion0) = {
         let run = &harness.state().runs()[0];
-        (run.spectra.generation, run.motion.clone().expect("motion"))
+        (run.spectra.generation, run.motion.value.clone().expect("motion"))
     };
     let mut settings = harness.state().settings().clone();
     assert_ne!(settings.welch.segment_len, 1024);

@@ -55,7 +55,7 @@ fn a_shift_drag_over_the_time_series_selects_the_stretch_the_run_is_identified_o
         gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
         4,
     );
-    let summary = harness.state().runs()[0].summary.clone().expect("loaded");
+    let summary = harness.state().runs()[0].summary().cloned().expect("loaded");
     let (start, end) = (summary.start_s, summary.start_s + summary.duration_s);
     // Over the first (angles) plot, in the central panel between the side panels.
     let (from, to) = (Pos2::new(520.0, 160.0), Pos2::new(860.0, 160.0));
@@ -152,7 +152,7 @@ fn a_right_click_sets_cursor_a_and_the_read_out_gives_the_differences() {
     harness.get_by_label_contains("Δt from A = +");
     harness.get_by_label_contains("(Δ ");
     // The pointer right of A: a positive interval; A inside the record.
-    let summary = harness.state().runs()[0].summary.clone().expect("loaded");
+    let summary = harness.state().runs()[0].summary().cloned().expect("loaded");
     assert!(t_a > summary.start_s && t_a < summary.start_s + summary.duration_s);
     harness.key_press(egui::Key::Escape);
     harness.run_steps(2);

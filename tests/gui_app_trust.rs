@@ -184,7 +184,7 @@ fn a_recording_fault_is_shown_and_exported() {
     let path = dir.path().join("glitched.csv");
     write_run(&simulate(&config).expect("simulated"), &path).expect("written");
     let mut harness = app(vec![path.clone()]);
-    let summary = harness.state().runs()[0].summary.clone().expect("loaded");
+    let summary = harness.state().runs()[0].summary().cloned().expect("loaded");
     assert!(!summary.recording_faults.is_empty(), "the glitch is found");
     let sentence = summary.recording_faults[0].to_string();
     assert!(sentence.contains("gy"), "{sentence}");

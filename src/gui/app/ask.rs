@@ -23,7 +23,7 @@ impl App {
     ) {
         let stem = self
             .selected()
-            .and_then(|r| r.summary.as_ref())
+            .and_then(super::RunEntry::summary)
             .map_or_else(|| "imu-attest".to_owned(), |s| crate::run::run_stem(&s.path));
         let mut request = DialogRequest::save(purpose, filter, format!("{stem}{suffix}"));
         request.selected = self.selected;

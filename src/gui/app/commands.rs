@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::dialog::JSON;
 use super::prompt::PathPurpose;
-use super::{App, RunEntry, RunState};
+use super::{App, RunEntry};
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::gui::pipeline::{Job, JobKind, RunId, Stage, ValidationKey};
@@ -95,13 +95,13 @@ impl App {
                 None => self.open_dialog(PathPurpose::OpenSession),
             },
             Command::CancelLoad(id) => {
-                if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
-                    cancel.store(true, Ordering::Relaxed);
+                if let Some(reading) = self.run(id).and_then(|r| r.reading.as_ref()) {
+                    reading.cancel.store(true, Ordering::Relaxed);
                 }
             }
             Command::Remove(id) => {
-                if let Some(RunState::Loading { cancel, .. }) = self.run(id).map(|r| &r.state) {
-                    cancel.store(true, Ordering::Relaxed);
+                if let Some(reading) = self.run(id).and_then(|r| r.reading.as_ref()) {
+                    reading.cancel.store(true, Ordering::Relaxed);
                 }
                 self.runs.retain(|r| r.id != id);
                 self.compared.retain(|r| *r != id);
@@ -122,12 +122,7 @@ impl App {
             Command::SetSettings(settings) => {
                 if *settings != self.prefs.settings {
                     self.prefs.settings = *settings;
-                    let ids: Vec<RunId> = self
-                        .runs
-                        .iter()
-                        .filter(|r| r.summary.is_some())
-                        .map(|r| r.id)
-                        .collect();
+                    let ids: Vec<RunId> = self.runs.iter().filter(|r| r.loaded()).map(|r| r.id).collect();
                     for id in ids {
                         self.analyse(id);
                     }
@@ -226,7 +221,7 @@ impl App {
         let settings = Box::new(self.prefs.settings.clone());
         let generation = self.next_generation();
         let Some(run) = self.run_mut(id) else { return };
-        if run.summary.is_none() {
+        if !run.loaded() {
             return;
         }
         run.diagnosis.request(generation);

@@ -110,12 +110,7 @@ impl App {
             self.errors.push(ErrorTopic::Export, format!("export: {e}"));
             return;
         }
-        let runs: Vec<_> = self
-            .runs
-            .iter()
-            .filter(|r| r.summary.is_some())
-            .map(|r| r.id)
-            .collect();
+        let runs: Vec<_> = self.runs.iter().filter(|r| r.loaded()).map(|r| r.id).collect();
         let Some(&first) = runs.first() else {
             self.errors
                 .push(ErrorTopic::Export, "export: no loaded run".to_owned());
@@ -137,7 +132,7 @@ impl App {
             self.errors.push(ErrorTopic::Export, format!("export: {e}"));
             return;
         }
-        let Some(id) = self.selected().filter(|r| r.summary.is_some()).map(|r| r.id) else {
+        let Some(id) = self.selected().filter(|r| r.loaded()).map(|r| r.id) else {
             self.errors
                 .push(ErrorTopic::Export, "export: no loaded run selected".to_owned());
             return;

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use eframe::egui;
 
-use super::{App, Command, ErrorTopic, HeatmapMode, RunState};
+use super::{App, Command, ErrorTopic, HeatmapMode, LoadedRun};
 use crate::block::Block;
 use crate::compare::compare;
 use crate::gui::pipeline::{Event, FailureKind, RunId, Stage};
@@ -131,8 +131,8 @@ impl App {
     fn handle(&mut self, event: Event) {
         match event {
             Event::Progress { run, fraction } => {
-                if let Some(RunState::Loading { fraction: f, .. }) = self.run_mut(run).map(|r| &mut r.state) {
-                    *f = fraction;
+                if let Some(reading) = self.run_mut(run).and_then(|r| r.reading.as_mut()) {
+                    reading.fraction = fraction;
                 }
             }
             Event::Loaded {
@@ -141,10 +141,10 @@ impl App {
                 summary,
                 measured,
             } => {
-                let Some(entry) = self.run_mut(run).filter(|r| r.load_generation == generation) else {
+                let Some(entry) = self.run_mut(run).filter(|r| r.load.requested == generation) else {
                     return;
                 };
-                entry.state = RunState::Loaded;
+                entry.reading = None;
                 let changed = entry
                     .expected_sha256
                     .take()
@@ -154,17 +154,24 @@ impl App {
                         summary.file_name
                     ));
                 let path = summary.path.clone();
-                entry.summary = Some(summary);
-                entry.measured = Some(measured);
+                entry
+                    .load
+                    .offer(generation, Arc::new(LoadedRun { summary, measured }));
                 if let Some(message) = changed {
                     self.errors.push(ErrorTopic::Load, message);
                 }
                 self.remember_recent(&path);
                 self.analyse(run);
             }
-            Event::Motion { run, motion, .. } => {
+            Event::Motion {
+                run,
+                generation,
+                motion,
+            } => {
+                // The observer runs once per run (the settings do not change it): the first
+                // analysis that gets through it answers, with its generation.
                 if let Some(entry) = self.run_mut(run) {
-                    entry.motion = Some(motion);
+                    entry.motion.offer(generation, motion);
                 }
             }
             Event::Spectra {
@@ -284,14 +291,14 @@ impl App {
         } else {
             // A failure before the spectra leaves neither spectra nor identification; a later
             // one leaves the spectra of this request standing.
+            if stage == Stage::Motion {
+                entry.motion.fail(generation, message.clone());
+            }
             if matches!(stage, Stage::Motion | Stage::Spectra) {
                 entry.spectra.fail(generation, message.clone());
             }
             if entry.identification.fail(generation, message.clone()) {
-                let name = entry
-                    .summary
-                    .as_ref()
-                    .map_or_else(String::new, |s| s.file_name.clone());
+                let name = entry.summary().map_or_else(String::new, |s| s.file_name.clone());
                 self.errors.push(
                     ErrorTopic::Analysis(run),
                     format!("{name}: {} stage: {message}", stage.name()),

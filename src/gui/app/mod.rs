@@ -8,6 +8,7 @@
 mod ask;
 mod commands;
 pub mod dialog;
+mod entry;
 mod errors;
 mod export;
 mod logic;
@@ -18,7 +19,6 @@ mod ui;
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 
 use eframe::egui;
 use serde::{Deserialize, Serialize};
@@ -29,14 +29,10 @@ pub use prompt::PathPurpose;
 
 use crate::block::Block;
 use crate::compare::Comparison;
-use crate::diagnose::Report;
-use crate::effect::Effect;
-use crate::gui::pipeline::{
-    Identification, Measured, Motion, RunId, RunSummary, Spectra, Validated, ValidationKey, Worker,
-    WorkerMode,
-};
+use crate::gui::pipeline::{RunId, Worker, WorkerMode};
 use crate::ident::settings::Settings;
 use crate::run::LoadOptions;
+pub use entry::{LoadedRun, Reading, RunEntry};
 pub use errors::{ErrorEntry, ErrorLog, ErrorTopic};
 pub use record::StageRecord;
 
@@ -177,97 +173,6 @@ impl Prefs {
         let mut prefs: Self = serde_json::from_str(json).ok()?;
         prefs.settings.span_s = None;
         Some(prefs)
-    }
-}
-
-/// Where a run is in its life.
-#[derive(Clone, Debug)]
-pub enum RunState {
-    /// Being read.
-    Loading {
-        /// Bytes read / total.
-        fraction: f32,
-        /// Set to cancel.
-        cancel: Arc<AtomicBool>,
-    },
-    /// Loaded.
-    Loaded,
-}
-
-/// One run in the run list, with the newest good result of each stage.
-#[derive(Clone, Debug)]
-pub struct RunEntry {
-    /// Session id.
-    pub id: RunId,
-    /// File.
-    pub path: PathBuf,
-    /// Loading or loaded.
-    pub state: RunState,
-    /// Generation of the load job.
-    pub load_generation: u64,
-    /// Summary, once loaded.
-    pub summary: Option<Arc<RunSummary>>,
-    /// Measured series, once loaded.
-    pub measured: Option<Arc<Measured>>,
-    /// Observer and block inputs.
-    pub motion: Option<Arc<Motion>>,
-    /// Spectra (the last good ones), requested with every analysis.
-    pub spectra: StageRecord<Spectra>,
-    /// Identification (the last good one), requested with every analysis.
-    pub identification: StageRecord<Identification>,
-    /// The missing-effect report (the last good one; results of older requests are dropped).
-    pub diagnosis: StageRecord<Report>,
-    /// A model's prediction of the outputs (the Validation tab; the last good one).
-    pub validation: StageRecord<Validated>,
-    /// What the latest validation request answers.
-    pub validation_wanted: Option<ValidationKey>,
-    /// The SHA-256 a reopened session recorded for the file (checked when it loads).
-    pub expected_sha256: Option<String>,
-    /// Effects the engineer accepted (kept in the model shown).
-    pub accepted: Vec<(Block, Effect)>,
-    /// Effects the engineer rejected (never offered again).
-    pub rejected: Vec<(Block, Effect)>,
-}
-
-impl RunEntry {
-    fn loading(id: RunId, path: PathBuf, generation: u64, cancel: Arc<AtomicBool>) -> Self {
-        Self {
-            id,
-            path,
-            state: RunState::Loading {
-                fraction: 0.0,
-                cancel,
-            },
-            load_generation: generation,
-            summary: None,
-            measured: None,
-            motion: None,
-            spectra: StageRecord::default(),
-            identification: StageRecord::default(),
-            diagnosis: StageRecord::default(),
-            validation: StageRecord::default(),
-            validation_wanted: None,
-            expected_sha256: None,
-            accepted: Vec::new(),
-            rejected: Vec::new(),
-        }
-    }
-
-    /// Computing: loading, or an analysis newer than the identification shown is under way.
-    #[must_use]
-    pub fn busy(&self) -> bool {
-        let refitting = self.identification.as_ref().is_some_and(|i| i.provisional());
-        matches!(self.state, RunState::Loading { .. })
-            || self.identification.running()
-            || (self.identification.error.is_none() && refitting)
-    }
-
-    /// The file name shown.
-    #[must_use]
-    pub fn name(&self) -> String {
-        self.path
-            .file_name()
-            .map_or_else(|| self.path.display().to_string(), |n| n.to_string_lossy().into())
     }
 }
 

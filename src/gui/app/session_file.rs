@@ -125,7 +125,7 @@ impl App {
     /// The session file of the app as it is: loaded runs only.
     #[must_use]
     pub fn session_file(&self) -> SessionFile {
-        let loaded: Vec<_> = self.runs.iter().filter(|r| r.summary.is_some()).collect();
+        let loaded: Vec<_> = self.runs.iter().filter(|r| r.loaded()).collect();
         let index = |id| loaded.iter().position(|r| r.id == id);
         SessionFile {
             schema: SESSION_SCHEMA.to_owned(),
@@ -134,7 +134,7 @@ impl App {
             runs: loaded
                 .iter()
                 .filter_map(|r| {
-                    let s = r.summary.as_ref()?;
+                    let s = r.summary()?;
                     Some(SessionRun {
                         path: s.path.clone(),
                         sha256: s.sha256.clone(),

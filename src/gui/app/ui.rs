@@ -90,7 +90,7 @@ impl App {
             egui::ScrollArea::vertical().show(ui, |ui| {
                 runs::show(ui, &self.runs, self.selected, &mut commands);
                 ui.separator();
-                let summary = selected.and_then(|r| r.summary.as_deref());
+                let summary = selected.and_then(|r| r.summary().map(AsRef::as_ref));
                 controls::show(ui, &self.prefs.settings, summary, &mut commands);
             });
         });

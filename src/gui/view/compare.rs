@@ -51,7 +51,7 @@ pub fn show(
 ) {
     ui.horizontal_wrapped(|ui| {
         ui.strong("compare:");
-        for run in runs.iter().filter(|r| r.summary.is_some()) {
+        for run in runs.iter().filter(|r| r.loaded()) {
             let mut on = compared.contains(&run.id);
             if ui.checkbox(&mut on, format!("compare {}", run.name())).changed() {
                 commands.push(Command::ToggleCompare(run.id));

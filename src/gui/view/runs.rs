@@ -2,7 +2,7 @@
 
 use eframe::egui;
 
-use crate::gui::app::{Command, RunEntry, RunState};
+use crate::gui::app::{Command, RunEntry};
 use crate::gui::pipeline::RunId;
 
 /// Draws the list; returns the commands the user asked for.
@@ -37,11 +37,11 @@ pub fn show(ui: &mut egui::Ui, runs: &[RunEntry], selected: Option<RunId>, comma
                 commands.push(Command::Remove(run.id));
             }
         });
-        match (&run.state, &run.summary) {
-            (RunState::Loading { fraction, .. }, _) => {
+        match (&run.reading, run.summary()) {
+            (Some(reading), _) => {
                 ui.horizontal(|ui| {
                     ui.add(
-                        egui::ProgressBar::new(*fraction)
+                        egui::ProgressBar::new(reading.fraction)
                             .desired_width(140.0)
                             .show_percentage(),
                     );
@@ -50,7 +50,7 @@ pub fn show(ui: &mut egui::Ui, runs: &[RunEntry], selected: Option<RunId>, comma
                     }
                 });
             }
-            (RunState::Loaded, Some(s)) => {
+            (None, Some(s)) => {
                 let blocks: Vec<&str> = s.blocks.iter().map(|b| b.name()).collect();
                 ui.label(format!("regime: {}", s.regime));
                 ui.label(format!(
@@ -68,7 +68,7 @@ pub fn show(ui: &mut egui::Ui, runs: &[RunEntry], selected: Option<RunId>, comma
                     ui.colored_label(ui.visuals().error_fg_color, e);
                 }
             }
-            (RunState::Loaded, None) => {}
+            (None, None) => {}
         }
     }
 }

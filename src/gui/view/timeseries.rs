@@ -79,7 +79,7 @@ pub fn show(
     settings: &Settings,
     commands: &mut Vec<Command>,
 ) {
-    let Some(measured) = &run.measured else {
+    let Some(measured) = run.measured() else {
         ui.label("loading…");
         return;
     };
@@ -93,8 +93,12 @@ pub fn show(
             ui.label("observer running…");
         }
     });
-    let groups = groups(measured, run.motion.as_deref(), view.show_differentiated);
-    let faults: &[RecordingFault] = run.summary.as_ref().map_or(&[], |s| &s.recording_faults);
+    let groups = groups(
+        measured,
+        run.motion.as_ref().map(AsRef::as_ref),
+        view.show_differentiated,
+    );
+    let faults: &[RecordingFault] = run.summary().map_or(&[], |s| &s.recording_faults);
     let [first, ..] = &measured.angles;
     let (t_start, t_end) = (first.t0, first.t_end().max(first.t0 + first.dt));
     // Per run: switching runs shows the new run's whole time span, not the last one's zoom.

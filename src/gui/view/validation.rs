@@ -24,7 +24,7 @@ pub fn fit_label(v: &Validated, i: usize) -> String {
 
 /// Draws the tab for `run`, choosing among `runs` for the model.
 pub fn show(ui: &mut egui::Ui, run: &RunEntry, runs: &[RunEntry], view: &mut ViewState) {
-    let blocks = run.summary.as_ref().map_or_else(Vec::new, |s| s.blocks.clone());
+    let blocks = run.summary().map_or_else(Vec::new, |s| s.blocks.clone());
     if !blocks.contains(&view.bode_block)
         && let Some(&first) = blocks.first()
     {

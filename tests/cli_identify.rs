@@ -131,6 +131,8 @@ fn bad_settings_and_inputs_exit_2_with_one_line() {
         (r#"{"order": 9}"#, "order"),
         (r#"{"welch": {"segment_len": 65536}}"#, "too few samples"),
         (r#"{"colour": "blue"}"#, "unknown field"),
+        // A misspelt Welch field is refused, not ignored (the default segment used silently).
+        (r#"{"welch": {"segment": 1024}}"#, "unknown field `segment`"),
         (
             "{\n  \"lambda\": [1, 2]\n}",
             "s.json:3:1: lambda: lambda must be three numbers",

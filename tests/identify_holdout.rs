@@ -8,6 +8,7 @@
 use imu_attest::block::Block;
 use imu_attest::ident::identify::{RunIdentification, identify_run};
 use imu_attest::ident::settings::Settings;
+use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::run::{LoadOptions, load};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
@@ -45,6 +46,15 @@ fn a_sensor_lag_predicts_the_other_half_and_is_kept() {
             "seed {seed}: {h:?}"
         );
         assert_eq!(gyro.structural.order, 1, "seed {seed}: the lag is kept");
+        // A real lag behind a positive delay: nothing stands in for anything.
+        assert!(
+            !gyro
+                .warnings
+                .iter()
+                .any(|w| matches!(w, IdentWarning::DelayAbsorbedByPoles { .. })),
+            "seed {seed}: {:?}",
+            gyro.warnings
+        );
         let (h0, h1) = (h[0].unwrap_or(0.0), h[1].unwrap_or(f64::INFINITY));
         assert!(
             h1 < 0.5 * h0,

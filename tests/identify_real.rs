@@ -76,11 +76,11 @@ fn defaults_give_the_known_gain_and_delay_on_every_real_run() {
         assert!(
             !kinds(&b)
                 .iter()
-                .any(|k| k == "negative_delay" || k == "implausible_gain")
+                .any(|k| k == "negative_delay" || k == "implausible_gain" || k == "delay_absorbed_by_poles")
         );
         taus.push(s.tau_s);
     }
-    // Same IMU: the delays agree. Measured spread 0.15 ms (4.17, 4.32, 4.19 ms); the issue asks
+    // Same IMU: the delays agree. Measured spread 0.141 ms (4.165, 4.306, 4.180 ms); the issue asks
     // for 0.1 ms, which the slow run (largest uncertainty, 0.04 ms) misses.
     let spread = taus.iter().fold(f64::MIN, |a, &b| a.max(b)) - taus.iter().fold(f64::MAX, |a, &b| a.min(b));
     assert!(spread < 0.2e-3, "tau spread {spread}");
@@ -152,6 +152,42 @@ fn a_gyro_leading_the_stand_is_a_negative_delay() {
         kinds(&b).contains(&"negative_delay".to_owned()),
         "{:?}",
         kinds(&b)
+    );
+}
+
+#[test]
+fn poles_standing_in_for_the_delay_are_flagged() {
+    // The second half of the tapping run (64 s, too short to halve for rule 7): a second-order
+    // model with a negative delay fits it better than the delay alone (a pair at ~47 Hz, damping
+    // ~0.6, whose lag replaces the 4.2 ms delay and whose gain rise matches the reference's
+    // band limit).
+    let run = real("broad25_tapping");
+    let stretch = |order| Settings {
+        span_s: Some([104.0, 168.0]),
+        order,
+        ..Settings::default()
+    };
+    let b = gyro(&run, &stretch(OrderSetting::Fixed(2).into()));
+    assert!(b.structural.tau_s < 0.0, "tau {}", b.structural.tau_s);
+    assert!(
+        kinds(&b).contains(&"delay_absorbed_by_poles".to_owned()),
+        "{:?}",
+        kinds(&b)
+    );
+    // Order 0 on the same stretch: the delay is positive, nothing to say.
+    let b0 = gyro(&run, &stretch(OrderSetting::Fixed(0).into()));
+    assert!(b0.structural.tau_s > 3.9e-3, "tau {}", b0.structural.tau_s);
+    assert!(!kinds(&b0).contains(&"delay_absorbed_by_poles".to_owned()));
+    // With the default (auto) order, whichever model is chosen is either positive-delayed or
+    // carries the warning: never a negative delay behind poles in silence.
+    let auto = gyro(&run, &stretch(Settings::default().order));
+    let s = &auto.structural;
+    assert!(
+        s.order == 0 || s.tau_s >= 0.0 || kinds(&auto).contains(&"delay_absorbed_by_poles".to_owned()),
+        "order {}, tau {}, {:?}",
+        s.order,
+        s.tau_s,
+        kinds(&auto)
     );
 }
 

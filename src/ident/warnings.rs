@@ -90,6 +90,20 @@ pub enum IdentWarning {
         /// Its standard deviation, s.
         tau_std_s: f64,
     },
+    /// The chosen model has poles and a negative delay where the delay-only model (order 0) has a
+    /// positive one: its poles' lag stands in for the delay, the delay is the remainder. Such a
+    /// model is the block's only when the stand's angles lag it; otherwise it describes the
+    /// reference with the block (a band-limited reference's gain rise is fitted this way).
+    DelayAbsorbedByPoles {
+        /// The chosen order.
+        order: usize,
+        /// Its delay, s.
+        tau_s: f64,
+        /// Its standard deviation, s.
+        tau_std_s: f64,
+        /// The delay of the order-0 candidate, s.
+        delay_only_tau_s: f64,
+    },
     /// The delay drifts through the record (the stretches' delays have a significant trend): the
     /// block and the stand may log on separate clocks.
     DelayDrift {
@@ -177,6 +191,21 @@ impl fmt::Display for IdentWarning {
                  moves; check the time columns, the angles' own latency, or the band",
                 tau_s * 1e3,
                 tau_std_s * 1e3
+            ),
+            IdentWarning::DelayAbsorbedByPoles {
+                order,
+                tau_s,
+                tau_std_s,
+                delay_only_tau_s,
+            } => write!(
+                f,
+                "the order-{order} model's delay is negative ({:.3} +- {:.3} ms) where the \
+                 delay-only model gives {:.3} ms: its poles' lag stands in for the delay; this is \
+                 the block's model only if the stand's angles lag the block (angle latency), \
+                 otherwise it fits the reference's own response too: compare with order 0",
+                tau_s * 1e3,
+                tau_std_s * 1e3,
+                delay_only_tau_s * 1e3
             ),
             IdentWarning::DelayDrift {
                 trend,

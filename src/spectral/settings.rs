@@ -6,8 +6,10 @@ use serde::{Deserialize, Serialize};
 /// The smallest segment length accepted, samples.
 pub const MIN_SEGMENT_LEN: usize = 8;
 
-/// How a run is cut into segments and what is done to each. Every field is optional in JSON.
+/// How a run is cut into segments and what is done to each. Every field is optional in JSON; an
+/// unknown one is refused (a misspelt `segment_len` would otherwise be silently ignored).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct WelchSettings {
     /// Samples per segment `N`: even and at least [`MIN_SEGMENT_LEN`]. Default 4096.
     #[serde(default = "default_segment_len")]

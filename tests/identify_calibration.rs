@@ -8,9 +8,10 @@
 //! Asserted for the gyro, as the "Done when" states it: no order above 0 on runs without
 //! sensor dynamics, K within 0.3 % (relative Frobenius), and honest sigmas: the normalised errors
 //! `(K - K_true) / K_std` and `(tau - tau_true) / tau_std` with rms within 0.7-1.4 and at most
-//! 10 % beyond 2 sigma. For the accelerometer the orders, K within 0.5 % (measured 0.40 %: the
-//! issue's 0.3 % is still open) and its K sigmas (z rms 1.07, 3 % beyond 2 sigma); its delay's
-//! (rms 1.26, but 2 of 12 beyond 2 sigma) are printed, not asserted (README).
+//! 10 % beyond 2 sigma (measured with the band's top ended at the misfit: K within 0.154 %, z rms
+//! 0.92, tau z rms 1.15). For the accelerometer the orders, K within 0.5 % (measured 0.399 %: the
+//! issue's 0.3 % is still open) and its K sigmas (z rms 1.01, 4 % beyond 2 sigma); its delay's
+//! (rms 1.25, but 2 of 12 beyond 2 sigma) are printed, not asserted (README).
 
 use imu_attest::block::Block;
 use imu_attest::ident::identify::identify_run;

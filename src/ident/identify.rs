@@ -17,10 +17,11 @@ use super::band::{
     BandSetting, MIN_BAND_BINS, MIN_COHERENCE, auto_limits, best_coherence, native_bins, untrusted_ranges,
     usable_band,
 };
+use super::band_top::misfit_edge;
 use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings};
 use super::holdout::{HeldOut, cached_held_out};
-use super::selfcheck::self_check;
+use super::selfcheck::{chi2_per_bin, self_check};
 use super::session::{Session, Start};
 use super::settings::{OrderSetting, Settings};
 use super::spectra::BlockSpectra;
@@ -132,27 +133,49 @@ pub fn identify_block_from(
         block,
         settings.band_hz.search_limits(spectra.sample_rate_hz),
     )?;
-    let band_hz = resolve_band(&spectra, block, settings.band_hz)?;
-    check_excitation(&spectra, block, band_hz)?;
-    let wiener = Arc::new(regularised_wiener(
-        &spectra,
-        &factorisation,
-        &settings.weight(),
-        settings.lambda,
-        band_hz,
-    )?);
-    let band = native_bins(&spectra, band_hz);
+    let found = resolve_band(&spectra, block, settings.band_hz)?;
+    check_excitation(&spectra, block, found)?;
+    let fit_over = |band_hz: [f64; 2], previous: Option<&StructuralFit>| -> Result<_, IdentError> {
+        let wiener = Arc::new(regularised_wiener(
+            &spectra,
+            &factorisation,
+            &settings.weight(),
+            settings.lambda,
+            band_hz,
+        )?);
+        let band = native_bins(&spectra, band_hz);
+        let held_out = cached_held_out(&spectra, band_hz);
+        let structural = structural_fit(
+            &spectra,
+            &factorisation,
+            &wiener,
+            &band,
+            settings.order.of(block),
+            held_out.as_deref(),
+            previous,
+        )?;
+        Ok((band_hz, wiener, band, Arc::new(structural)))
+    };
+    let mut fitted = fit_over(found, previous)?;
+    let mut trimmed = None;
+    if settings.band_hz == BandSetting::Auto {
+        let (_, wiener, band, structural) = &fitted;
+        let chi2 = chi2_per_bin(&spectra, &factorisation.noise_psd, wiener, band, structural);
+        if let Some(edge) = misfit_edge(&chi2, spectra.bin_correlation) {
+            let top = spectra.frequency_hz[band[edge.index - 1]];
+            // From the caller's start, not refined from the fit just made: a refinement lands
+            // near, not on, the cold fit's optimum, and the command line gives the cold answer.
+            fitted = fit_over([found[0], top], previous)?;
+            trimmed = Some(IdentWarning::BandTopMisfit {
+                band_hz: [top, found[1]],
+                level_ratio: edge.level_above / edge.level_below,
+                chi2_per_bin_above: edge.level_above,
+            });
+        }
+    }
+    let (band_hz, wiener, band, structural) = fitted;
     let mut warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
-    let held_out = cached_held_out(&spectra, band_hz);
-    let structural = Arc::new(structural_fit(
-        &spectra,
-        &factorisation,
-        &wiener,
-        &band,
-        settings.order.of(block),
-        held_out.as_deref(),
-        previous,
-    )?);
+    warnings.extend(trimmed);
     let stationarity = cached_stationarity(&spectra, band_hz);
     let structural = match &stationarity {
         Some(st) => {

@@ -7,6 +7,7 @@
 
 pub mod band;
 pub mod band_cache;
+pub mod band_top;
 pub mod block_orders;
 pub mod excitation;
 pub mod factorisation;

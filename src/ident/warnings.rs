@@ -65,6 +65,17 @@ pub enum IdentWarning {
         /// `[low, high]` stretches, Hz.
         ranges_hz: Vec<[f64; 2]>,
     },
+    /// The auto band was ended below the usable band's top: over the stretch left out the chosen
+    /// model's chi2 per bin is far above the band's below it, while the outputs stay coherent with
+    /// the inputs ([`super::band_top`]).
+    BandTopMisfit {
+        /// The stretch left out, Hz.
+        band_hz: [f64; 2],
+        /// Its mean chi2 per bin over the band's below it.
+        level_ratio: f64,
+        /// Its mean chi2 per bin over the expectation (18).
+        chi2_per_bin_above: f64,
+    },
     /// The model does not explain the data to the stated noise: uncertainties widened.
     PoorFit {
         /// chi2 per degree of freedom of the chosen model.
@@ -179,6 +190,19 @@ impl fmt::Display for IdentWarning {
                 worst_band_hz[0],
                 worst_band_hz[1],
                 chi2_per_dof.max(1.0).sqrt()
+            ),
+            IdentWarning::BandTopMisfit {
+                band_hz,
+                level_ratio,
+                chi2_per_bin_above,
+            } => write!(
+                f,
+                "the band ends at {:.1} Hz: from there to {:.1} Hz the model misses the data by \
+                 {level_ratio:.0} times the misfit below (chi2 per bin {chi2_per_bin_above:.1} times \
+                 its expectation) while the outputs stay coherent with the inputs: the reference's \
+                 band limit or smoothing (inputs filtered, not noisy), or dynamics no admissible \
+                 order takes; the diagnosis searches above the band",
+                band_hz[0], band_hz[1]
             ),
             IdentWarning::ImplausibleGain { output, input, value } => write!(
                 f,

@@ -120,6 +120,7 @@ impl App {
     fn drain_events(&mut self, ctx: &egui::Context) {
         let start = Instant::now();
         while let Ok(event) = self.worker.events.try_recv() {
+            self.frame_events += 1;
             self.handle(event);
             if start.elapsed() > DRAIN_BUDGET {
                 ctx.request_repaint();

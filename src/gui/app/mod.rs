@@ -204,6 +204,9 @@ pub struct App {
     frame_cpu_s: Option<f32>,
     /// Print every frame's CPU time to stderr (environment variable [`FRAME_LOG_VAR`] set).
     frame_log: bool,
+    /// Worker events taken in the current frame (printed with its time, to tell a slow frame
+    /// that took a result from one that only drew).
+    frame_events: usize,
 }
 
 /// Set (to anything) to print `frame_cpu_ms <ms>` to stderr after every frame: how the frame
@@ -247,6 +250,7 @@ impl App {
             ctx: cc.egui_ctx.clone(),
             frame_cpu_s: None,
             frame_log: std::env::var_os(FRAME_LOG_VAR).is_some(),
+            frame_events: 0,
         };
         app.push_command(Command::Open(options.paths));
         app
@@ -327,12 +331,14 @@ impl App {
 
 impl eframe::App for App {
     fn logic(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
+        // `cpu_usage` is the previous frame's, and so are the events counted.
         self.frame_cpu_s = frame.info().cpu_usage;
         if self.frame_log
             && let Some(s) = self.frame_cpu_s
         {
-            eprintln!("frame_cpu_ms {:.3}", 1e3 * s);
+            eprintln!("frame_cpu_ms {:.3} events {}", 1e3 * s, self.frame_events);
         }
+        self.frame_events = 0;
         self.logic_pass(ctx);
     }
 

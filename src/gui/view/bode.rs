@@ -21,11 +21,17 @@ pub struct BodeEntry<'a> {
     pub details: bool,
 }
 
-/// Axis labels of a `log10 f` axis, in Hz.
+/// Axis labels of a `log10 f` axis, in Hz: plain numbers from 0.01 to 1e5 Hz, powers of ten
+/// beyond (a plot panned or zoomed far out showed "0.00" or "inf"), nothing where `10^x` is not a
+/// finite number.
 #[must_use]
 pub fn hz_label(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     let v = 10f64.powf(mark.value);
-    if v >= 10.0 {
+    if !v.is_finite() || v <= 0.0 {
+        String::new()
+    } else if !(0.01..1e5).contains(&v) {
+        format!("{v:.0e}")
+    } else if v >= 10.0 {
         format!("{v:.0}")
     } else if v >= 1.0 {
         format!("{v:.1}")
@@ -281,4 +287,29 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
         ui.separator();
         super::disturbance::coherence_and_noise(ui, bode);
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hz_label;
+    use egui_plot::GridMark;
+
+    #[test]
+    fn frequency_labels_stay_readable_far_out() {
+        let label = |value: f64| {
+            hz_label(
+                GridMark {
+                    value,
+                    step_size: 1.0,
+                },
+                &(0.0..=1.0),
+            )
+        };
+        assert_eq!(label(0.0), "1.0");
+        assert_eq!(label(2.0), "100");
+        assert_eq!(label(-1.0), "0.10");
+        assert_eq!(label(-5.0), "1e-5");
+        assert_eq!(label(7.0), "1e7");
+        assert_eq!(label(400.0), "", "10^400 is not a number to show");
+    }
 }

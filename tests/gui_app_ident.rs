@@ -198,6 +198,27 @@ fn a_worker_panic_is_shown_the_last_result_kept_and_the_app_goes_on() {
 }
 
 #[test]
+fn an_observer_failure_is_said_in_the_time_series_until_an_analysis_goes_through() {
+    let mut harness = sample_app();
+    harness.get_by_label("Time series").click();
+    harness.run_steps(2);
+    let id = harness.state().runs()[0].id;
+    harness
+        .state_mut()
+        .push_command(Command::InjectPanic(id, Stage::Motion));
+    harness.run_steps(2);
+    assert!(harness.state().runs()[0].motion.error.is_some());
+    harness.get_by_label_contains("observer failed");
+    assert!(
+        harness.query_by_label_contains("observer running").is_none(),
+        "not a spinner for ever"
+    );
+    set(&mut harness, |s| s.order = OrderSetting::Fixed(0).into());
+    assert!(harness.state().runs()[0].motion.error.is_none());
+    assert!(harness.query_by_label_contains("observer failed").is_none());
+}
+
+#[test]
 fn two_runs_are_compared_side_by_side() {
     let approach = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("sample_runs/approach.csv.gz");
     let paths = vec![sample_run_path().expect("sample run"), approach];

@@ -41,7 +41,7 @@ pub fn extended_model(
 
 /// The whole-record starting points the `accepted` effects of `model`'s blocks are fitted
 /// from: one per block that has any, over that block's own band as identified (the usable band
-/// with `band_hz: "auto"`). Not the diagnosis's band: the diagnosis looks for misfit where the
+/// with `band_hz: "auto"`, ended where the model stops explaining the data at its top). Not the diagnosis's band: the diagnosis looks for misfit where the
 /// inputs may not be trustworthy, but a model is fitted only where they are (on the real
 /// recordings, over 0.1-40 Hz a gyro's K came out 0.4-1.4 % off; over its usable band, within
 /// 0.6 %).

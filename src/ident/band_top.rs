@@ -16,9 +16,10 @@
 //! freedom per bin) is kept when the stretch above is the worse one by at least
 //! [`MIN_LEVEL_RATIO`] (in mean and in median: a line a few bins wide at the top is not a
 //! stretch), holds at least [`MIN_TOP_BINS`] bins, leaves at least half the band below,
-//! and the likelihood ratio exceeds [`MIN_LIKELIHOOD_RATIO`] once divided by the band's own
-//! overdispersion (the level below, when above 1: a misfit spread over the whole band does not
-//! make a split significant). The band then ends at the split's lowest bin, and the block is
+//! and the likelihood ratio exceeds [`MIN_LIKELIHOOD_RATIO`] once divided by the dispersion of
+//! the chi2 below the split (quasi-likelihood: their variance over a scaled chi-square's, at
+//! least 1; a structured misfit over the whole band does not make a split significant, a noise
+//! model off by a constant factor changes nothing). The band then ends at the split's lowest bin, and the block is
 //! fitted again over it; the identification says so (`band_top_misfit`).
 //!
 //! Only the auto band is trimmed: a band the user gives is kept as given (its misfit is reported
@@ -53,10 +54,11 @@ pub struct MisfitEdge {
 #[must_use]
 pub fn misfit_edge(chi2: &[f64], bin_correlation: f64) -> Option<MisfitEdge> {
     let n = chi2.len();
-    if n < 2 * MIN_TOP_BINS || chi2.iter().any(|c| !c.is_finite() || *c < 0.0) {
+    if n < 2 * MIN_TOP_BINS || chi2.iter().any(|c| !c.is_finite()) {
         return None;
     }
-    let r: Vec<f64> = chi2.iter().map(|c| c / 18.0).collect();
+    // A chi2 a rounding error below zero is zero.
+    let r: Vec<f64> = chi2.iter().map(|c| c.max(0.0) / 18.0).collect();
     let nu = 18.0 / bin_correlation.max(1.0);
     let mut below = vec![0.0; n + 1];
     for (k, v) in r.iter().enumerate() {
@@ -76,7 +78,7 @@ pub fn misfit_edge(chi2: &[f64], bin_correlation: f64) -> Option<MisfitEdge> {
         }
         let ratio =
             nu * (whole - m_low as f64 * log_level(low, m_low) - m_high as f64 * log_level(high, m_high));
-        let likelihood_ratio = ratio / level_below.max(1.0);
+        let likelihood_ratio = ratio / dispersion(&r[..index], nu);
         if best.is_none_or(|b| likelihood_ratio > b.likelihood_ratio) {
             best = Some(MisfitEdge {
                 index,
@@ -92,6 +94,21 @@ pub fn misfit_edge(chi2: &[f64], bin_correlation: f64) -> Option<MisfitEdge> {
         b.likelihood_ratio > MIN_LIKELIHOOD_RATIO
             && median(&r[b.index..]) >= MIN_LEVEL_RATIO * median(&r[..b.index])
     })
+}
+
+/// The quasi-likelihood dispersion of `r` (chi2 per bin over its expectation): its variance over
+/// the `2 mean^2 / nu` of a scaled chi-square with `nu` degrees of freedom, at least 1. Scale-free:
+/// a noise model off by a constant factor leaves it unchanged, a misfit that varies from bin to
+/// bin (a structured residual) raises it.
+fn dispersion(r: &[f64], nu: f64) -> f64 {
+    let n = r.len() as f64;
+    let mean = r.iter().sum::<f64>() / n;
+    let var = r.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    if mean > 0.0 {
+        (var * nu / (2.0 * mean * mean)).max(1.0)
+    } else {
+        1.0
+    }
 }
 
 fn median(values: &[f64]) -> f64 {
@@ -129,6 +146,30 @@ mod tests {
         let edge = misfit_edge(&c, 1.94).expect("a split");
         assert!((240..=252).contains(&edge.index), "{edge:?}");
         assert!(edge.level_above > 5.0 * edge.level_below, "{edge:?}");
+    }
+
+    #[test]
+    fn a_constant_factor_on_the_noise_changes_nothing_and_a_structured_misfit_below_weakens_a_split() {
+        let mut c = flat(300, 0.7);
+        for (k, v) in c.iter_mut().enumerate().skip(240) {
+            *v = 18.0 * (0.7 + 0.05 * (k - 240) as f64);
+        }
+        let edge = misfit_edge(&c, 1.94).expect("a split");
+        let scaled: Vec<f64> = c.iter().map(|v| 3.0 * v).collect();
+        let again = misfit_edge(&scaled, 1.94).expect("a split");
+        assert_eq!(again.index, edge.index, "scale-free");
+        assert!((again.likelihood_ratio - edge.likelihood_ratio).abs() < 1e-9 * edge.likelihood_ratio);
+        // The same top over a band whose misfit swings by 20x from bin to bin.
+        let mut structured = c.clone();
+        for (k, v) in structured.iter_mut().enumerate().take(240) {
+            *v *= if k % 7 < 2 { 6.0 } else { 0.3 };
+        }
+        let weak = misfit_edge(&structured, 1.94).map_or(0.0, |e| e.likelihood_ratio);
+        assert!(
+            weak < edge.likelihood_ratio / 2.0,
+            "{weak} vs {}",
+            edge.likelihood_ratio
+        );
     }
 
     #[test]

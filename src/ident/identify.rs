@@ -163,14 +163,29 @@ pub fn identify_block_from(
         let chi2 = chi2_per_bin(&spectra, &factorisation.noise_psd, wiener, band, structural);
         if let Some(edge) = misfit_edge(&chi2, spectra.bin_correlation) {
             let top = spectra.frequency_hz[band[edge.index - 1]];
+            let first_from_scratch = structural.fitted.from_scratch();
             // From the caller's start, not refined from the fit just made: a refinement lands
             // near, not on, the cold fit's optimum, and the command line gives the cold answer.
-            fitted = fit_over([found[0], top], previous)?;
-            trimmed = Some(IdentWarning::BandTopMisfit {
-                band_hz: [top, found[1]],
-                level_ratio: edge.level_above / edge.level_below,
-                chi2_per_bin_above: edge.level_above,
-            });
+            // A trimmed band the data cannot be fitted on (too few bins for the order asked, an
+            // axis not excited there) keeps the first fit: the trim is an improvement, never a
+            // new refusal.
+            let refit = check_excitation(&spectra, block, [found[0], top])
+                .and_then(|()| fit_over([found[0], top], previous));
+            if let Ok(mut refit) = refit {
+                // The cut was chosen from a refined, not a cold, fit: the result is provisional
+                // even when the refit reused its models exactly.
+                if !first_from_scratch && refit.3.fitted.from_scratch() {
+                    let mut s = (*refit.3).clone();
+                    s.fitted.mark_refined();
+                    refit.3 = Arc::new(s);
+                }
+                trimmed = Some(IdentWarning::BandTopMisfit {
+                    band_hz: [spectra.frequency_hz[band[edge.index]], found[1]],
+                    level_ratio: edge.level_above / edge.level_below.max(f64::MIN_POSITIVE),
+                    chi2_per_bin_above: edge.level_above,
+                });
+                fitted = refit;
+            }
         }
     }
     let (band_hz, wiener, band, structural) = fitted;

@@ -197,7 +197,7 @@ impl fmt::Display for IdentWarning {
                 chi2_per_bin_above,
             } => write!(
                 f,
-                "the band ends at {:.1} Hz: from there to {:.1} Hz the model misses the data by \
+                "the band ends below {:.1} Hz: from there to {:.1} Hz the model misses the data by \
                  {level_ratio:.0} times the misfit below (chi2 per bin {chi2_per_bin_above:.1} times \
                  its expectation) while the outputs stay coherent with the inputs: the reference's \
                  band limit or smoothing (inputs filtered, not noisy), or dynamics no admissible \

@@ -194,6 +194,9 @@ impl App {
                 let Some(entry) = self.run_mut(run) else { return };
                 // The same generation again is its refit from scratch (see `provisional`).
                 entry.identification.offer(generation, identification);
+                // An identification went through the observer: an earlier observer failure is
+                // moot (the observer's result is cached, so no new one may come).
+                entry.motion.error = None;
                 if entry.identification.error.is_none() && generation >= entry.identification.requested {
                     self.errors.clear(ErrorTopic::Analysis(run));
                 }

@@ -34,7 +34,9 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
             .checkbox(&mut auto, "auto band")
             .on_hover_text(
                 "Fit only where the outputs are coherent with the inputs computed from the angles \
-                 (multiple coherence at least 0.9), found per block from the data.",
+                 (multiple coherence at least 0.9), found per block from the data, and ended \
+                 below a stretch at the top that the model does not explain (a smoothed \
+                 reference; a warning says so).",
             )
             .changed()
         {

@@ -29,7 +29,7 @@ pub fn tau_label(block: &str, m: &BlockModel) -> String {
 }
 
 /// The band line, e.g. `gyro band 0.14-14.58 Hz (auto: where the outputs are coherent with the
-/// inputs)`.
+/// inputs and the model explains them)`.
 #[must_use]
 pub fn band_label(block: &str, m: &BlockModel, auto: bool) -> String {
     format!(
@@ -37,7 +37,7 @@ pub fn band_label(block: &str, m: &BlockModel, auto: bool) -> String {
         m.band_hz[0],
         m.band_hz[1],
         if auto {
-            "auto: where the outputs are coherent with the inputs from the angles"
+            "auto: where the outputs are coherent with the inputs from the angles and the model explains them"
         } else {
             "as set"
         }

@@ -88,7 +88,9 @@ pub fn show(
             &mut view.show_differentiated,
             "overlay plain numerical differentiation (dashed)",
         );
-        if run.motion.is_none() {
+        if let Some(e) = &run.motion.error {
+            ui.colored_label(ui.visuals().error_fg_color, format!("observer failed: {e}"));
+        } else if run.motion.is_none() {
             ui.spinner();
             ui.label("observer running…");
         }

@@ -63,6 +63,12 @@ impl FittedOrders {
         self.from_scratch
     }
 
+    /// Marks these models as not what a fit from scratch gives (e.g. fitted exactly, but over
+    /// a band chosen from a refined fit).
+    pub fn mark_refined(&mut self) {
+        self.from_scratch = false;
+    }
+
     /// Number of orders kept (orders `0..len`).
     #[must_use]
     pub fn len(&self) -> usize {

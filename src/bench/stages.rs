@@ -168,6 +168,9 @@ fn identify_stage(state: &mut BenchState) -> Result<(), BenchError> {
     Ok(())
 }
 
+/// One structural fit per block over the band the coherence finds: a band ended at a misfit
+/// (`ident::band_top`) fits a second time in `identify`, which `open_to_model` and the commands'
+/// wall times include and this stage does not.
 fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let cached = state.cached("structural_fit")?;
     if state.wiener.len() != cached.len() {

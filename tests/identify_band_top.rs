@@ -9,24 +9,21 @@ use imu_attest::ident::band::BandSetting;
 use imu_attest::ident::identify::{BlockIdentification, identify_run};
 use imu_attest::ident::settings::Settings;
 use imu_attest::ident::warnings::IdentWarning;
-use imu_attest::run::{LoadOptions, load};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
-use imu_attest::sim::write::write_run;
-use imu_attest::sim::{SimConfig, SimulatedRun, simulate};
+use imu_attest::sim::{SimConfig, SimulatedRun};
+
+#[path = "common/sim.rs"]
+#[expect(dead_code, reason = "this test needs only `simulated_run`")]
+mod sim_common;
 
 fn run(regime: Regime, seed: u64, stand: StandImperfections) -> (SimulatedRun, imu_attest::run::Run) {
-    let dir = tempfile::tempdir().expect("temp dir");
     let mut config = SimConfig::new(regime);
     config.duration_s = 120.0;
     config.rate_hz = 500.0;
     config.seed = seed;
     config.stand = stand;
-    let sim = simulate(&config).expect("simulated");
-    let path = dir.path().join("run.csv");
-    write_run(&sim, &path).expect("written");
-    let run = load(&path, &LoadOptions::default()).expect("loads");
-    (sim, run)
+    sim_common::simulated_run(&config)
 }
 
 fn k_error(sim: &SimulatedRun, b: &BlockIdentification) -> f64 {
@@ -145,4 +142,61 @@ fn a_stand_without_a_band_limit_keeps_the_band_the_coherence_found() {
             );
         }
     }
+}
+
+#[test]
+fn a_retune_on_a_trimmed_run_starts_each_fit_from_its_own_band_and_says_when_it_is_provisional() {
+    use imu_attest::ident::identify::identify_run as cold;
+    use imu_attest::ident::session::{Session, Start};
+    use imu_attest::ident::settings::OrderSetting;
+    use std::sync::Arc;
+
+    let stand = StandImperfections {
+        band_limit_hz: Some(30.0),
+        ..StandImperfections::real()
+    };
+    let (_, r) = run(Regime::TurbulentCruise, 44, stand);
+    let mut session = Session::new(Arc::new(r.clone()));
+    let first = session
+        .identify(&Settings::default(), Start::Cold, &mut |_| {})
+        .expect("identified");
+    let gyro = &first.blocks[0];
+    assert!(trimmed(gyro).is_some(), "{:?}", gyro.warnings);
+    let usable = gyro
+        .usable_band_fit
+        .as_ref()
+        .expect("the usable band's fit is kept");
+    assert!(usable.fitted.from_scratch());
+    // Order changes, as the app's retune makes them: the fits start from the previous ones over
+    // the same bands. Whatever comes out is either what the command line gives, or says it is
+    // provisional (and is then redone cold).
+    for order in [OrderSetting::Fixed(0), OrderSetting::Auto] {
+        let settings = Settings {
+            order: order.into(),
+            ..Settings::default()
+        };
+        let warm = session
+            .identify(&settings, Start::Warm, &mut |_| {})
+            .expect("retuned");
+        let reference = cold(&r, &settings).expect("identified");
+        for (w, c) in warm.blocks.iter().zip(&reference.blocks) {
+            if !warm.provisional() {
+                assert_eq!(bits(w), bits(c), "{order:?} {:?}", w.block);
+            }
+        }
+        let polished = session.polish().map_or(warm, |p| p.expect("polished"));
+        for (p, c) in polished.blocks.iter().zip(&reference.blocks) {
+            assert_eq!(bits(p), bits(c), "{order:?} {:?}", p.block);
+        }
+    }
+}
+
+/// The band, K and delay of a block's fit, bit for bit.
+fn bits(b: &BlockIdentification) -> Vec<u64> {
+    b.band_hz
+        .iter()
+        .chain(b.structural.k.iter().flatten())
+        .chain([&b.structural.tau_s])
+        .map(|v| v.to_bits())
+        .collect()
 }

@@ -1,42 +1,53 @@
-//! A value derived from a block's spectra for one band, kept with the spectra for the last band
-//! asked: it does not depend on A, Lambda or the order, so a retune reuses it. The key is the
-//! band's exact bits; a poisoned lock is a miss (the value is recomputed, never lost to a panic).
+//! A value derived from a block's spectra for one band, kept with the spectra for the last
+//! [`BANDS_KEPT`] bands asked: it does not depend on A, Lambda or the order, so a retune reuses
+//! it. More than one band because one identification may ask for two (the usable band, then the
+//! band ended at a misfit at its top, `super::band_top`): with one entry each would evict the
+//! other, and every retune would recompute both. The key is the band's exact bits; a poisoned
+//! lock is a miss (the value is recomputed, never lost to a panic).
 
 use std::sync::{Arc, Mutex};
+
+/// Bands kept per cache.
+pub const BANDS_KEPT: usize = 4;
 
 /// The band's bits and the value found for it (`None`: nothing could be computed for that band).
 type Entry<T> = ([u64; 2], Option<Arc<T>>);
 
-/// One value per block's spectra, for the last band asked.
+/// One value per block's spectra and band, for the last [`BANDS_KEPT`] bands asked (the most
+/// recently asked first).
 #[derive(Debug)]
-pub struct BandCache<T>(Mutex<Option<Entry<T>>>);
+pub struct BandCache<T>(Mutex<Vec<Entry<T>>>);
 
 impl<T> Default for BandCache<T> {
     fn default() -> Self {
-        Self(Mutex::new(None))
+        Self(Mutex::new(Vec::new()))
     }
 }
 
 impl<T> Clone for BandCache<T> {
     fn clone(&self) -> Self {
-        Self(Mutex::new(self.0.lock().ok().and_then(|g| g.clone())))
+        Self(Mutex::new(self.0.lock().map(|g| g.clone()).unwrap_or_default()))
     }
 }
 
 impl<T> BandCache<T> {
-    /// The value for `band_hz`: the cached one when the band is the last asked, else `compute()`
-    /// (kept for the next call).
+    /// The value for `band_hz`: the cached one when the band is among the last asked, else
+    /// `compute()` (kept for the next calls, the oldest band dropped).
     pub fn get_or(&self, band_hz: [f64; 2], compute: impl FnOnce() -> Option<T>) -> Option<Arc<T>> {
         let key = band_hz.map(f64::to_bits);
-        if let Ok(guard) = self.0.lock()
-            && let Some((k, value)) = guard.as_ref()
-            && *k == key
+        if let Ok(mut guard) = self.0.lock()
+            && let Some(i) = guard.iter().position(|(k, _)| *k == key)
         {
-            return value.clone();
+            let entry = guard.remove(i);
+            let value = entry.1.clone();
+            guard.insert(0, entry);
+            return value;
         }
         let value = compute().map(Arc::new);
         if let Ok(mut guard) = self.0.lock() {
-            *guard = Some((key, value.clone()));
+            guard.retain(|(k, _)| *k != key);
+            guard.insert(0, (key, value.clone()));
+            guard.truncate(BANDS_KEPT);
         }
         value
     }
@@ -49,7 +60,7 @@ mod tests {
     use super::BandCache;
 
     #[test]
-    fn a_band_is_computed_once_until_another_band_is_asked() {
+    fn a_band_is_computed_once_while_it_is_among_the_last_asked() {
         let cache = BandCache::<f64>::default();
         let calls = Cell::new(0);
         let compute = |v: f64| {
@@ -61,8 +72,18 @@ mod tests {
         assert_eq!(calls.get(), 1, "the same band is not recomputed");
         assert_eq!(cache.get_or([0.1, 12.0], || compute(3.0)).as_deref(), Some(&3.0));
         assert_eq!(calls.get(), 2, "another band is computed");
+        // Two bands asked in turn (the usable band, then the band ended at a misfit): both kept.
+        assert_eq!(cache.get_or([0.1, 10.0], || compute(5.0)).as_deref(), Some(&1.0));
+        assert_eq!(cache.get_or([0.1, 12.0], || compute(6.0)).as_deref(), Some(&3.0));
+        assert_eq!(calls.get(), 2, "neither evicts the other");
         let copy = cache.clone();
         assert_eq!(copy.get_or([0.1, 12.0], || compute(4.0)).as_deref(), Some(&3.0));
         assert_eq!(calls.get(), 2, "a clone keeps the cached value");
+        // The oldest of more than BANDS_KEPT bands is dropped.
+        for top in 0..super::BANDS_KEPT {
+            let _ = cache.get_or([0.2, 20.0 + top as f64], || compute(7.0));
+        }
+        assert_eq!(calls.get(), 2 + super::BANDS_KEPT);
+        assert_eq!(cache.get_or([0.1, 10.0], || compute(8.0)).as_deref(), Some(&8.0));
     }
 }

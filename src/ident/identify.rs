@@ -53,10 +53,33 @@ pub struct BlockIdentification {
     pub band: Vec<usize>,
     /// Structural model (order).
     pub structural: Arc<StructuralFit>,
+    /// The fit over the usable band the coherence found, when the band was ended below it at a
+    /// misfit ([`super::band_top`]): where the next retune's first fit starts from.
+    pub usable_band_fit: Option<Arc<StructuralFit>>,
     /// The stretches' fits (the stationarity check; `None` for a record too short to cut).
     pub stationarity: Option<Arc<Stationarity>>,
     /// What was regularised or is inexact (empty when all is well).
     pub warnings: Vec<IdentWarning>,
+}
+
+/// The structural fits a retune of a block starts from ([`identify_block_from`]'s `previous`).
+#[derive(Clone, Debug)]
+pub struct FitStart {
+    /// The block's fit as reported.
+    pub fit: Arc<StructuralFit>,
+    /// Its fit over the usable band, when the band was ended below it at a misfit.
+    pub usable_band: Option<Arc<StructuralFit>>,
+}
+
+impl BlockIdentification {
+    /// Where a retune of this block starts from.
+    #[must_use]
+    pub fn fit_start(&self) -> FitStart {
+        FitStart {
+            fit: self.structural.clone(),
+            usable_band: self.usable_band_fit.clone(),
+        }
+    }
 }
 
 /// A whole run's identification.
@@ -124,7 +147,7 @@ pub fn identify_block_from(
     spectra: Arc<BlockSpectra>,
     factorisation: Arc<Factorisation>,
     settings: &Settings,
-    previous: Option<&StructuralFit>,
+    previous: Option<&FitStart>,
 ) -> Result<BlockIdentification, IdentError> {
     // Excitation first, over the band asked for (or the auto search limits): a stand axis held
     // still is named as such, not as a band without coherence.
@@ -156,8 +179,14 @@ pub fn identify_block_from(
         )?;
         Ok((band_hz, wiener, band, Arc::new(structural)))
     };
-    let mut fitted = fit_over(found, previous)?;
+    // Each fit starts from the previous fit over the same band, where there is one: the usable
+    // band's (kept when the band was ended at a misfit) for the first, the reported one for the
+    // refit over the ended band.
+    let previous_fit = previous.map(|p| &*p.fit);
+    let first_start = previous.map(|p| p.usable_band.as_deref().unwrap_or(&p.fit));
+    let mut fitted = fit_over(found, first_start)?;
     let mut trimmed = None;
+    let mut usable_band_fit = None;
     if settings.band_hz == BandSetting::Auto {
         let (_, wiener, band, structural) = &fitted;
         let chi2 = chi2_per_bin(&spectra, &factorisation.noise_psd, wiener, band, structural);
@@ -170,7 +199,7 @@ pub fn identify_block_from(
             // axis not excited there) keeps the first fit: the trim is an improvement, never a
             // new refusal.
             let refit = check_excitation(&spectra, block, [found[0], top])
-                .and_then(|()| fit_over([found[0], top], previous));
+                .and_then(|()| fit_over([found[0], top], previous_fit));
             if let Ok(mut refit) = refit {
                 // The cut was chosen from a refined, not a cold, fit: the result is provisional
                 // even when the refit reused its models exactly.
@@ -184,6 +213,7 @@ pub fn identify_block_from(
                     level_ratio: edge.level_above / edge.level_below.max(f64::MIN_POSITIVE),
                     chi2_per_bin_above: edge.level_above,
                 });
+                usable_band_fit = Some(structural.clone());
                 fitted = refit;
             }
         }
@@ -231,6 +261,7 @@ pub fn identify_block_from(
         band_hz,
         band,
         structural,
+        usable_band_fit,
         stationarity,
         warnings,
     })

@@ -28,11 +28,10 @@ use rayon::prelude::*;
 
 use super::IdentError;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
-use super::identify::{BlockIdentification, IdentStep, RunIdentification, identify_block_from};
+use super::identify::{BlockIdentification, FitStart, IdentStep, RunIdentification, identify_block_from};
 use super::settings::Settings;
 use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
-use super::structural::StructuralFit;
 use crate::block::Block;
 use crate::run::Run;
 use crate::spectral::{WelchPlanner, WelchSettings};
@@ -64,7 +63,7 @@ pub struct Session {
     /// The factorisations of the spectra before the last Welch change: warm starts.
     previous_factorisations: PerBlock<Factorisation>,
     /// Every block's latest structural fit: warm starts.
-    fits: PerBlock<StructuralFit>,
+    fits: PerBlock<FitStart>,
     identification: Option<(Settings, Arc<RunIdentification>)>,
 }
 
@@ -336,7 +335,7 @@ impl Session {
         }
         for b in &id.blocks {
             self.fits.retain(|(block, _)| *block != b.block);
-            self.fits.push((b.block, b.structural.clone()));
+            self.fits.push((b.block, Arc::new(b.fit_start())));
         }
         self.identification = Some((settings, id.clone()));
         Ok(id)

@@ -17,7 +17,16 @@ pub fn simulated_run_of(duration_s: f64, regime: Regime, seed: u64, effects: &[&
     config.seed = seed;
     config.duration_s = duration_s;
     config.effects = effects.iter().map(|e| e.parse().expect("effect spec")).collect();
-    let sim = simulate(&config).expect("simulated");
+    simulated_run(&config)
+}
+
+/// The run `config` describes, written to a CSV and loaded back.
+///
+/// # Panics
+/// On a failed simulation, write or load (a broken test).
+#[must_use]
+pub fn simulated_run(config: &SimConfig) -> (SimulatedRun, Run) {
+    let sim = simulate(config).expect("simulated");
     let dir = tempfile::tempdir().expect("temporary folder");
     let path = dir.path().join("run.csv");
     write_run(&sim, &path).expect("written");

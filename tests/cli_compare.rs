@@ -5,11 +5,17 @@
 
 use std::path::{Path, PathBuf};
 
+use imu_attest::block::Block;
+use imu_attest::compare::findings::Presence;
 use imu_attest::compare::{COMPARISON_SCHEMA, Comparison};
+use imu_attest::diagnose::Verdict;
+use imu_attest::effect::Effect;
 use imu_attest::model::Model;
 
 mod binary;
 use binary::imu_attest;
+#[path = "binary/approach.rs"]
+mod approach;
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -42,6 +48,7 @@ fn compares_two_regimes_and_agrees_with_identify() {
     let text = std::fs::read_to_string(&out).unwrap();
     let value: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(value["schema"], COMPARISON_SCHEMA);
+    assert!(value.get("findings").is_none(), "findings only with --diagnose");
     let c: Comparison = serde_json::from_value(value).unwrap();
     let regimes: Vec<&str> = c.runs.iter().map(|r| r.source.regime.as_str()).collect();
     assert_eq!(regimes, ["cruise", "approach"]);
@@ -86,6 +93,58 @@ fn compares_two_regimes_and_agrees_with_identify() {
             "{name}"
         );
     }
+}
+
+/// `--diagnose`: each run's verdict and the findings compared. Two units with a hidden gyro
+/// lag, the second twice as slow: the lag is named on both and its size differs.
+#[test]
+fn with_diagnose_the_findings_are_compared() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut runs = Vec::new();
+    for (name, seed, effect) in [
+        ("a.csv", "5", "sensor_lag:gyro"),
+        ("b.csv", "6", "sensor_lag:gyro@2"),
+    ] {
+        let path = dir.path().join(name);
+        approach::approach_run(&path, seed, Some(effect));
+        runs.push(path);
+    }
+    let out = dir.path().join("comparison.json");
+    let o = imu_attest(&[
+        "compare",
+        runs[0].to_str().unwrap(),
+        runs[1].to_str().unwrap(),
+        "--diagnose",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c: Comparison = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let verdicts: Vec<_> = c.runs.iter().map(|r| r.verdict).collect();
+    assert_eq!(verdicts, [Some(Verdict::EffectFound); 2]);
+    let findings = c.findings.expect("findings compared");
+    let lag = findings
+        .iter()
+        .find(|d| d.block == Block::Gyro && d.effect == Effect::SensorLag)
+        .expect("the gyro lag compared");
+    assert_eq!(lag.runs, [0, 1]);
+    assert_eq!(lag.presence, Presence::Both);
+    let t = &lag.sizes[0];
+    assert_eq!(t.name, "T_s");
+    assert!(
+        t.b > 1.5 * t.a,
+        "the second lag is twice the first: {} vs {}",
+        t.a,
+        t.b
+    );
+    assert!((t.delta.diff - (t.b - t.a)).abs() < 1e-15);
+    assert_eq!(t.delta.significant, Some(true), "{}", lag.words);
+    assert_eq!(lag.consistent, Some(false));
+    assert!(
+        lag.words.contains("T_s") && lag.words.contains("differs"),
+        "{}",
+        lag.words
+    );
 }
 
 #[test]

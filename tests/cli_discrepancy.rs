@@ -1,31 +1,18 @@
 //! `imu-attest discrepancy` through the binary: the contract's report (section 5) with its field
 //! names, the hidden effect named, `--model` honoured, and exit status 2 with one line for bad
 //! input, leaving no output file.
-#![expect(clippy::unwrap_used, reason = "tests")]
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod binary;
 use binary::imu_attest;
+#[path = "binary/approach.rs"]
+mod approach;
 
 fn simulated_run(dir: &Path, name: &str, effect: Option<&str>) -> PathBuf {
     let run = dir.join(format!("{name}.csv"));
-    let mut args = vec![
-        "simulate",
-        "--regime",
-        "approach",
-        "--duration",
-        "60",
-        "--seed",
-        "7",
-    ];
-    if let Some(e) = effect {
-        args.extend(["--effect", e]);
-    }
-    args.extend(["--out", run.to_str().unwrap()]);
-    let o = imu_attest(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    approach::approach_run(&run, "7", effect);
     run
 }
 

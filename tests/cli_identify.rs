@@ -8,6 +8,8 @@ use imu_attest::model::{MODEL_SCHEMA, Model};
 
 mod binary;
 use binary::imu_attest;
+#[path = "binary/approach.rs"]
+mod approach;
 
 fn simulated_run(dir: &Path) -> PathBuf {
     simulated_run_as(dir, "cruise.csv", &["--seed", "4"])
@@ -176,20 +178,7 @@ fn bad_settings_and_inputs_exit_2_with_one_line() {
 fn effects_accepted_from_a_list_or_a_discrepancy_report() {
     let dir = tempfile::tempdir().unwrap();
     let run = dir.path().join("lagged.csv");
-    let o = imu_attest(&[
-        "simulate",
-        "--regime",
-        "approach",
-        "--duration",
-        "60",
-        "--seed",
-        "5",
-        "--effect",
-        "sensor_lag:gyro",
-        "--out",
-        run.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    approach::approach_run(&run, "5", Some("sensor_lag:gyro"));
     let identify_run = |run: &Path, effects: &Path, out: &Path| {
         imu_attest(&[
             "identify",

@@ -179,3 +179,66 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
     harness.get_by_label("Bode").click();
     harness.run_steps(2);
 }
+
+/// Two units with a hidden gyro lag, the second twice as slow: before they are diagnosed the
+/// Compare tab says how to compare their findings; once both are, it names the lag on both and
+/// says its size differs (the library's comparison of the same reports, in the same words).
+#[test]
+fn compare_shows_each_run_s_findings_side_by_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut paths = Vec::new();
+    for (name, seed, spec) in [("a.csv", 5, "sensor_lag:gyro"), ("b.csv", 6, "sensor_lag:gyro@2")] {
+        let mut config = SimConfig::new(Regime::Approach);
+        config.duration_s = 60.0;
+        config.seed = seed;
+        config.effects = vec![spec.parse().unwrap()];
+        let path = dir.path().join(name);
+        write_run(&simulate(&config).unwrap(), &path).unwrap();
+        paths.push(path);
+    }
+    let mut harness = app(paths);
+    harness.get_by_label("Compare").click();
+    harness.run_steps(2);
+    harness.get_by_label("compare a.csv").click();
+    harness.run_steps(1);
+    harness.get_by_label("compare b.csv").click();
+    harness.run_steps(2);
+    harness.get_by_label(imu_attest::gui::view::compare::FINDINGS_NOT_COMPARED);
+    harness.get_by_label("a.csv").click();
+    harness.run_steps(2);
+    diagnose(&mut harness);
+    harness.get_by_label("verdict: effect found");
+    // Still on the Missing effects tab: select the other run and diagnose it.
+    harness.get_by_label("b.csv").click();
+    harness.run_steps(2);
+    harness.get_by_label("Find missing effects").click();
+    harness.run_steps(4);
+    harness.get_by_label("verdict: effect found");
+    harness.get_by_label("Compare").click();
+    harness.run_steps(3);
+    let app = harness.state();
+    let reports: Vec<_> = app
+        .runs()
+        .iter()
+        .map(|r| r.diagnosis.value.clone().expect("diagnosed"))
+        .collect();
+    let findings: Vec<&[imu_attest::diagnose::Finding]> =
+        reports.iter().map(|r| r.findings.as_slice()).collect();
+    let expected =
+        imu_attest::compare::findings::compare_findings(&findings, &["a.csv".to_owned(), "b.csv".to_owned()]);
+    let c = app.comparison().expect("compared").clone();
+    assert_eq!(c.findings.as_deref(), Some(expected.as_slice()));
+    let lag = expected
+        .iter()
+        .find(|d| d.block == Block::Gyro && d.effect == Effect::SensorLag)
+        .expect("the lag compared");
+    assert_eq!(lag.consistent, Some(false), "{}", lag.words);
+    harness.get_by_label("findings of the gyro block across runs");
+    harness.get_by_label("a.csv: effect found; b.csv: effect found");
+    harness.get_by_label(&format!("a.csv / b.csv: gyro first-order lag: {}", lag.words));
+    assert!(
+        harness
+            .query_by_label(imu_attest::gui::view::compare::FINDINGS_NOT_COMPARED)
+            .is_none()
+    );
+}

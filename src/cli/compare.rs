@@ -1,19 +1,25 @@
-//! `imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json`: identifies each run
-//! with the same settings and writes [`crate::compare::Comparison`] (schema
-//! `imu-attest/comparison/1`).
+//! `imu-attest compare RUN RUN... [--settings S.json] [--diagnose] --out COMPARISON.json`:
+//! identifies each run with the same settings and writes [`crate::compare::Comparison`] (schema
+//! `imu-attest/comparison/1`); with `--diagnose` each run is diagnosed too (as `discrepancy`)
+//! and every pair's findings are compared (`findings`, each run's `verdict`).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::identify::{identify_model, read_settings};
+use std::sync::Arc;
+
+use super::identify::{identify_in, read_settings};
 use super::{Args, CliError};
 use crate::compare::compare;
+use crate::diagnose::{DiagnoseOptions, diagnose_session};
+use crate::ident::session::Session;
 use crate::output::{ensure_not_input, write_atomic};
 use crate::run::sidecar_path;
 
 pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let (settings, settings_path) = read_settings(args)?;
     let out = PathBuf::from(args.required("out")?);
+    let diagnose = args.flag("diagnose");
     args.reject_unknown()?;
     if args.positional.len() < 2 {
         return Err(CliError::Input(format!(
@@ -28,11 +34,34 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         .collect();
     inputs.extend(settings_path);
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
-    let models = runs
-        .iter()
-        .map(|r| identify_model(r, &settings, &[]))
-        .collect::<Result<Vec<_>, _>>()?;
-    let comparison = compare(&models).map_err(|e| CliError::Input(e.to_string()))?;
+    let mut models = Vec::with_capacity(runs.len());
+    let mut reports = Vec::new();
+    for r in &runs {
+        let mut session = Session::new(Arc::new(super::progress::load_run(r)?));
+        models.push(identify_in(r, &mut session, &settings, &[])?);
+        if diagnose {
+            let report =
+                diagnose_session(&mut session, &settings, &DiagnoseOptions::default()).map_err(|e| {
+                    if e.is_input_error() {
+                        CliError::Input(format!("{}: {e}", r.display()))
+                    } else {
+                        CliError::Internal(anyhow::anyhow!("{}: {e}", r.display()))
+                    }
+                })?;
+            reports.push(report);
+        }
+    }
+    let mut comparison = compare(&models).map_err(|e| CliError::Input(e.to_string()))?;
+    if diagnose {
+        let names: Vec<String> = runs
+            .iter()
+            .map(|r| {
+                r.file_name()
+                    .map_or_else(|| r.display().to_string(), |n| n.to_string_lossy().into_owned())
+            })
+            .collect();
+        comparison.add_findings(&reports.iter().collect::<Vec<_>>(), &names);
+    }
     write_atomic(&out, |w| {
         serde_json::to_writer_pretty(&mut *w, &comparison).map_err(std::io::Error::other)?;
         w.write_all(b"\n")

@@ -75,14 +75,24 @@ pub(super) fn identify_model(
     accepted: &[(Block, Effect)],
 ) -> Result<Model, CliError> {
     let run = Arc::new(super::progress::load_run(run_path)?);
+    identify_in(run_path, &mut Session::new(run), settings, accepted)
+}
+
+/// Identifies the run of `session` (loaded from `run_path`) into its checked model; the
+/// session keeps its stages for what comes next (`compare --diagnose`).
+pub(super) fn identify_in(
+    run_path: &Path,
+    session: &mut Session,
+    settings: &Settings,
+    accepted: &[(Block, Effect)],
+) -> Result<Model, CliError> {
     let settings = Settings {
-        blocks: settings.blocks_for(&run.blocks()),
+        blocks: settings.blocks_for(&session.run().blocks()),
         ..settings.clone()
     };
     // Settings that do not fit this run are the user's input; anything else is ours.
     let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
-    let mut session = Session::new(run.clone());
-    let model = extended_model(&mut session, &settings, accepted, &mut |step| {
+    let model = extended_model(session, &settings, accepted, &mut |step| {
         bar.set_length(step.total as u64);
         bar.set_position(step.done as u64);
         bar.set_message(match step.block {

@@ -59,7 +59,9 @@ usage:
                                                   E.json: accepted effects ({\"effects\": [{block,
                                                   effect}]}, or a discrepancy report's findings)
   imu-attest discrepancy RUN [--settings S.json] [--model MODEL.json] --out REPORT.json
-  imu-attest compare RUN RUN... [--settings S.json] --out COMPARISON.json
+  imu-attest compare RUN RUN... [--settings S.json] [--diagnose] --out COMPARISON.json
+                                                  --diagnose: each run's findings too, compared
+                                                  pair by pair (sizes within their deviations?)
   imu-attest report RUN... [--settings S.json] [--model MODEL.json] [--spec SPEC.json]
                       --out REPORT.html           the certificate: model, noise terms (Allan),
                                                   diagnosis, pass/fail against SPEC
@@ -107,7 +109,7 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         "inspect" => inspect::run(&Args::parse(rest)?),
         "identify" => identify::run(&Args::parse(rest)?),
         "discrepancy" => discrepancy::run(&Args::parse(rest)?),
-        "compare" => compare::run(&Args::parse(rest)?),
+        "compare" => compare::run(&Args::parse_with_flags(rest, &["diagnose"])?),
         "report" => report::run(&Args::parse(rest)?),
         "batch" => batch::run(&Args::parse_with_flags(rest, &["diagnose"])?),
         "bench" => bench::run(rest),

@@ -10,6 +10,8 @@
 
 use std::collections::BTreeMap;
 
+pub mod findings;
+
 use serde::{Deserialize, Serialize};
 
 use crate::ident::settings::Settings;
@@ -34,6 +36,10 @@ pub struct Comparison {
     pub runs: Vec<ComparedRun>,
     /// Every pair of runs `a < b`, per block both have.
     pub differences: Vec<Difference>,
+    /// With `compare --diagnose` (or runs diagnosed in the app): every pair's findings compared
+    /// ([`findings::compare_findings`]); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub findings: Option<Vec<findings::FindingDifference>>,
 }
 
 impl Comparison {
@@ -57,6 +63,9 @@ pub struct ComparedRun {
     pub source: Source,
     /// Per block (`"gyro"`, `"accel"`).
     pub blocks: BTreeMap<String, BlockFigures>,
+    /// The diagnosis's verdict, when the runs' findings are compared.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<crate::diagnose::Verdict>,
 }
 
 /// A block's static gain and delay with their standard deviations.
@@ -162,6 +171,7 @@ pub fn compare(models: &[Model]) -> Result<Comparison, CompareError> {
                 .iter()
                 .map(|(name, b)| (name.clone(), BlockFigures::from_model(b)))
                 .collect(),
+            verdict: None,
         })
         .collect();
     let mut differences = Vec::new();
@@ -180,7 +190,25 @@ pub fn compare(models: &[Model]) -> Result<Comparison, CompareError> {
         significance_sigmas: SIGNIFICANCE_SIGMAS,
         runs,
         differences,
+        findings: None,
     })
+}
+
+impl Comparison {
+    /// Adds the runs' diagnoses: each run's verdict and every pair's findings compared.
+    /// `reports[i]` is run `i`'s; `names` labels the runs in the words. Reports of another
+    /// count than the runs leave the comparison as it was.
+    pub fn add_findings(&mut self, reports: &[&crate::diagnose::Report], names: &[String]) {
+        if reports.len() != self.runs.len() {
+            return;
+        }
+        for (run, report) in self.runs.iter_mut().zip(reports) {
+            run.verdict = Some(report.verdict);
+        }
+        let findings: Vec<&[crate::diagnose::Finding]> =
+            reports.iter().map(|r| r.findings.as_slice()).collect();
+        self.findings = Some(findings::compare_findings(&findings, names));
+    }
 }
 
 fn difference(

@@ -196,6 +196,52 @@ pub fn misfit_closed(before_total_db: f64, after_total_db: f64) -> String {
     }
 }
 
+/// The parameters that are an effect's size (zero: no effect); empty for effects whose
+/// parameters locate rather than size it (a tone's or resonance's frequency).
+fn size_keys(effect: Effect) -> &'static [&'static str] {
+    match effect {
+        Effect::ScaleNonlinearity => &["k2"],
+        Effect::LeverArmError => &["offset_m"],
+        Effect::GSensitivity => &["G"],
+        Effect::SensorLag | Effect::ReferenceLag => &["T_s"],
+        Effect::AxisTimeSkew => &["skew_s"],
+        _ => &[],
+    }
+}
+
+/// The numbers of `v` in order, nested arrays flattened (`None` for a null or missing one).
+fn leaves(v: Option<&Value>, out: &mut Vec<Option<f64>>) {
+    match v {
+        Some(Value::Array(a)) => a.iter().for_each(|x| leaves(Some(x), out)),
+        Some(x) => out.push(num(x)),
+        None => out.push(None),
+    }
+}
+
+/// Whether every component of a finding's size lies within two of its standard deviations of
+/// zero (all of them known): the chi-square shows a misfit of the effect's form, but its size is
+/// not determined (on a real run, a misfit that piles up where the effect's regressors live
+/// widens their standard deviations: `uncertainty`'s sandwich).
+#[must_use]
+pub fn size_within_noise(f: &Finding) -> bool {
+    let mut values = Vec::new();
+    let mut stds = Vec::new();
+    for key in size_keys(f.effect) {
+        leaves(f.parameters.get(*key), &mut values);
+        leaves(f.parameter_std.get(*key), &mut stds);
+    }
+    !values.is_empty()
+        && values.len() == stds.len()
+        && values.iter().zip(&stds).all(|(v, sd)| match (v, sd) {
+            (Some(v), Some(sd)) => sd.is_finite() && *sd > 0.0 && v.abs() <= 2.0 * sd,
+            _ => false,
+        })
+}
+
+/// Said in a finding's evidence when [`size_within_noise`].
+pub const SIZE_WITHIN_NOISE: &str = "its size is within two standard deviations of zero in every component: \
+     the data show a misfit of this form, not a size to certify";
+
 #[cfg(test)]
 mod tests {
     use serde_json::json;
@@ -217,6 +263,36 @@ mod tests {
             added_parameters: 1,
             criterion_gain: 80.0,
         }
+    }
+
+    #[test]
+    fn size_within_noise_needs_every_component_inside_two_sd() {
+        let mut f = finding(
+            Block::Gyro,
+            Effect::ScaleNonlinearity,
+            json!({"k2": [0.014, -0.001, 0.045]}),
+        );
+        f.parameter_std = json!({"k2": [0.0088, 0.0038, 0.045]});
+        assert!(size_within_noise(&f));
+        f.parameter_std = json!({"k2": [0.0088, 0.0038, 0.012]});
+        assert!(!size_within_noise(&f), "z is 3.7 sd from zero");
+        f.parameter_std = json!({"k2": [0.0088, null, 0.045]});
+        assert!(!size_within_noise(&f), "an unknown sd says nothing");
+        let mut g = finding(
+            Block::Accel,
+            Effect::GSensitivity,
+            json!({"G": [[1e-4, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]}),
+        );
+        g.parameter_std = json!({"G": [[1e-4, 1e-5, 1e-5], [1e-5, 1e-5, 1e-5], [1e-5, 1e-5, 1e-5]]});
+        assert!(size_within_noise(&g));
+        g.parameters = json!({"G": [[3e-4, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]});
+        assert!(!size_within_noise(&g));
+        let mut tone = finding(Block::Gyro, Effect::VibrationTone, json!({"frequency_hz": 0.1}));
+        tone.parameter_std = json!({"frequency_hz": 1.0});
+        assert!(
+            !size_within_noise(&tone),
+            "a tone's frequency locates it, it does not size it"
+        );
     }
 
     #[test]

@@ -404,6 +404,9 @@ fn diagnose_block(
         .map(|(effect, index, mut finding)| {
             finding.parameters = parameters(effect, &state, index, input_names);
             finding.parameter_std = parameter_std(effect, &state, index, cov.as_ref());
+            if super::describe::size_within_noise(&finding) {
+                let _ = write!(finding.evidence, "; {}", super::describe::SIZE_WITHIN_NOISE);
+            }
             finding
         })
         .collect();

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use eframe::egui;
 
-use super::{App, Command, ErrorTopic, HeatmapMode, LoadedRun};
+use super::{App, Command, ErrorTopic, HeatmapMode, LoadedRun, RunEntry};
 use crate::block::Block;
 use crate::compare::compare;
 use crate::gui::pipeline::{Event, FailureKind, RunId, Stage};
@@ -19,7 +19,8 @@ const DRAIN_BUDGET: Duration = Duration::from_millis(10);
 pub(super) type TextureKey = (RunId, u64, Block, HeatmapMode);
 
 /// What the comparison was computed from: each compared run and its identification generation.
-pub(super) type ComparisonKey = Vec<(RunId, u64)>;
+/// The compared runs with their identification's and diagnosis's generations (0: none).
+pub(super) type ComparisonKey = Vec<(RunId, u64, u64)>;
 
 impl App {
     pub(super) fn logic_pass(&mut self, ctx: &egui::Context) {
@@ -101,7 +102,7 @@ impl App {
             .iter()
             .filter_map(|&id| self.run(id))
             .filter(|r| r.identification.is_some())
-            .map(|r| (r.id, r.identification.generation))
+            .map(|r| (r.id, r.identification.generation, r.diagnosis.generation))
             .collect();
         if key.len() < 2 {
             self.comparison = None;
@@ -110,11 +111,22 @@ impl App {
         if self.comparison.as_ref().is_some_and(|(k, _)| *k == key) {
             return;
         }
-        let models: Vec<Model> = key
+        let entries: Vec<&RunEntry> = key.iter().filter_map(|&(id, _, _)| self.run(id)).collect();
+        let models: Vec<Model> = entries
             .iter()
-            .filter_map(|&(id, _)| self.run(id)?.identification.as_ref().map(|i| i.model.clone()))
+            .filter_map(|r| r.identification.as_ref().map(|i| i.model.clone()))
             .collect();
-        self.comparison = compare(&models).ok().map(|c| (key, Arc::new(c)));
+        let mut comparison = compare(&models).ok();
+        // Every compared run diagnosed (Find missing effects): their findings compared too.
+        let reports: Vec<&crate::diagnose::Report> = entries
+            .iter()
+            .filter_map(|r| r.diagnosis.value.as_deref())
+            .collect();
+        if let Some(c) = comparison.as_mut().filter(|_| reports.len() == entries.len()) {
+            let names: Vec<String> = entries.iter().map(|r| r.name()).collect();
+            c.add_findings(&reports, &names);
+        }
+        self.comparison = comparison.map(|c| (key, Arc::new(c)));
     }
 
     fn drain_events(&mut self, ctx: &egui::Context) {

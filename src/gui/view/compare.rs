@@ -90,6 +90,8 @@ pub fn show(
             .id_salt("compare-table")
             .show(ui, |ui| figures(ui, c, block, view));
         ui.separator();
+        findings(ui, c, view.bode_block);
+        ui.separator();
         let entries: Vec<BodeEntry<'_>> = compared
             .iter()
             .filter_map(|id| runs.iter().find(|r| r.id == *id))
@@ -161,4 +163,50 @@ fn figures(ui: &mut egui::Ui, c: &Comparison, block: &str, view: &ViewState) {
             }
         }
     });
+}
+
+/// Said where the compared runs have not all been diagnosed.
+pub const FINDINGS_NOT_COMPARED: &str =
+    "findings: run Find missing effects on every compared run (Missing effects tab) to compare them here";
+
+/// The diagnosis's findings of `block` compared between each pair of runs, in words.
+fn findings(ui: &mut egui::Ui, c: &Comparison, block: crate::block::Block) {
+    let Some(all) = &c.findings else {
+        ui.weak(FINDINGS_NOT_COMPARED);
+        return;
+    };
+    let file = |i: usize| c.runs.get(i).map_or("?", |r| r.source.file.as_str());
+    ui.strong(format!("findings of the {} block across runs", block.name()));
+    let verdicts: Vec<String> = c
+        .runs
+        .iter()
+        .map(|r| {
+            let verdict = match r.verdict {
+                Some(crate::diagnose::Verdict::EffectFound) => "effect found",
+                Some(crate::diagnose::Verdict::NoMissingEffect) => "no missing effect",
+                None => "not diagnosed",
+            };
+            format!("{}: {verdict}", r.source.file)
+        })
+        .collect();
+    ui.label(verdicts.join("; "));
+    let mut any = false;
+    for d in all.iter().filter(|d| d.block == block) {
+        any = true;
+        let text = format!(
+            "{} / {}: {}: {}",
+            file(d.runs[0]),
+            file(d.runs[1]),
+            d.effect.name_on(d.block),
+            d.words
+        );
+        if d.consistent == Some(false) {
+            ui.colored_label(ui.visuals().warn_fg_color, text);
+        } else {
+            ui.label(text);
+        }
+    }
+    if !any {
+        ui.label("no finding on this block in any compared run");
+    }
 }

@@ -1,0 +1,204 @@
+//! The diagnosis's findings compared across runs of the same unit (issue 15): an effect of the
+//! sensor is one property of it, so where two runs both name it its sizes must agree within
+//! their standard deviations; where they do not, the misfit of that form is not one fixed
+//! property of the unit (the runs' motion or reference shape it), and the engineer is told.
+//! An effect named on one run only is listed as such: the other run's motion may not excite it
+//! (a quadratic scale factor needs high rates), so absence alone is not a disagreement.
+//!
+//! Findings of the same block and effect are paired in the order the diagnosis named them.
+//! Their sizes are compared figure by figure: every number of a finding's `parameters` that has
+//! a standard deviation entry (a number or `null`) in its `parameter_std`, named by its key and
+//! index (`k2[2]`, `G[0][1]`). A difference is significant as in [`super::Delta`]: beyond
+//! [`super::SIGNIFICANCE_SIGMAS`] combined standard deviations; `None` where one is unknown.
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::{Delta, SIGNIFICANCE_SIGMAS};
+use crate::block::Block;
+use crate::diagnose::Finding;
+use crate::effect::Effect;
+
+/// Which of the two runs named the effect.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Presence {
+    /// Both.
+    Both,
+    /// The first of the pair only.
+    OnlyA,
+    /// The second of the pair only.
+    OnlyB,
+}
+
+/// One figure of a finding's size in both runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SizeDelta {
+    /// The figure: its key in `parameters` and its index (`k2[2]`).
+    pub name: String,
+    /// In the first run.
+    pub a: f64,
+    /// In the second run.
+    pub b: f64,
+    /// `b - a`, its standard deviation and significance.
+    #[serde(flatten)]
+    pub delta: Delta,
+}
+
+/// One effect of one block compared between two runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FindingDifference {
+    /// The block.
+    pub block: Block,
+    /// The catalogue entry.
+    pub effect: Effect,
+    /// Indices into the comparison's runs, `a < b`.
+    pub runs: [usize; 2],
+    /// Which run named it.
+    pub presence: Presence,
+    /// The sizes side by side (empty unless both named it).
+    pub sizes: Vec<SizeDelta>,
+    /// Both named it and no figure differs significantly (`None` unless both named it and at
+    /// least one figure could be judged).
+    pub consistent: Option<bool>,
+    /// The comparison in words.
+    pub words: String,
+}
+
+/// The numbers of `v` with their names (`key[i][j]`), in order.
+fn leaves(name: &str, v: &Value, out: &mut Vec<(String, Option<f64>)>) {
+    match v {
+        Value::Array(a) => {
+            for (i, x) in a.iter().enumerate() {
+                leaves(&format!("{name}[{i}]"), x, out);
+            }
+        }
+        Value::Null => out.push((name.to_owned(), None)),
+        other => out.push((name.to_owned(), other.as_f64())),
+    }
+}
+
+/// A finding's figures that have a standard deviation entry: `(name, value, std)`.
+fn figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
+    let (Value::Object(params), Value::Object(stds)) = (&f.parameters, &f.parameter_std) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (key, std) in stds {
+        let Some(value) = params.get(key) else { continue };
+        let (mut values, mut sds) = (Vec::new(), Vec::new());
+        leaves(key, value, &mut values);
+        leaves(key, std, &mut sds);
+        if values.len() != sds.len() {
+            continue;
+        }
+        for ((name, v), (_, sd)) in values.into_iter().zip(sds) {
+            if let Some(v) = v.filter(|v| v.is_finite()) {
+                out.push((name, v, sd.filter(|s| s.is_finite() && *s > 0.0)));
+            }
+        }
+    }
+    out
+}
+
+/// Compares two findings of the same block and effect.
+fn sizes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
+    let fb = figures(b);
+    figures(a)
+        .into_iter()
+        .filter_map(|(name, va, sa)| {
+            let (_, vb, sb) = fb.iter().find(|(n, _, _)| *n == name)?;
+            Some(SizeDelta {
+                delta: Delta::new(va, sa, *vb, *sb),
+                name,
+                a: va,
+                b: *vb,
+            })
+        })
+        .collect()
+}
+
+/// The words of a compared pair (`names` of the two runs).
+fn words(presence: Presence, sizes: &[SizeDelta], names: [&str; 2]) -> String {
+    match presence {
+        Presence::OnlyA | Presence::OnlyB => {
+            let (on, off) = if presence == Presence::OnlyA {
+                (names[0], names[1])
+            } else {
+                (names[1], names[0])
+            };
+            format!("named on {on} only: {off}'s motion may not excite it, or it is not the unit's")
+        }
+        Presence::Both => {
+            let worst = sizes
+                .iter()
+                .filter(|s| s.delta.significant == Some(true))
+                .filter_map(|s| s.delta.std.map(|sd| (s, s.delta.diff.abs() / sd)))
+                .max_by(|x, y| x.1.total_cmp(&y.1));
+            match worst {
+                Some((s, z)) => format!(
+                    "named on both, but its size differs ({} {:.4e} against {:.4e}, {z:.1} standard deviations \
+                     apart): not one fixed property of the unit, the runs' motion or reference shape it",
+                    s.name, s.a, s.b
+                ),
+                None if sizes.iter().any(|s| s.delta.significant.is_some()) => {
+                    format!("named on both, sizes agree within {SIGNIFICANCE_SIGMAS} standard deviations")
+                }
+                None => "named on both; sizes not judged (standard deviations unknown)".to_owned(),
+            }
+        }
+    }
+}
+
+/// Every pair of runs `a < b`, every (block, effect) named on either, compared. `names` labels
+/// the runs in the words (their files); `findings[i]` is run `i`'s diagnosis's findings.
+#[must_use]
+pub fn compare_findings(findings: &[&[Finding]], names: &[String]) -> Vec<FindingDifference> {
+    let mut out = Vec::new();
+    for a in 0..findings.len() {
+        for b in a + 1..findings.len() {
+            let (ra, rb) = (findings[a], findings[b]);
+            let keys: Vec<(Block, Effect)> = ra.iter().chain(rb).map(|f| (f.block, f.effect)).collect();
+            let mut seen: Vec<(Block, Effect)> = Vec::new();
+            for key in keys {
+                if seen.contains(&key) {
+                    continue;
+                }
+                seen.push(key);
+                let of = |r: &[Finding]| -> Vec<Finding> {
+                    r.iter().filter(|f| (f.block, f.effect) == key).cloned().collect()
+                };
+                let (fa, fb) = (of(ra), of(rb));
+                for k in 0..fa.len().max(fb.len()) {
+                    let presence = match (fa.get(k), fb.get(k)) {
+                        (Some(_), Some(_)) => Presence::Both,
+                        (Some(_), None) => Presence::OnlyA,
+                        _ => Presence::OnlyB,
+                    };
+                    let sizes = match (fa.get(k), fb.get(k)) {
+                        (Some(x), Some(y)) => sizes(x, y),
+                        _ => Vec::new(),
+                    };
+                    let judged: Vec<bool> = sizes.iter().filter_map(|s| s.delta.significant).collect();
+                    let consistent =
+                        (presence == Presence::Both && !judged.is_empty()).then(|| !judged.contains(&true));
+                    let label = |i: usize| names.get(i).map_or("?", String::as_str);
+                    out.push(FindingDifference {
+                        block: key.0,
+                        effect: key.1,
+                        runs: [a, b],
+                        presence,
+                        words: words(presence, &sizes, [label(a), label(b)]),
+                        sizes,
+                        consistent,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+#[path = "findings_tests.rs"]
+mod tests;

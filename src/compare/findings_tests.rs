@@ -1,0 +1,104 @@
+use serde_json::{Value, json};
+
+use super::*;
+
+fn finding(effect: Effect, parameters: Value, std: Value) -> Finding {
+    Finding {
+        block: Block::Gyro,
+        effect,
+        name: effect.name_on(Block::Gyro),
+        parameters,
+        parameter_std: std,
+        gap_before_db: -20.0,
+        gap_after_db: -21.0,
+        evidence: String::new(),
+        delta_chi2: 100.0,
+        added_parameters: 3,
+        criterion_gain: 60.0,
+    }
+}
+
+fn k2(v: [f64; 3], sd: [f64; 3]) -> Finding {
+    finding(Effect::ScaleNonlinearity, json!({ "k2": v }), json!({ "k2": sd }))
+}
+
+fn names() -> Vec<String> {
+    ["fast.csv", "slow.csv", "tapping.csv"]
+        .map(str::to_owned)
+        .to_vec()
+}
+
+#[test]
+fn sizes_within_their_deviations_agree_and_beyond_them_differ() {
+    // The real runs' k2 (1e-3 s/rad): broad07 against broad11 agree (x 1.7, z 1.0 sd apart),
+    // broad07 against broad25 do not (z 5.4 sd apart).
+    let fast = [k2([-0.78e-3, -0.95e-3, -0.59e-3], [0.19e-3, 0.13e-3, 0.14e-3])];
+    let slow = [k2([14.3e-3, -0.93e-3, 45.3e-3], [8.8e-3, 3.8e-3, 45.0e-3])];
+    let tapping = [k2([10.9e-3, -0.55e-3, 6.8e-3], [2.8e-3, 0.81e-3, 1.35e-3])];
+    let out = compare_findings(&[&fast, &slow, &tapping], &names());
+    assert_eq!(out.len(), 3, "{out:?}");
+    let pair = |a: usize, b: usize| out.iter().find(|d| d.runs == [a, b]).expect("pair");
+    let agree = pair(0, 1);
+    assert_eq!(agree.presence, Presence::Both);
+    assert_eq!(agree.consistent, Some(true), "{}", agree.words);
+    assert_eq!(agree.sizes.len(), 3);
+    assert_eq!(agree.sizes[2].name, "k2[2]");
+    assert!((agree.sizes[2].delta.diff - (45.3e-3 + 0.59e-3)).abs() < 1e-12);
+    assert!(agree.words.contains("agree"), "{}", agree.words);
+    let differ = pair(0, 2);
+    assert_eq!(differ.consistent, Some(false));
+    assert!(
+        differ.words.contains("k2[2]") && differ.words.contains("5.4 standard deviations"),
+        "{}",
+        differ.words
+    );
+}
+
+#[test]
+fn an_effect_on_one_run_only_is_listed_not_judged() {
+    let lag = finding(Effect::SensorLag, json!({"T_s": 0.004}), json!({"T_s": 0.0001}));
+    let a = [lag];
+    let b: [Finding; 0] = [];
+    let out = compare_findings(&[&a, &b], &names());
+    assert_eq!(out.len(), 1);
+    assert_eq!(out[0].presence, Presence::OnlyA);
+    assert_eq!(out[0].consistent, None);
+    assert!(out[0].sizes.is_empty());
+    assert!(
+        out[0].words.starts_with("named on fast.csv only"),
+        "{}",
+        out[0].words
+    );
+    let reversed = compare_findings(&[&b, &a], &names());
+    assert_eq!(reversed[0].presence, Presence::OnlyB);
+    assert!(
+        reversed[0].words.starts_with("named on slow.csv only"),
+        "{}",
+        reversed[0].words
+    );
+}
+
+#[test]
+fn unknown_deviations_and_nested_sizes() {
+    // G is 3x3: every element compared under its two indices; a null sd is not judged.
+    let g = |v: f64, sd: Value| {
+        finding(
+            Effect::GSensitivity,
+            json!({"G": [[v, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]}),
+            json!({ "G": [[sd, null, null], [null, null, null], [null, null, null]] }),
+        )
+    };
+    let a = [g(1e-4, json!(1e-5))];
+    let b = [g(2e-4, Value::Null)];
+    let out = compare_findings(&[&a, &b], &names());
+    assert_eq!(out[0].sizes.len(), 9);
+    assert_eq!(out[0].sizes[0].name, "G[0][0]");
+    assert_eq!(out[0].sizes[0].delta.significant, None);
+    assert_eq!(out[0].consistent, None);
+    assert!(out[0].words.contains("not judged"), "{}", out[0].words);
+    let c = [g(1.2e-4, json!(1e-5))];
+    let out = compare_findings(&[&a, &c], &names());
+    assert_eq!(out[0].consistent, Some(true));
+    let d = [g(2e-4, json!(1e-5))];
+    assert_eq!(compare_findings(&[&a, &d], &names())[0].consistent, Some(false));
+}

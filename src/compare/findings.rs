@@ -40,6 +40,10 @@ pub struct SizeDelta {
     pub a: f64,
     /// In the second run.
     pub b: f64,
+    /// Its standard deviation in the first run (`None`: unknown).
+    pub a_std: Option<f64>,
+    /// In the second.
+    pub b_std: Option<f64>,
     /// `b - a`, its standard deviation and significance.
     #[serde(flatten)]
     pub delta: Delta,
@@ -79,7 +83,8 @@ fn leaves(name: &str, v: &Value, out: &mut Vec<(String, Option<f64>)>) {
 }
 
 /// A finding's figures that have a standard deviation entry: `(name, value, std)`.
-fn figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
+#[must_use]
+pub fn figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
     let (Value::Object(params), Value::Object(stds)) = (&f.parameters, &f.parameter_std) else {
         return Vec::new();
     };
@@ -101,8 +106,10 @@ fn figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
     out
 }
 
-/// Compares two findings of the same block and effect.
-fn sizes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
+/// Compares two findings of the same block and effect (or one finding's sizes on two stretches
+/// of a record: `diagnose::halves`), figure by figure.
+#[must_use]
+pub fn sizes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
     let fb = figures(b);
     figures(a)
         .into_iter()
@@ -113,9 +120,22 @@ fn sizes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
                 name,
                 a: va,
                 b: *vb,
+                a_std: sa,
+                b_std: *sb,
             })
         })
         .collect()
+}
+
+/// The figure that differs by the most standard deviations among the significant ones, with
+/// that number.
+#[must_use]
+pub fn most_different(sizes: &[SizeDelta]) -> Option<(&SizeDelta, f64)> {
+    sizes
+        .iter()
+        .filter(|s| s.delta.significant == Some(true))
+        .filter_map(|s| s.delta.std.map(|sd| (s, s.delta.diff.abs() / sd)))
+        .max_by(|x, y| x.1.total_cmp(&y.1))
 }
 
 /// The words of a compared pair (`names` of the two runs).
@@ -129,24 +149,17 @@ fn words(presence: Presence, sizes: &[SizeDelta], names: [&str; 2]) -> String {
             };
             format!("named on {on} only: {off}'s motion may not excite it, or it is not the unit's")
         }
-        Presence::Both => {
-            let worst = sizes
-                .iter()
-                .filter(|s| s.delta.significant == Some(true))
-                .filter_map(|s| s.delta.std.map(|sd| (s, s.delta.diff.abs() / sd)))
-                .max_by(|x, y| x.1.total_cmp(&y.1));
-            match worst {
-                Some((s, z)) => format!(
-                    "named on both, but its size differs ({} {:.4e} against {:.4e}, {z:.1} standard deviations \
+        Presence::Both => match most_different(sizes) {
+            Some((s, z)) => format!(
+                "named on both, but its size differs ({} {:.4e} against {:.4e}, {z:.1} standard deviations \
                      apart): not one fixed property of the unit, the runs' motion or reference shape it",
-                    s.name, s.a, s.b
-                ),
-                None if sizes.iter().any(|s| s.delta.significant.is_some()) => {
-                    format!("named on both, sizes agree within {SIGNIFICANCE_SIGMAS} standard deviations")
-                }
-                None => "named on both; sizes not judged (standard deviations unknown)".to_owned(),
+                s.name, s.a, s.b
+            ),
+            None if sizes.iter().any(|s| s.delta.significant.is_some()) => {
+                format!("named on both, sizes agree within {SIGNIFICANCE_SIGMAS} standard deviations")
             }
-        }
+            None => "named on both; sizes not judged (standard deviations unknown)".to_owned(),
+        },
     }
 }
 

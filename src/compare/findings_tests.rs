@@ -15,6 +15,7 @@ fn finding(effect: Effect, parameters: Value, std: Value) -> Finding {
         delta_chi2: 100.0,
         added_parameters: 3,
         criterion_gain: 60.0,
+        halves: None,
     }
 }
 

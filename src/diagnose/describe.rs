@@ -262,6 +262,7 @@ mod tests {
             delta_chi2: 100.0,
             added_parameters: 1,
             criterion_gain: 80.0,
+            halves: None,
         }
     }
 

@@ -25,6 +25,7 @@ pub mod design;
 pub mod extend;
 pub mod fit;
 pub mod gate;
+pub mod halves;
 pub mod map;
 pub mod profile;
 pub mod report;

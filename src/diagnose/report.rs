@@ -86,6 +86,10 @@ pub struct Finding {
     pub added_parameters: usize,
     /// `delta_chi2 - added_parameters ln(n) - 2 ln(m)`: positive means significant.
     pub criterion_gain: f64,
+    /// The sizes fitted on each half of the analysed stretch, `[{parameters, parameter_std}, ..]`
+    /// (`halves.rs`; absent where the halves are not compared).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub halves: Option<Value>,
 }
 
 /// A candidate's evidence in one round.

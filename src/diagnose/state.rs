@@ -45,10 +45,16 @@ impl State {
     /// (degenerate inputs).
     #[must_use]
     pub fn base(design: Design, tau_s: f64, band_hz: [f64; 2]) -> Option<Self> {
+        Self::refit(design, &Structure::default(), &Theta::delay_only(tau_s), band_hz)
+    }
+
+    /// `structure` fitted on `design` from `start` (no tones, no clock correction). `None` when
+    /// the fit fails (degenerate inputs).
+    #[must_use]
+    pub fn refit(design: Design, structure: &Structure, start: &Theta, band_hz: [f64; 2]) -> Option<Self> {
         let outputs = design.outputs();
         let grams = design.grams(&outputs);
-        let theta = Theta::delay_only(tau_s);
-        let fitted = fit(&design, &grams, &Structure::default(), &theta, band_hz)?;
+        let fitted = fit(&design, &grams, structure, start, band_hz)?;
         let residual = fitted_residual(&design, &outputs, &fitted);
         Some(Self {
             design,

@@ -121,6 +121,7 @@ fn lag_finding(block: Block, t: f64, sd: f64) -> super::Finding {
         delta_chi2: 500.0,
         added_parameters: 1,
         criterion_gain: 480.0,
+        halves: None,
     }
 }
 

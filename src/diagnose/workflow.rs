@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 use super::DiagnoseError;
 use super::candidates::{Candidate, Extension, candidates};
 use super::design::{Design, DesignSignals};
+use super::halves::{HalvesSource, compare_halves};
 use super::map::{disagreement_map, power, psd_cells};
 use super::report::{
     BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
@@ -79,6 +80,9 @@ pub struct Prepared {
     pub source: Source,
     /// One entry per block, in the order of the settings.
     pub blocks: Vec<PreparedBlock>,
+    /// What the record's halves are built from, to tell whether each finding is one property
+    /// of the block over the run ([`super::halves`]; `None`: not compared).
+    pub halves: Option<HalvesSource>,
 }
 
 /// One block's starting point.
@@ -145,6 +149,11 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         settings,
         source: Source::of(run),
         blocks,
+        halves: Some(HalvesSource {
+            run: session.run().clone(),
+            identification: id,
+            span,
+        }),
     })
 }
 
@@ -154,7 +163,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
     let mut findings = Vec::new();
     let mut blocks = BTreeMap::new();
     let mut penalty = 0.0;
-    for pb in &prep.blocks {
+    for (block_index, pb) in prep.blocks.iter().enumerate() {
         let given = options.given.and_then(|m| m.blocks.get(pb.block.name()));
         // A rejected stand-side lag rejects the lag it was found as.
         let rejected: Vec<Effect> = options
@@ -169,7 +178,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
                 }
             })
             .collect();
-        let (report, mut found) = diagnose_block(pb, given, &rejected);
+        let (report, mut found) = diagnose_block(pb, (prep.halves.as_ref(), block_index), given, &rejected);
         penalty = pb.dof.ln();
         findings.append(&mut found);
         blocks.insert(pb.block.name().to_owned(), report);
@@ -205,7 +214,7 @@ const LINE_SEARCH_TOP: f64 = 1.5;
 /// The block's whole-record design, its expected disturbance level taken from the
 /// identification's `S_psi`, and its spectra above the band up to [`LINE_SEARCH_TOP`] times
 /// the band's top for the line search (`None` when too few bins remain).
-fn block_design(
+pub(super) fn block_design(
     run: &Run,
     motion: &EulerSeries,
     b: &BlockIdentification,
@@ -328,6 +337,7 @@ fn summary(c: &Candidate, rule: Rule) -> CandidateSummary {
 /// Grows one block's model; returns its report and findings.
 fn diagnose_block(
     pb: &PreparedBlock,
+    (halves, block_index): (Option<&HalvesSource>, usize),
     given: Option<&BlockModel>,
     rejected: &[Effect],
 ) -> (BlockReport, Vec<Finding>) {
@@ -389,6 +399,7 @@ fn diagnose_block(
             delta_chi2: delta,
             added_parameters: added,
             criterion_gain: gain,
+            halves: None,
         };
         accepted.push((best.effect, index, finding));
         state = next;
@@ -399,17 +410,17 @@ fn diagnose_block(
     } else {
         covariance(&state, band, chi2_per_dof)
     };
-    let findings = accepted
-        .into_iter()
-        .map(|(effect, index, mut finding)| {
-            finding.parameters = parameters(effect, &state, index, input_names);
-            finding.parameter_std = parameter_std(effect, &state, index, cov.as_ref());
-            if super::describe::size_within_noise(&finding) {
-                let _ = write!(finding.evidence, "; {}", super::describe::SIZE_WITHIN_NOISE);
-            }
-            finding
-        })
-        .collect();
+    for (effect, index, finding) in &mut accepted {
+        finding.parameters = parameters(*effect, &state, *index, input_names);
+        finding.parameter_std = parameter_std(*effect, &state, *index, cov.as_ref());
+        if super::describe::size_within_noise(finding) {
+            let _ = write!(finding.evidence, "; {}", super::describe::SIZE_WITHIN_NOISE);
+        }
+    }
+    if let Some(source) = halves {
+        compare_halves(source, block_index, &state, band, input_names, &mut accepted);
+    }
+    let findings = accepted.into_iter().map(|(_, _, finding)| finding).collect();
     let mut report = block_report(base, &state, first_round, dof);
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     (report, findings)

@@ -67,7 +67,8 @@ fn findings_on_real_runs_close_the_gap_stay_inside_the_band_and_agree_between_ru
             if f.effect == Effect::ScaleNonlinearity {
                 assert!(
                     f.evidence.contains(SIZE_WITHIN_NOISE)
-                        || f.evidence.contains("not one fixed property of the block over this run"),
+                        || f.evidence
+                            .contains("not one fixed property of the block over this run"),
                     "{name}: a k2 presented as certifiable: {}",
                     f.evidence
                 );

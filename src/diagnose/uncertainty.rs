@@ -185,21 +185,7 @@ fn sandwich_widening(
 ) -> Option<Vec<f64>> {
     let n = bread.nrows();
     let width = scores.len().div_ceil(SANDWICH_CLUSTERS).max(1);
-    let clusters: Vec<DVector<f64>> = scores
-        .chunks(width)
-        .map(|c| c.iter().fold(DVector::zeros(n), |acc, v| acc + v))
-        .collect();
-    let c = clusters.len();
-    if c < 4 * n {
-        return None;
-    }
-    let mean = clusters.iter().fold(DVector::zeros(n), |acc, v| acc + v) / c as f64;
-    let mut meat = DMatrix::<f64>::zeros(n, n);
-    for v in &clusters {
-        let d = v - &mean;
-        meat += &d * d.transpose();
-    }
-    meat *= c as f64 / (c as f64 - 1.0);
+    let meat = crate::ident::structural::sandwich::clustered_meat(scores, width)?;
     let v = bread * meat * bread;
     Some(
         (0..n)

@@ -30,7 +30,11 @@
 //! # Uncertainty
 //! The standard deviations are the square roots of the diagonal of the Gauss–Newton covariance
 //! `(J^T J)^-1` at the optimum (J the Jacobian of the whitened real residuals), multiplied by `max(1, chi2 / dof)`: a fit worse than the stated noise
-//! allows widens its error bars, a fit better than it never narrows them. A parameter the data
+//! allows widens its error bars, a fit better than it never narrows them. Per parameter, the
+//! sandwich `(J^T J)^-1 M (J^T J)^-1` of the bins' own scores replaces it where it is wider
+//! ([`sandwich`]): a misfit that piles up in some bins (on `--stand real` runs, the
+//! accelerometer's frequency-dependent errors in variables) is seen there, not in the one
+//! `chi2 / dof` number. A parameter the data
 //! cannot determine (a singular direction of `J`) gets an infinite standard deviation.
 //!
 //! # Order selection
@@ -61,6 +65,7 @@ mod phasor;
 mod project;
 mod rational;
 mod report;
+pub(crate) mod sandwich;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -221,10 +221,18 @@ impl Model {
     /// real residuals `sqrt(2) (Re, Im)(r_i L_i)` (unscaled by `chi2 / dof`). `+inf` for an
     /// undetermined parameter.
     pub fn parameter_std(&self, data: &Prepared) -> Vec<f64> {
+        self.parameter_std_and_sandwich(data).0
+    }
+
+    /// [`Self::parameter_std`] and, per parameter, the sandwich variance `(J^T J)^-1 M (J^T J)^-1`
+    /// of the bins' scores (`super::sandwich`; `None` where it cannot be formed).
+    pub fn parameter_std_and_sandwich(&self, data: &Prepared) -> (Vec<f64>, Option<Vec<f64>>) {
         let n_num = self.num.len();
         let p = ELEMENTS * n_num + self.den.len() + 1;
         let rows = data.real_data();
         let mut jac = faer::Mat::<f64>::zeros(rows, p);
+        // The whitened real residuals, laid out as the Jacobian's rows (for the sandwich).
+        let mut residual = vec![0.0; rows];
         let sqrt2 = std::f64::consts::SQRT_2;
         for k in 0..data.bins() {
             let x = data.x[k];
@@ -251,6 +259,11 @@ impl Model {
                     }
                 }
                 let row: [Complex64; 3] = std::array::from_fn(|j| model[3 * i + j]);
+                let r: [Complex64; 3] = std::array::from_fn(|j| data.h[k][3 * i + j] - row[j]);
+                for (l, z) in weight.whiten(&r).iter().enumerate() {
+                    residual[base + 2 * l] = sqrt2 * z.re;
+                    residual[base + 2 * l + 1] = sqrt2 * z.im;
+                }
                 let mut pw = sigma;
                 for m in 0..self.den.len() {
                     put(ELEMENTS * n_num + m, row.map(|z| -z * pw / d));
@@ -260,8 +273,9 @@ impl Model {
             }
         }
         if (0..p).any(|c| jac.col(c).iter().any(|v| !v.is_finite())) {
-            return vec![f64::INFINITY; p];
+            return (vec![f64::INFINITY; p], None);
         }
+        let scores = super::sandwich::bin_scores(&jac, &residual, data.bins());
         // Householder QR in place, sequential: at this size (at most ~6000 x 41) the threaded
         // version is about twice as slow, and a retune runs the blocks in parallel already.
         let block_size = qr::recommended_block_size::<f64>(rows, p);
@@ -276,7 +290,7 @@ impl Model {
             Spec::default(),
         );
         let r = DMatrix::from_fn(p, p, |i, j| if j >= i { jac[(i, j)] } else { 0.0 });
-        std_from_r(&r)
+        (std_from_r(&r), super::sandwich::variances(&r, &scores))
     }
 }
 

@@ -35,7 +35,8 @@ pub(super) fn ieee_units(k: &[[f64; 3]; 3], k_std: &[[f64; 3]; 3]) -> IeeeUnits 
 }
 
 /// Builds the output. The covariance is that of the Gauss–Newton approximation, scaled by
-/// `max(1, chi2 / dof)` and by the bins' correlation (`bin_correlation`, at least 1).
+/// `max(1, chi2 / dof)` and by the bins' correlation (`bin_correlation`, at least 1), and per
+/// parameter the sandwich's where that is wider.
 pub(super) fn assemble(
     data: &Prepared,
     selection: &Selection,
@@ -48,10 +49,21 @@ pub(super) fn assemble(
     let w_ref = data.omega_ref;
     let dof = data.real_data().saturating_sub(parameter_count(order)).max(1);
     let inflation = ((selection.chi2() / dof as f64).max(1.0) * bin_correlation.max(1.0)).sqrt();
-    let std: Vec<f64> = model
-        .parameter_std(data)
-        .into_iter()
-        .map(|s| s * inflation)
+    // Widened by the sandwich where the bins' own scores spread more than the weights say
+    // (`sandwich.rs`); never narrowed.
+    let (plain, sandwich) = model.parameter_std_and_sandwich(data);
+    let std: Vec<f64> = plain
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let widened = s * inflation;
+            let robust = sandwich.as_ref().and_then(|v| v.get(i)).map_or(0.0, |v| v.sqrt());
+            if widened.is_finite() {
+                widened.max(robust)
+            } else {
+                widened
+            }
+        })
         .collect();
     let to_matrix = |c: &[f64; ELEMENTS]| -> [[f64; 3]; 3] {
         std::array::from_fn(|i| std::array::from_fn(|j| c[3 * i + j]))

@@ -82,14 +82,20 @@ fn leaves(name: &str, v: &Value, out: &mut Vec<(String, Option<f64>)>) {
     }
 }
 
-/// A finding's figures that have a standard deviation entry: `(name, value, std)`.
+/// A finding's size figures that have a standard deviation entry: `(name, value, std)`.
 #[must_use]
 pub fn figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
     let (Value::Object(params), Value::Object(stds)) = (&f.parameters, &f.parameter_std) else {
         return Vec::new();
     };
+    // An effect's size only (a skew's channel delays hold the block's delay too); effects that
+    // are located rather than sized (tones, resonances) by every figure.
+    let keys = crate::diagnose::describe::size_keys(f.effect);
     let mut out = Vec::new();
     for (key, std) in stds {
+        if !keys.is_empty() && !keys.contains(&key.as_str()) {
+            continue;
+        }
         let Some(value) = params.get(key) else { continue };
         let (mut values, mut sds) = (Vec::new(), Vec::new());
         leaves(key, value, &mut values);

@@ -198,7 +198,7 @@ pub fn misfit_closed(before_total_db: f64, after_total_db: f64) -> String {
 
 /// The parameters that are an effect's size (zero: no effect); empty for effects whose
 /// parameters locate rather than size it (a tone's or resonance's frequency).
-fn size_keys(effect: Effect) -> &'static [&'static str] {
+pub(crate) fn size_keys(effect: Effect) -> &'static [&'static str] {
     match effect {
         Effect::ScaleNonlinearity => &["k2"],
         Effect::LeverArmError => &["offset_m"],

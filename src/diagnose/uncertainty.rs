@@ -148,7 +148,9 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
         let shares = group_shares(design, grams, structure, layout, &theta, &beta);
         (!shares.is_empty()).then_some(shares)
     };
-    let at_x0 = shares_at(&x0)?;
+    let Some(at_x0) = shares_at(&x0) else {
+        return Some(Covariance { matrix, n_linear: p });
+    };
     let mut scores: Vec<DVector<f64>> = at_x0.iter().map(|(_, u)| -2.0 * u).collect();
     for a in 0..q {
         let (Some(up), Some(down)) = (

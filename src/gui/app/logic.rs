@@ -122,7 +122,12 @@ impl App {
             .iter()
             .filter_map(|r| r.diagnosis.value.as_deref())
             .collect();
-        if let Some(c) = comparison.as_mut().filter(|_| reports.len() == entries.len()) {
+        // Only diagnoses made under one set of settings are comparable.
+        let same_settings = reports.windows(2).all(|w| w[0].settings == w[1].settings);
+        if let Some(c) = comparison
+            .as_mut()
+            .filter(|_| reports.len() == entries.len() && same_settings)
+        {
             let names: Vec<String> = entries.iter().map(|r| r.name()).collect();
             c.add_findings(&reports, &names);
         }

@@ -166,8 +166,8 @@ fn figures(ui: &mut egui::Ui, c: &Comparison, block: &str, view: &ViewState) {
 }
 
 /// Said where the compared runs have not all been diagnosed.
-pub const FINDINGS_NOT_COMPARED: &str =
-    "findings: run Find missing effects on every compared run (Missing effects tab) to compare them here";
+pub const FINDINGS_NOT_COMPARED: &str = "findings: run Find missing effects on every compared run (Missing \
+     effects tab), with the same settings, to compare them here";
 
 /// The diagnosis's findings of `block` compared between each pair of runs, in words.
 fn findings(ui: &mut egui::Ui, c: &Comparison, block: crate::block::Block) {

@@ -221,12 +221,16 @@ impl Model {
     /// real residuals `sqrt(2) (Re, Im)(r_i L_i)` (unscaled by `chi2 / dof`). `+inf` for an
     /// undetermined parameter.
     pub fn parameter_std(&self, data: &Prepared) -> Vec<f64> {
-        self.parameter_std_and_sandwich(data).0
+        self.standard_deviations(data, false).0
     }
 
     /// [`Self::parameter_std`] and, per parameter, the sandwich variance `(J^T J)^-1 M (J^T J)^-1`
     /// of the bins' scores (`super::sandwich`; `None` where it cannot be formed).
     pub fn parameter_std_and_sandwich(&self, data: &Prepared) -> (Vec<f64>, Option<Vec<f64>>) {
+        self.standard_deviations(data, true)
+    }
+
+    fn standard_deviations(&self, data: &Prepared, sandwich: bool) -> (Vec<f64>, Option<Vec<f64>>) {
         let n_num = self.num.len();
         let p = ELEMENTS * n_num + self.den.len() + 1;
         let rows = data.real_data();
@@ -275,7 +279,11 @@ impl Model {
         if (0..p).any(|c| jac.col(c).iter().any(|v| !v.is_finite())) {
             return (vec![f64::INFINITY; p], None);
         }
-        let scores = super::sandwich::bin_scores(&jac, &residual, data.bins());
+        let scores = if sandwich {
+            super::sandwich::bin_scores(&jac, &residual, data.bins())
+        } else {
+            Vec::new()
+        };
         // Householder QR in place, sequential: at this size (at most ~6000 x 41) the threaded
         // version is about twice as slow, and a retune runs the blocks in parallel already.
         let block_size = qr::recommended_block_size::<f64>(rows, p);
@@ -290,7 +298,11 @@ impl Model {
             Spec::default(),
         );
         let r = DMatrix::from_fn(p, p, |i, j| if j >= i { jac[(i, j)] } else { 0.0 });
-        (std_from_r(&r), super::sandwich::variances(&r, &scores))
+        let plain = std_from_r(&r);
+        let robust = (sandwich && plain.iter().all(|v| v.is_finite()))
+            .then(|| super::sandwich::variances(&r, &scores))
+            .flatten();
+        (plain, robust)
     }
 }
 

@@ -63,7 +63,22 @@ pub(crate) fn clustered_meat(scores: &[DVector<f64>], width: usize) -> Option<DM
 pub(super) fn variances(r: &DMatrix<f64>, scores: &[DVector<f64>]) -> Option<Vec<f64>> {
     let p = r.ncols();
     let meat = clustered_meat(scores, CLUSTER_BINS)?;
-    let inverse = (r.transpose() * r).try_inverse()?;
+    // (R^T R)^-1 = V S^-2 V^T from R's SVD (not by inverting R^T R, which squares the
+    // condition); a direction below 1e-12 of the largest singular value leaves its parameters
+    // undetermined (`+inf` already), and the sandwich is not formed.
+    let svd = r.clone().svd(false, true);
+    let v_t = svd.v_t?;
+    let s = svd.singular_values;
+    let s_max = s.iter().copied().fold(0.0, f64::max);
+    let determined = |x: f64| x.is_finite() && x > 1e-12 * s_max;
+    if !(s_max.is_finite() && s_max > 0.0 && s.iter().all(|&x| determined(x))) {
+        return None;
+    }
+    let inverse = DMatrix::<f64>::from_fn(p, p, |i, j| {
+        (0..s.len())
+            .map(|k| v_t[(k, i)] * v_t[(k, j)] / (s[k] * s[k]))
+            .sum::<f64>()
+    });
     let v = &inverse * meat * &inverse;
     let diagonal: Vec<f64> = (0..p).map(|i| v[(i, i)]).collect();
     diagonal

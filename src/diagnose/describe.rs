@@ -209,33 +209,19 @@ pub(crate) fn size_keys(effect: Effect) -> &'static [&'static str] {
     }
 }
 
-/// The numbers of `v` in order, nested arrays flattened (`None` for a null or missing one).
-fn leaves(v: Option<&Value>, out: &mut Vec<Option<f64>>) {
-    match v {
-        Some(Value::Array(a)) => a.iter().for_each(|x| leaves(Some(x), out)),
-        Some(x) => out.push(num(x)),
-        None => out.push(None),
-    }
-}
-
 /// Whether every component of a finding's size lies within two of its standard deviations of
 /// zero (all of them known): the chi-square shows a misfit of the effect's form, but its size is
 /// not determined (on a real run, a misfit that piles up where the effect's regressors live
 /// widens their standard deviations: `uncertainty`'s sandwich).
 #[must_use]
 pub fn size_within_noise(f: &Finding) -> bool {
-    let mut values = Vec::new();
-    let mut stds = Vec::new();
-    for key in size_keys(f.effect) {
-        leaves(f.parameters.get(*key), &mut values);
-        leaves(f.parameter_std.get(*key), &mut stds);
-    }
-    !values.is_empty()
-        && values.len() == stds.len()
-        && values.iter().zip(&stds).all(|(v, sd)| match (v, sd) {
-            (Some(v), Some(sd)) => sd.is_finite() && *sd > 0.0 && v.abs() <= 2.0 * sd,
-            _ => false,
-        })
+    // The size figures as the comparisons read them (`compare::findings::figures`).
+    let figures = crate::compare::findings::figures(f);
+    !size_keys(f.effect).is_empty()
+        && !figures.is_empty()
+        && figures
+            .iter()
+            .all(|(_, v, sd)| sd.is_some_and(|sd| v.abs() <= 2.0 * sd))
 }
 
 /// Said in a finding's evidence when [`size_within_noise`].

@@ -70,10 +70,13 @@ fn a_sensor_lag_predicts_the_other_half_and_is_kept() {
 #[test]
 fn a_record_too_short_for_the_stationarity_check_is_still_halved() {
     // 60 s at 500 Hz: 13 Welch segments of 4096 with half overlap, too few for four stretches of
-    // six, enough for two halves.
+    // six, enough for two halves; the stationarity check is made on segments of 2048 (28 of them,
+    // 4 stretches).
     let id = identified(60.0, &[], 5);
     for b in &id.blocks {
-        assert!(b.stationarity.is_none(), "{}: no stationarity check", b.block);
+        let st = b.stationarity.as_ref().expect("checked on a shorter segment");
+        assert_eq!(st.segment_len, Some(2048), "{}", b.block);
+        assert_eq!(st.stretches.len(), 4, "{}", b.block);
         let h = held_out(&id, b.block);
         assert!(h.iter().all(Option::is_some), "{}: {h:?}", b.block);
     }

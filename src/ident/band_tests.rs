@@ -29,6 +29,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
         equivalent_averages: 38.0,
         bin_correlation: 1.0,
         stretches: Vec::new(),
+        finer_stretches: None,
         stationarity_cache: crate::ident::stretches::StationarityCache::default(),
         held_out_cache: crate::ident::holdout::HeldOutCache::default(),
         sample_rate_hz: RATE,

@@ -35,6 +35,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
         equivalent_averages: 38.0,
         bin_correlation: 1.0,
         stretches: Vec::new(),
+        finer_stretches: None,
         stationarity_cache: crate::ident::stretches::StationarityCache::default(),
         held_out_cache: crate::ident::holdout::HeldOutCache::default(),
         sample_rate_hz: RATE,

@@ -56,7 +56,8 @@ pub struct BlockIdentification {
     /// The fit over the usable band the coherence found, when the band was ended below it at a
     /// misfit ([`super::band_top`]): where the next retune's first fit starts from.
     pub usable_band_fit: Option<Arc<StructuralFit>>,
-    /// The stretches' fits (the stationarity check; `None` for a record too short to cut).
+    /// The stretches' fits (the stationarity check, on a shorter segment for a record too short
+    /// for stretches at the settings' segment; `None` for a record too short even then).
     pub stationarity: Option<Arc<Stationarity>>,
     /// What was regularised or is inexact (empty when all is well).
     pub warnings: Vec<IdentWarning>,

@@ -148,3 +148,7 @@ mod edges_tests;
 #[cfg(test)]
 #[path = "causal_grid_tests.rs"]
 mod causal_grid_tests;
+
+#[cfg(test)]
+#[path = "finer_stretches_tests.rs"]
+mod finer_stretches_tests;

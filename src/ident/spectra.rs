@@ -7,7 +7,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::signals::BlockSignals;
-use super::stretches::{StationarityCache, StretchSpectra, stretch_count};
+use super::stretches::{FinerStretches, StationarityCache, StretchSpectra, finer_segment_len, stretch_count};
 use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
 
 /// One block's spectral matrices on the one-sided Welch grid.
@@ -29,6 +29,11 @@ pub struct BlockSpectra {
     /// halves of the held-out validation, [`super::holdout`]); two halves for a record too short
     /// for the stationarity check, empty for one too short to halve.
     pub stretches: Vec<StretchSpectra>,
+    /// Stretches on a shorter segment for the stationarity check of a record too short for
+    /// [`super::stretches::MIN_STRETCHES`] stretches at the settings' segment
+    /// ([`super::stretches::finer_segment_len`]); `None` when `stretches` suffice or no shorter
+    /// segment gives enough.
+    pub finer_stretches: Option<FinerStretches>,
     /// The stretches' fits for the last band asked ([`super::stretches::cached_stationarity`]).
     pub stationarity_cache: StationarityCache,
     /// The held-out figures for the last band asked ([`super::holdout::cached_held_out`]).
@@ -96,8 +101,25 @@ pub fn block_spectra(
         Some(parts) => stretches_of(&parts, n_segments, settings, sample_rate_hz, &window),
         None => stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?,
     };
+    let n_samples = channels.first().map_or(0, |c| c.len());
+    let finer_stretches = match finer_segment_len(settings, n_samples) {
+        Some(segment_len) if stretches.len() < super::stretches::MIN_STRETCHES => {
+            let finer = WelchSettings {
+                segment_len,
+                fft_len: None,
+                ..*settings
+            };
+            let window = planner.window(finer.window, segment_len);
+            Some(FinerStretches {
+                segment_len,
+                stretches: stretch_spectra(planner, &channels, sample_rate_hz, &finer, &window)?,
+            })
+        }
+        _ => None,
+    };
     Ok(BlockSpectra {
         stretches,
+        finer_stretches,
         stationarity_cache: StationarityCache::default(),
         held_out_cache: super::holdout::HeldOutCache::default(),
         frequency_hz: m.frequency_hz.clone(),

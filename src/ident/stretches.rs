@@ -15,9 +15,12 @@
 //!   logging on separate clocks) shows as a trend of the stretches' delays; a gain that changes
 //!   (temperature, a loose mount) as a spread well beyond the stretches' own uncertainties.
 //!
+//! A record too short for [`MIN_STRETCHES`] stretches at the settings' segment is cut into
+//! stretches of a shorter segment for this check ([`finer_segment_len`], [`FinerStretches`]).
+//!
 //! Units: s, Hz, `K` in block units over input units. A stretch whose fit fails is left out; fewer
-//! than [`MIN_STRETCHES`] stretches (a short record cut only into halves) or fitted stretches give
-//! no summary.
+//! than [`MIN_STRETCHES`] fitted stretches, or a record too short even on the shortest segment,
+//! give no summary.
 
 use serde::{Deserialize, Serialize};
 
@@ -53,7 +56,7 @@ pub struct StretchSpectra {
 /// [`MAX_STRETCHES`] of at least [`MIN_SEGMENTS`] segments each; a record too short for
 /// [`MIN_STRETCHES`] of them is cut into its two halves when each has [`MIN_SEGMENTS`] (the
 /// held-out validation of the order, [`super::holdout`], needs only those; the stationarity check
-/// then has too few stretches and is not made), and not at all when shorter still.
+/// is then made on a shorter segment, [`finer_segment_len`]), and not at all when shorter still.
 #[must_use]
 pub fn stretch_count(n_segments: usize) -> usize {
     let m = (n_segments / MIN_SEGMENTS).min(MAX_STRETCHES);
@@ -64,6 +67,55 @@ pub fn stretch_count(n_segments: usize) -> usize {
     } else {
         0
     }
+}
+
+/// Stretches cut on a shorter Welch segment than the settings' (each on its own native grid,
+/// `k fs / segment_len`): the stationarity check of a record too short for [`MIN_STRETCHES`]
+/// stretches of [`MIN_SEGMENTS`] segments at the settings' segment.
+#[derive(Clone, Debug)]
+pub struct FinerStretches {
+    /// Their segment length, samples.
+    pub segment_len: usize,
+    /// The stretches, in time order.
+    pub stretches: Vec<StretchSpectra>,
+}
+
+/// Shortest segment the stationarity check may fall back to, as a fraction of the settings'
+/// segment (a quarter: the stretches' bins are then 4x wider, still many across a band of a
+/// few Hz, and the order-0 fit they feed needs no fine resolution) and in samples.
+const FINER_SEGMENT_DIVISOR: usize = 4;
+/// Shortest segment the stationarity check falls back to, samples.
+const FINER_SEGMENT_MIN: usize = 256;
+
+/// The longest segment, halving the settings' down to a quarter of it (and not below
+/// [`FINER_SEGMENT_MIN`] samples), that cuts a record of `n_samples` into [`MIN_STRETCHES`]
+/// stretches of [`MIN_SEGMENTS`] segments; `None` when the settings' own segment already does,
+/// or none does.
+///
+/// Why: without stretches a record's standard deviations rest on the noise model alone, and on
+/// a short real record (132 s at 286 Hz with the default 4096-sample segment: 17 segments) that
+/// model's errors go unchecked; the spread of the stretches' estimates on a shorter segment is
+/// a floor on the whole record's variance that does not rest on it (the longer segment's
+/// estimate is no less variable than that spread implies, since the delay and the gain are
+/// carried by the band's many bins, not by its finest resolution).
+#[must_use]
+pub fn finer_segment_len(settings: &crate::spectral::WelchSettings, n_samples: usize) -> Option<usize> {
+    if stretch_count(settings.n_segments(n_samples)) >= MIN_STRETCHES {
+        return None;
+    }
+    let shortest = (settings.segment_len / FINER_SEGMENT_DIVISOR).max(FINER_SEGMENT_MIN);
+    let mut len = settings.segment_len / 2;
+    while len >= shortest && len.is_multiple_of(2) {
+        let finer = crate::spectral::WelchSettings {
+            segment_len: len,
+            ..*settings
+        };
+        if stretch_count(finer.n_segments(n_samples)) >= MIN_STRETCHES {
+            return Some(len);
+        }
+        len /= 2;
+    }
+    None
 }
 
 /// One stretch's order-0 fit.
@@ -91,6 +143,10 @@ pub struct Stationarity {
     pub k_spread_std: [[f64; 3]; 3],
     /// `sd(tau_m) / sqrt(M)`, s.
     pub tau_spread_std_s: f64,
+    /// The stretches' Welch segment, samples, when it is shorter than the settings' (a record too
+    /// short for [`MIN_STRETCHES`] stretches at the settings' segment, [`FinerStretches`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segment_len: Option<usize>,
     /// Least-squares slope of the stretches' delays against time, s per s (the delay grows by
     /// this much each second; 1e-6 is 1 ppm of clock rate).
     pub tau_trend: f64,
@@ -127,17 +183,32 @@ const STRETCH_DELAY_REACH_S: f64 = 0.3;
 /// or with fewer than [`MIN_STRETCHES`] fitted.
 #[must_use]
 pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Stationarity> {
-    if spectra.stretches.len() < MIN_STRETCHES {
-        return None;
-    }
-    let native = native_bins(spectra, band_hz);
-    let step = spectra.native_step();
-    let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
-    let stretches: Vec<StretchFit> = spectra
-        .stretches
-        .iter()
-        .filter_map(|s| fit_stretch(s, &native, step, &frequency_hz))
-        .collect();
+    let fitted = |stretches: &[StretchSpectra], native: &[usize], step: usize, frequency_hz: &[f64]| {
+        stretches
+            .iter()
+            .filter_map(|s| fit_stretch(s, native, step, frequency_hz))
+            .collect::<Vec<StretchFit>>()
+    };
+    let (stretches, segment_len) = if spectra.stretches.len() >= MIN_STRETCHES {
+        let native = native_bins(spectra, band_hz);
+        let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
+        (
+            fitted(&spectra.stretches, &native, spectra.native_step(), &frequency_hz),
+            None,
+        )
+    } else {
+        // The finer stretches' own native grid: bin `k` at `k fs / segment_len`.
+        let finer = spectra.finer_stretches.as_ref()?;
+        let bin_hz = |k: usize| k as f64 * spectra.sample_rate_hz / finer.segment_len as f64;
+        let native: Vec<usize> = (0..=finer.segment_len / 2)
+            .filter(|&k| (band_hz[0]..=band_hz[1]).contains(&bin_hz(k)))
+            .collect();
+        let frequency_hz: Vec<f64> = native.iter().map(|&k| bin_hz(k)).collect();
+        (
+            fitted(&finer.stretches, &native, 1, &frequency_hz),
+            Some(finer.segment_len),
+        )
+    };
     let m = stretches.len();
     if m < MIN_STRETCHES {
         return None;
@@ -159,6 +230,7 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
         stretches,
         k_spread_std,
         tau_spread_std_s,
+        segment_len,
         tau_trend,
         tau_trend_std,
     })

@@ -143,7 +143,8 @@ pub struct BlockModel {
     #[serde(default)]
     pub band_hz: [f64; 2],
     /// The block identified on consecutive stretches of the record (order 0): per-stretch `K`
-    /// and delay, their spread and the delay's trend. Absent for a record too short to cut.
+    /// and delay, their spread and the delay's trend (`segment_len` when on a shorter segment
+    /// than the settings'). Absent for a record too short to cut.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stationarity: Option<crate::ident::stretches::Stationarity>,
     /// Noise terms of the block's disturbance (the residual of this model over the analysed

@@ -13,8 +13,13 @@ use crate::model::BlockModel;
 #[must_use]
 pub fn stationarity_label(block: &str, st: &Stationarity) -> String {
     format!(
-        "{block} stretches: {}; delay trend {:+.1} ± {:.1} ppm ({})",
+        "{block} stretches: {}{}; delay trend {:+.1} ± {:.1} ppm ({})",
         st.stretches.len(),
+        st.segment_len
+            .map(|l| format!(
+                " (on segments of {l}: the record is too short for stretches at the settings' segment)"
+            ))
+            .unwrap_or_default(),
         st.tau_trend * 1e6,
         st.tau_trend_std * 1e6,
         if st.drifts() {

@@ -180,3 +180,63 @@ fn a_bad_run_or_a_single_run_exits_2_without_output() {
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("broken.csv"));
 }
+
+/// The three real recordings are one IMU (`tests/data/real/README.md`): its delay is one figure,
+/// and broad11 and broad25 share the axis rotation, so their `K` differ only by how the unit sat
+/// against the reference. The comparison must not call the short, slow run's delay different
+/// (its deviation from stretches on a shorter segment), and must split the `K` difference of the
+/// pair with one axis rotation into the mount's rotation and the unit's own figures.
+#[test]
+fn the_real_unit_s_runs_agree_on_the_delay_and_a_rotation_of_its_axes_is_told_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let real = |name: &str| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/real")
+            .join(name)
+    };
+    let runs = [
+        real("broad07_fast_rotation.csv.gz"),
+        real("broad11_slow_translation.csv.gz"),
+        real("broad25_tapping.csv.gz"),
+    ];
+    let out = dir.path().join("comparison.json");
+    let mut args = vec!["compare"];
+    args.extend(runs.iter().map(|r| r.to_str().unwrap()));
+    args.extend(["--out", out.to_str().unwrap()]);
+    let o = imu_attest(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let c: Comparison = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    for d in &c.differences {
+        assert_ne!(
+            d.tau_s.significant,
+            Some(true),
+            "runs {:?}: {:?}",
+            d.runs,
+            d.tau_s
+        );
+    }
+    let pair = c
+        .differences
+        .iter()
+        .find(|d| d.runs == [1, 2])
+        .expect("broad11 / broad25");
+    let split = pair.mount.as_ref().expect("K near the identity: split");
+    // The rotation is half the antisymmetric part of K_b K_a^-1 - I (mrad), from the runs' K.
+    let k = |run: usize| nalgebra::Matrix3::from_fn(|i, j| c.runs[run].blocks["gyro"].k[i][j]);
+    let m = k(2) * k(1).try_inverse().unwrap();
+    let theta = [(2, 1), (0, 2), (1, 0)].map(|(i, j)| 500.0 * (m[(i, j)] - m[(j, i)]));
+    for (got, want) in split.rotation_mrad.iter().zip(theta) {
+        assert!((got.diff - want).abs() < 1e-9, "{} vs {want}", got.diff);
+    }
+    assert!(split.rotation_significant, "{:?}", split.rotation_mrad);
+    assert!(
+        split.rotation_mrad[0].diff.abs() > 3.0,
+        "{:?}",
+        split.rotation_mrad
+    );
+    assert!(
+        stderr.contains("broad25_tapping.csv.gz - broad11_slow_translation.csv.gz: the axes are rotated by"),
+        "{stderr}"
+    );
+}

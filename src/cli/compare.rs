@@ -62,6 +62,18 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             .collect();
         comparison.add_findings(&reports.iter().collect::<Vec<_>>(), &names);
     }
+    for d in &comparison.differences {
+        if let Some(split) = &d.mount {
+            let file = |i: usize| comparison.runs[i].source.file.as_str();
+            eprintln!(
+                "imu-attest: {} block, {} - {}: {}",
+                d.block,
+                file(d.runs[1]),
+                file(d.runs[0]),
+                split.words()
+            );
+        }
+    }
     write_atomic(&out, |w| {
         serde_json::to_writer_pretty(&mut *w, &comparison).map_err(std::io::Error::other)?;
         w.write_all(b"\n")

@@ -11,6 +11,7 @@
 use std::collections::BTreeMap;
 
 pub mod findings;
+pub mod mount;
 
 use serde::{Deserialize, Serialize};
 
@@ -144,6 +145,10 @@ pub struct Difference {
     pub tau_s: Delta,
     /// Any element of K or tau significantly different.
     pub significant: bool,
+    /// The difference of `K` split into the mount's rotation and the block's own axes
+    /// ([`mount::MountSplit`]); absent when either `K` is too far from the identity for it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mount: Option<mount::MountSplit>,
 }
 
 /// Why a comparison cannot be made.
@@ -227,6 +232,7 @@ fn difference(
         .flatten()
         .chain([&tau_s])
         .any(|d| d.significant == Some(true));
+    let mount = mount::MountSplit::new(fa, fb, &k, &tau_s);
     Difference {
         block: block.to_owned(),
         runs: [a, b],
@@ -234,6 +240,7 @@ fn difference(
         k,
         tau_s,
         significant,
+        mount,
     }
 }
 

@@ -32,6 +32,21 @@ pub fn significance_label(comparison: &Comparison, block: &str) -> String {
     format!("{block}: {n} significant differences")
 }
 
+/// Per pair of runs with a split ([`crate::compare::mount::MountSplit`]): the pair's files and
+/// whether the mount's rotation and the block's own figures differ, in words.
+#[must_use]
+pub fn mount_lines(comparison: &Comparison, block: &str) -> Vec<String> {
+    comparison
+        .differences
+        .iter()
+        .filter(|d| d.block == block)
+        .filter_map(|d| {
+            let split = d.mount.as_ref()?;
+            Some(format!("{}: {}", difference_header(comparison, d), split.words()))
+        })
+        .collect()
+}
+
 fn delta_text(d: &Delta, scale: f64) -> String {
     let mark = if d.significant == Some(true) { " *" } else { "" };
     match d.std {
@@ -81,6 +96,9 @@ pub fn show(
     });
     let block = view.bode_block.name();
     ui.label(significance_label(c, block));
+    for line in mount_lines(c, block) {
+        ui.label(line);
+    }
     if c.orders_differ(block) {
         ui.colored_label(ui.visuals().warn_fg_color, ORDERS_DIFFER);
     }

@@ -230,7 +230,7 @@ fn compare_shows_each_run_s_findings_side_by_side() {
     assert_eq!(c.findings.as_deref(), Some(expected.as_slice()));
     // The pair's difference of K split into the mount's rotation and the block's own axes,
     // shown in words (both runs simulated on one mount: no rotation between them).
-    let mounts = imu_attest::gui::view::compare::mount_lines(&c, "gyro");
+    let mounts = c.mount_lines("gyro");
     assert_eq!(mounts.len(), 1, "{mounts:?}");
     assert!(
         mounts[0].starts_with("b.csv - a.csv: the axes' rotation agrees"),

@@ -62,16 +62,9 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             .collect();
         comparison.add_findings(&reports.iter().collect::<Vec<_>>(), &names);
     }
-    for d in &comparison.differences {
-        if let Some(split) = &d.mount {
-            let file = |i: usize| comparison.runs[i].source.file.as_str();
-            eprintln!(
-                "imu-attest: {} block, {} - {}: {}",
-                d.block,
-                file(d.runs[1]),
-                file(d.runs[0]),
-                split.words()
-            );
+    for block in crate::block::Block::BOTH.map(crate::block::Block::name) {
+        for line in comparison.mount_lines(block) {
+            eprintln!("imu-attest: {block} block, {line}");
         }
     }
     write_atomic(&out, |w| {

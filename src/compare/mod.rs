@@ -57,6 +57,33 @@ impl Comparison {
     }
 }
 
+impl Comparison {
+    /// A pair's label: `later - earlier`, by file (two runs of one regime differ).
+    #[must_use]
+    pub fn difference_header(&self, d: &Difference) -> String {
+        let file = |i: usize| self.runs.get(i).map_or("?", |r| r.source.file.as_str());
+        format!("{} - {}", file(d.runs[1]), file(d.runs[0]))
+    }
+
+    /// Per pair of runs with a split of `block`'s K ([`mount::MountSplit`]): the pair's label and
+    /// whether the axes' rotation and the block's own figures differ, in words (the command line
+    /// prints them, the Compare tab shows them).
+    #[must_use]
+    pub fn mount_lines(&self, block: &str) -> Vec<String> {
+        self.differences
+            .iter()
+            .filter(|d| d.block == block)
+            .filter_map(|d| {
+                Some(format!(
+                    "{}: {}",
+                    self.difference_header(d),
+                    d.mount.as_ref()?.words()
+                ))
+            })
+            .collect()
+    }
+}
+
 /// One run's figures.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ComparedRun {

@@ -102,8 +102,10 @@ pub fn block_spectra(
         None => stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?,
     };
     let n_samples = channels.first().map_or(0, |c| c.len());
+    // Only where the settings' segment gives too few stretches (`finer_segment_len` says None
+    // otherwise).
     let finer_stretches = match finer_segment_len(settings, n_samples) {
-        Some(segment_len) if stretches.len() < super::stretches::MIN_STRETCHES => {
+        Some(segment_len) => {
             let finer = WelchSettings {
                 segment_len,
                 fft_len: None,
@@ -115,7 +117,7 @@ pub fn block_spectra(
                 stretches: stretch_spectra(planner, &channels, sample_rate_hz, &finer, &window)?,
             })
         }
-        _ => None,
+        None => None,
     };
     Ok(BlockSpectra {
         stretches,

@@ -80,9 +80,9 @@ pub struct FinerStretches {
     pub stretches: Vec<StretchSpectra>,
 }
 
-/// Shortest segment the stationarity check may fall back to, as a fraction of the settings'
-/// segment (a quarter: the stretches' bins are then 4x wider, still many across a band of a
-/// few Hz, and the order-0 fit they feed needs no fine resolution) and in samples.
+/// Shortest segment the stationarity check falls back to, as a divisor of the settings' segment
+/// (a quarter: the stretches' bins are then 4x wider, still many across a band of a few Hz, and
+/// the order-0 fit they feed needs no fine resolution).
 const FINER_SEGMENT_DIVISOR: usize = 4;
 /// Shortest segment the stationarity check falls back to, samples.
 const FINER_SEGMENT_MIN: usize = 256;

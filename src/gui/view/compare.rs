@@ -32,21 +32,6 @@ pub fn significance_label(comparison: &Comparison, block: &str) -> String {
     format!("{block}: {n} significant differences")
 }
 
-/// Per pair of runs with a split ([`crate::compare::mount::MountSplit`]): the pair's files and
-/// whether the mount's rotation and the block's own figures differ, in words.
-#[must_use]
-pub fn mount_lines(comparison: &Comparison, block: &str) -> Vec<String> {
-    comparison
-        .differences
-        .iter()
-        .filter(|d| d.block == block)
-        .filter_map(|d| {
-            let split = d.mount.as_ref()?;
-            Some(format!("{}: {}", difference_header(comparison, d), split.words()))
-        })
-        .collect()
-}
-
 fn delta_text(d: &Delta, scale: f64) -> String {
     let mark = if d.significant == Some(true) { " *" } else { "" };
     match d.std {
@@ -96,7 +81,7 @@ pub fn show(
     });
     let block = view.bode_block.name();
     ui.label(significance_label(c, block));
-    for line in mount_lines(c, block) {
+    for line in c.mount_lines(block) {
         ui.label(line);
     }
     if c.orders_differ(block) {
@@ -133,13 +118,6 @@ pub fn show(
     });
 }
 
-/// The difference column's header: `later - earlier`, by file (two runs of one regime differ).
-#[must_use]
-pub fn difference_header(c: &Comparison, d: &crate::compare::Difference) -> String {
-    let file = |i: usize| c.runs.get(i).map_or("?", |r| r.source.file.as_str());
-    format!("{} - {}", file(d.runs[1]), file(d.runs[0]))
-}
-
 /// The table: each run's figures, then each pair's difference.
 fn figures(ui: &mut egui::Ui, c: &Comparison, block: &str, view: &ViewState) {
     egui::Grid::new("compare-figures").striped(true).show(ui, |ui| {
@@ -148,7 +126,7 @@ fn figures(ui: &mut egui::Ui, c: &Comparison, block: &str, view: &ViewState) {
             ui.strong(format!("{} ({})", r.source.file, r.source.regime));
         }
         for d in c.differences.iter().filter(|d| d.block == block) {
-            ui.strong(difference_header(c, d));
+            ui.strong(c.difference_header(d));
         }
         ui.end_row();
         ui.label("τ, ms");

@@ -55,9 +55,7 @@ impl Comparison {
             .map(|b| b.order);
         orders.next().is_some_and(|first| orders.any(|o| o != first))
     }
-}
 
-impl Comparison {
     /// A pair's label: `later - earlier`, by file (two runs of one regime differ).
     #[must_use]
     pub fn difference_header(&self, d: &Difference) -> String {

@@ -55,16 +55,22 @@ def shifted(x, tau, fs):
     return np.fft.irfft(spectrum * np.exp(-2j * np.pi * f * tau), 2 * n)[:n]
 
 
-def regression_delays(w, g, fs, keep):
+def band_passed_and_shifted(w, g, fs):
+    """Rates and gyro band-passed once, and the rates shifted by every trial delay once (the
+    whole record and its halves are slices of these)."""
     sos = butter(4, [0.2, 8.0], "bandpass", fs=fs, output="sos")
     wf, gf = sosfiltfilt(sos, w, axis=0), sosfiltfilt(sos, g, axis=0)
-    shifts = [np.stack([shifted(wf[:, j], tau, fs) for j in range(3)], -1)[keep] for tau in TRIAL_DELAYS_S]
+    shifts = [np.stack([shifted(wf[:, j], tau, fs) for j in range(3)], -1) for tau in TRIAL_DELAYS_S]
+    return shifts, gf
+
+
+def regression_delays(shifts, gf, keep):
     out = []
     for i in range(3):
         residuals = []
         for ws in shifts:
-            k, *_ = np.linalg.lstsq(ws, gf[keep, i], rcond=None)
-            residuals.append(np.sum((gf[keep, i] - ws @ k) ** 2))
+            k, *_ = np.linalg.lstsq(ws[keep], gf[keep, i], rcond=None)
+            residuals.append(np.sum((gf[keep, i] - ws[keep] @ k) ** 2))
         out.append(TRIAL_DELAYS_S[int(np.argmin(residuals))] * 1e3)
     return out
 
@@ -103,9 +109,10 @@ def main(paths):
         halves = [slice(rest, n // 2), slice(n // 2, n - rest)]
         name = path.split("/")[-1].split(".")[0]
         fmt = lambda v: " / ".join(f"{x:.2f}" for x in v)  # noqa: E731
-        print(f"{name}: regression delay x / y / z {fmt(regression_delays(w, g, fs, whole))} ms; "
-              f"halves {fmt(regression_delays(w, g, fs, halves[0]))} and "
-              f"{fmt(regression_delays(w, g, fs, halves[1]))} ms")
+        shifts, gf = band_passed_and_shifted(w, g, fs)
+        print(f"{name}: regression delay x / y / z {fmt(regression_delays(shifts, gf, whole))} ms; "
+              f"halves {fmt(regression_delays(shifts, gf, halves[0]))} and "
+              f"{fmt(regression_delays(shifts, gf, halves[1]))} ms")
         for (lo, hi), row in zip(BANDS_HZ, band_delays(w, g, fs)):
             print(f"  phase delay {lo:g}-{hi:g} Hz: x / y / z {fmt(row)} ms")
 

@@ -64,6 +64,7 @@ fn model_file_has_the_contract_fields_and_round_trips() {
     assert_eq!(v["settings"]["lambda"], "auto");
     assert_eq!(v["settings"]["order"], 0);
     assert_eq!(v["settings"]["band_hz"], "auto");
+    assert_eq!(v["settings"]["estimate"], "h1");
     assert_eq!(v["settings"]["blocks"], serde_json::json!(["gyro", "accel"]));
     for (block, inputs, outputs) in [
         ("gyro", ["wx", "wy", "wz"], ["gx", "gy", "gz"]),
@@ -131,6 +132,10 @@ fn bad_settings_and_inputs_exit_2_with_one_line() {
             "singular",
         ),
         (r#"{"order": 9}"#, "order"),
+        (
+            r#"{"estimate": "w0"}"#,
+            "s.json:1:17: estimate: unknown variant `w0`, expected `h1` or `causal_wiener`",
+        ),
         (r#"{"welch": {"segment_len": 65536}}"#, "too few samples"),
         (r#"{"colour": "blue"}"#, "unknown field"),
         // A misspelt Welch field is refused, not ignored (the default segment used silently).

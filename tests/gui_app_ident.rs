@@ -12,7 +12,7 @@ use imu_attest::gui::pipeline::Stage;
 use imu_attest::gui::view::compare::significance_label;
 use imu_attest::gui::view::results::{k_row_label, tau_label};
 use imu_attest::gui::{App, AppOptions, Command, WorkerMode, sample_run_path};
-use imu_attest::ident::settings::{LambdaSetting, OrderSetting};
+use imu_attest::ident::settings::{Estimate, LambdaSetting, OrderSetting};
 use imu_attest::model::{MODEL_SCHEMA, Model};
 use imu_attest::run::LoadOptions;
 
@@ -48,6 +48,31 @@ fn set(harness: &mut Harness<'_, App>, edit: impl FnOnce(&mut imu_attest::ident:
     harness.run_steps(3);
 }
 
+/// The first run's current identification.
+fn identification(harness: &Harness<'_, App>) -> Arc<imu_attest::gui::pipeline::Identification> {
+    harness.state().runs()[0]
+        .identification
+        .value
+        .clone()
+        .expect("identified")
+}
+
+/// A new identification whose spectra and factorisations are the old ones: only the Wiener stage
+/// and the fit were redone.
+fn assert_only_the_fit_redone(
+    before: &imu_attest::gui::pipeline::Identification,
+    after: &imu_attest::gui::pipeline::Identification,
+) {
+    assert!(!std::ptr::eq(before, after), "a new identification");
+    for (a, b) in before.blocks().iter().zip(after.blocks()) {
+        assert!(Arc::ptr_eq(&a.spectra, &b.spectra), "spectra not redone");
+        assert!(
+            Arc::ptr_eq(&a.factorisation, &b.factorisation),
+            "factorisation not redone"
+        );
+    }
+}
+
 #[test]
 fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     let mut harness = sample_app();
@@ -59,11 +84,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     let (tau0, k0) = gyro_labels(&harness);
     harness.get_by_label(&tau0);
     harness.get_by_label(&k0);
-    let before = harness.state().runs()[0]
-        .identification
-        .value
-        .clone()
-        .expect("identified");
+    let before = identification(&harness);
 
     set(&mut harness, |s| {
         s.lambda = LambdaSetting::Values([0.2, 0.2, 0.2]);
@@ -72,19 +93,8 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     assert_ne!(k1, k0, "K follows Lambda");
     harness.get_by_label(&k1);
     assert!(harness.query_by_label(&k0).is_none(), "the old K is gone");
-    let after = harness.state().runs()[0]
-        .identification
-        .value
-        .clone()
-        .expect("identified");
-    assert!(!Arc::ptr_eq(&before, &after), "a new identification");
-    for (a, b) in before.blocks().iter().zip(after.blocks()) {
-        assert!(Arc::ptr_eq(&a.spectra, &b.spectra), "spectra not redone");
-        assert!(
-            Arc::ptr_eq(&a.factorisation, &b.factorisation),
-            "factorisation not redone"
-        );
-    }
+    let after = identification(&harness);
+    assert_only_the_fit_redone(&before, &after);
 
     let chosen = after.model.blocks["gyro"].order;
     let other = if chosen == 2 { 1 } else { 2 };
@@ -92,11 +102,7 @@ fn lambda_and_order_changes_update_k_and_tau_and_redo_only_the_fit() {
     let (tau2, _) = gyro_labels(&harness);
     assert_ne!(tau2, tau0);
     harness.get_by_label(&tau2);
-    let id = harness.state().runs()[0]
-        .identification
-        .value
-        .clone()
-        .expect("identified");
+    let id = identification(&harness);
     assert_eq!(id.model.blocks["gyro"].order, other);
     // The richer model's poles are shown with their time constants or frequency and damping.
     let poles = imu_attest::gui::view::results::pole_lines("gyro", &id.model.blocks["gyro"]);
@@ -131,11 +137,7 @@ fn an_order_per_block_from_the_controls_reaches_the_model_and_its_file() {
         (settings.order.gyro, settings.order.accel),
         (OrderSetting::Auto, OrderSetting::Fixed(1))
     );
-    let id = harness.state().runs()[0]
-        .identification
-        .value
-        .clone()
-        .expect("identified");
+    let id = identification(&harness);
     assert_eq!(id.model.blocks["accel"].order, 1);
     assert_eq!(id.model.blocks["gyro"].order, gyro_auto, "the gyro stays on auto");
     assert_eq!(harness.get_all_by_label_contains("order 1 (fixed)").count(), 1);
@@ -159,6 +161,51 @@ fn an_order_per_block_from_the_controls_reaches_the_model_and_its_file() {
         "{}",
         json["settings"]
     );
+}
+
+/// The estimate, picked in the Controls' combo box: the paper's causal Wiener instead of the
+/// default `H1`. Only the Wiener stage and the fit are redone; Results names the estimate Lambda
+/// applies to, and the exported model's settings keep it.
+#[test]
+fn the_estimate_from_the_controls_refits_and_is_named_in_results_and_the_model() {
+    let mut harness = sample_app();
+    let before = identification(&harness);
+    assert_eq!(harness.state().settings().estimate, Estimate::H1);
+    assert!(
+        harness
+            .get_all_by_label_contains("on the H1 (measured cross-spectrum) estimate")
+            .count()
+            >= 1
+    );
+    harness.get_by_label("estimate").click();
+    harness.run_steps(2);
+    harness.get_by_label("causal Wiener W0 (paper)").click();
+    harness.run_steps(4);
+    assert_eq!(harness.state().settings().estimate, Estimate::CausalWiener);
+    let after = identification(&harness);
+    assert_only_the_fit_redone(&before, &after);
+    for (a, b) in before.blocks().iter().zip(after.blocks()) {
+        assert_ne!(
+            a.structural.k, b.structural.k,
+            "{}: K is fitted to the other estimate",
+            a.block
+        );
+    }
+    assert_eq!(
+        harness
+            .get_all_by_label_contains("on the causal Wiener W0 (paper) estimate")
+            .count(),
+        after.blocks().len()
+    );
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("causal.json");
+    harness
+        .state_mut()
+        .push_command(Command::ExportModel(Some(out.clone())));
+    harness.run_steps(2);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("exported")).expect("json");
+    assert_eq!(json["settings"]["estimate"], "causal_wiener");
 }
 
 #[test]

@@ -53,7 +53,7 @@ fn results_show_the_band_the_warnings_and_the_rejected_orders_of_a_real_run() {
     // The band found from the data, shown as such.
     assert!(m.band_hz[1] < 20.0, "{:?}", m.band_hz);
     harness.get_by_label(&band_label("gyro", m, true));
-    // This run's fit is worse than its noise (chi2/dof about 3.7): the warning is on screen.
+    // This run's fit is worse than its noise (chi2/dof about 4.3): the warning is on screen.
     let warning = m
         .fit
         .warnings

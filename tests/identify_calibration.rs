@@ -5,14 +5,15 @@
 //! the delay expected is the sensor's minus the angle latency (delays are relative to the angle
 //! measurement, contract section 2).
 //!
-//! Asserted for the gyro, as the "Done when" states it: no order above 0 on runs without
-//! sensor dynamics, K within 0.3 % (relative Frobenius), and honest sigmas: the normalised errors
-//! `(K - K_true) / K_std` and `(tau - tau_true) / tau_std` with rms within 0.7-1.4 and at most
-//! 10 % beyond 2 sigma (measured with the band's top ended at the misfit: K within 0.154 %, z rms
-//! 0.92, tau z rms 1.15). For the accelerometer the orders, K within 0.5 % (measured 0.399 %: the
-//! issue's 0.3 % is still open) and its K sigmas (z rms 1.02, 4 % beyond 2 sigma); its delay's
-//! (rms 1.25, but 2 of 12 beyond 2 sigma here; 0.95 and 1 of 30 on seeds 100-129, README) are
-//! printed, not asserted: twelve runs cannot tell 2 of 12 from the 10 % allowed.
+//! Asserted for both blocks, as the "Done when" states it: no order above 0 on runs
+//! without sensor dynamics, and honest sigmas: the normalised errors `(K - K_true) / K_std` and
+//! `(tau - tau_true) / tau_std` with rms within 0.7-1.4 and at most 10 % beyond 2 sigma; K within
+//! 0.3 % (relative Frobenius) for the gyro and 0.5 % for the accelerometer (the 0.3 % is
+//! met on these 120 s runs only just, 0.299 %: see the README). Measured with the `H1` estimate
+//! (the default since 26 Nov; release build of the same code): gyro K error max 0.152 %, K z rms
+//! 0.89, tau z rms 1.15; accelerometer K error max 0.299 %, K z rms 0.91, tau z rms 1.00 (1 of 12
+//! beyond 2 sigma; through the causal Wiener estimate it was 1.21 and 2 of 12, which is why the
+//! accelerometer's delay was not asserted before). The second test does the same at 1 kHz.
 
 use imu_attest::block::Block;
 use imu_attest::ident::identify::identify_run;
@@ -55,26 +56,27 @@ impl Scatter {
     }
 }
 
-#[test]
-fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
+/// Simulates `seeds` (regimes cycled) on a `--stand real` stand, writes and reads each run, and
+/// identifies it with default settings; the truth is read here only.
+fn campaign(seeds: std::ops::RangeInclusive<u64>, rate_hz: f64, duration_s: f64) -> (Scatter, Scatter) {
     let regimes = [Regime::Cruise, Regime::TurbulentCruise, Regime::Approach];
     let (mut gyro, mut accel) = (Scatter::default(), Scatter::default());
-    let dir = tempfile::tempdir().unwrap();
-    for seed in 1..=12u64 {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for seed in seeds {
         let mut config = SimConfig::new(regimes[(seed % 3) as usize]);
         config.seed = seed;
-        config.duration_s = 120.0;
-        config.rate_hz = 500.0;
+        config.duration_s = duration_s;
+        config.rate_hz = rate_hz;
         config.stand = StandImperfections::real();
-        let sim = simulate(&config).unwrap();
+        let sim = simulate(&config).expect("simulated");
         let path = dir.path().join(format!("run{seed}.csv"));
-        write_run(&sim, &path).unwrap();
-        let run = load(&path, &LoadOptions::default()).unwrap();
-        let id = identify_run(&run, &Settings::default()).unwrap();
+        write_run(&sim, &path).expect("written");
+        let run = load(&path, &LoadOptions::default()).expect("loads");
+        let id = identify_run(&run, &Settings::default()).expect("identified");
         for b in &id.blocks {
             let (truth, scatter) = match b.block {
-                Block::Gyro => (sim.sidecar.truth.gyro.as_ref().unwrap(), &mut gyro),
-                Block::Accel => (sim.sidecar.truth.accel.as_ref().unwrap(), &mut accel),
+                Block::Gyro => (sim.sidecar.truth.gyro.as_ref().expect("gyro truth"), &mut gyro),
+                Block::Accel => (sim.sidecar.truth.accel.as_ref().expect("accel truth"), &mut accel),
             };
             let fit = &b.structural;
             let (mut err, mut norm) = (0.0, 0.0);
@@ -94,17 +96,43 @@ fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
     }
     eprintln!("{}", gyro.summary(Block::Gyro));
     eprintln!("{}", accel.summary(Block::Accel));
+    (gyro, accel)
+}
+
+/// The calibration bounds: rms of the normalised errors within 0.7-1.4, at most 10 %
+/// beyond 2 sigma.
+fn assert_honest(block: Block, s: &Scatter, z: &[f64]) {
+    let rms = Scatter::rms(z);
+    assert!((0.7..=1.4).contains(&rms), "{}", s.summary(block));
+    assert!(Scatter::beyond_2_sigma(z) <= 0.10, "{}", s.summary(block));
+}
+
+#[test]
+fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
+    let (gyro, accel) = campaign(1..=12, 500.0, 120.0);
     for (block, s, k_limit) in [(Block::Gyro, &gyro, 0.003), (Block::Accel, &accel, 0.005)] {
         assert!(s.orders.iter().all(|&o| o == 0), "{}", s.summary(block));
         assert!(s.k_error.iter().all(|&e| e < k_limit), "{}", s.summary(block));
     }
-    for (block, s, z) in [
-        (Block::Gyro, &gyro, &gyro.k_z),
-        (Block::Gyro, &gyro, &gyro.tau_z),
-        (Block::Accel, &accel, &accel.k_z),
-    ] {
-        let rms = Scatter::rms(z);
-        assert!((0.7..=1.4).contains(&rms), "{}", s.summary(block));
-        assert!(Scatter::beyond_2_sigma(z) <= 0.10, "{}", s.summary(block));
+    for (block, s) in [(Block::Gyro, &gyro), (Block::Accel, &accel)] {
+        assert_honest(block, s, &s.k_z);
+        assert_honest(block, s, &s.tau_z);
+    }
+}
+
+/// At 1 kHz the reference's 30 Hz band limit lies far inside the grid. Fitted through the causal
+/// Wiener estimate (the default until 26 Nov), whose every bin depends on the spectra at every
+/// frequency, the accelerometer's K deviations were optimistic on these very runs (seeds 13-24,
+/// 80 s: z rms 1.50, 14 % beyond 2 sigma, K error max 0.647 %); through `H1` (the default now)
+/// 0.92 and 4 %, K error max 0.312 %, delay z rms 0.91 (release build, README). Asserted: orders
+/// 0, K within 0.4 % (gyro) and 0.5 % (accelerometer), and both blocks' K and delay sigmas honest.
+#[test]
+fn at_1_khz_a_band_limited_reference_leaves_both_blocks_sigmas_honest() {
+    let (gyro, accel) = campaign(13..=24, 1000.0, 80.0);
+    for (block, s, k_limit) in [(Block::Gyro, &gyro, 0.004), (Block::Accel, &accel, 0.005)] {
+        assert!(s.orders.iter().all(|&o| o == 0), "{}", s.summary(block));
+        assert!(s.k_error.iter().all(|&e| e < k_limit), "{}", s.summary(block));
+        assert_honest(block, s, &s.k_z);
+        assert_honest(block, s, &s.tau_z);
     }
 }

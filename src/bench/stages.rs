@@ -162,7 +162,7 @@ fn identify_stage(state: &mut BenchState) -> Result<(), BenchError> {
         .iter()
         .map(|(block, sp, f)| {
             let band_hz = resolve_band(sp, *block, s.band_hz)?;
-            regularised_wiener(sp, f, &s.weight(), s.lambda, band_hz)
+            regularised_wiener(sp, f, s.estimate, &s.weight(), s.lambda, band_hz)
         })
         .collect::<Result<_, _>>()?;
     Ok(())

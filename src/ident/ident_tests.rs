@@ -3,10 +3,10 @@
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
-use super::factorisation::{FactorisationSettings, factorise};
-use super::settings::LambdaSetting;
+use super::factorisation::{Factorisation, FactorisationSettings, factorise};
+use super::settings::{Estimate, LambdaSetting};
 use super::signals::BlockSignals;
-use super::spectra::block_spectra;
+use super::spectra::{BlockSpectra, block_spectra};
 use super::wiener::{band_bins, regularised_wiener};
 use crate::block::Block;
 use crate::rng::Rng;
@@ -47,6 +47,18 @@ fn synthetic(seed: u64, n: usize, k: Matrix3<f64>, noise: f64) -> BlockSignals {
     }
 }
 
+/// The spectra (256-sample segments) and the factorisation of a synthetic record.
+fn short_segment_stages(seed: u64, n: usize, noise: f64) -> (BlockSpectra, Factorisation) {
+    let sig = synthetic(seed, n, k_true(), noise);
+    let settings = WelchSettings {
+        segment_len: 256,
+        ..WelchSettings::default()
+    };
+    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).expect("spectra");
+    let fact = factorise(&sp, &FactorisationSettings::default()).expect("factorised");
+    (sp, fact)
+}
+
 fn k_true() -> Matrix3<f64> {
     Matrix3::new(
         1.001, 0.002, -0.001, -0.0015, 0.998, 0.0005, 0.003, -0.002, 1.0005,
@@ -70,6 +82,7 @@ fn causal_wiener_recovers_a_causal_system_and_the_noise_spectrum() {
     let w = regularised_wiener(
         &sp,
         &fact,
+        Estimate::CausalWiener,
         &Matrix3::identity(),
         LambdaSetting::Values([0.0; 3]),
         [1.0, 80.0],
@@ -113,18 +126,20 @@ fn causal_wiener_recovers_a_causal_system_and_the_noise_spectrum() {
 
 #[test]
 fn auto_lambda_minimises_the_constraint_residual() {
-    let sig = synthetic(2, 40_000, k_true(), 0.3);
-    let settings = WelchSettings {
-        segment_len: 256,
-        ..WelchSettings::default()
-    };
-    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
-    let fact = factorise(&sp, &FactorisationSettings::default()).unwrap();
+    let (sp, fact) = short_segment_stages(2, 40_000, 0.3);
     for a in [
         Matrix3::identity(),
         Matrix3::new(2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 0.5),
     ] {
-        let auto = regularised_wiener(&sp, &fact, &a, LambdaSetting::Auto, [1.0, 80.0]).unwrap();
+        let auto = regularised_wiener(
+            &sp,
+            &fact,
+            Estimate::CausalWiener,
+            &a,
+            LambdaSetting::Auto,
+            [1.0, 80.0],
+        )
+        .unwrap();
         assert!(auto.lambda_auto);
         assert!(auto.constraint_residual <= auto.constraint_residual_unregularised + 1e-15);
         // Brute force: every perturbation of the solved Lambda is worse.
@@ -132,8 +147,15 @@ fn auto_lambda_minimises_the_constraint_residual() {
             for delta in [-1e-3, 1e-3, -1e-2, 1e-2] {
                 let mut l = auto.lambda;
                 l[i] += delta;
-                let other =
-                    regularised_wiener(&sp, &fact, &a, LambdaSetting::Values(l), [1.0, 80.0]).unwrap();
+                let other = regularised_wiener(
+                    &sp,
+                    &fact,
+                    Estimate::CausalWiener,
+                    &a,
+                    LambdaSetting::Values(l),
+                    [1.0, 80.0],
+                )
+                .unwrap();
                 assert!(
                     other.constraint_residual >= auto.constraint_residual - 1e-14,
                     "A={a}, lambda[{i}]+{delta}"
@@ -141,10 +163,19 @@ fn auto_lambda_minimises_the_constraint_residual() {
             }
         }
         // With Lambda = 0 the weight A has no effect on W_u.
-        let w0 = regularised_wiener(&sp, &fact, &a, LambdaSetting::Values([0.0; 3]), [1.0, 80.0]).unwrap();
+        let w0 = regularised_wiener(
+            &sp,
+            &fact,
+            Estimate::CausalWiener,
+            &a,
+            LambdaSetting::Values([0.0; 3]),
+            [1.0, 80.0],
+        )
+        .unwrap();
         let w1 = regularised_wiener(
             &sp,
             &fact,
+            Estimate::CausalWiener,
             &Matrix3::identity(),
             LambdaSetting::Values([0.0; 3]),
             [1.0, 80.0],
@@ -154,18 +185,72 @@ fn auto_lambda_minimises_the_constraint_residual() {
     }
 }
 
+/// The `H1` estimate (the default) is `S_xu S_uu^-1` bin by bin: it meets the regularising
+/// constraint `W S_uu = S_xu` to rounding, so auto-Lambda solves to 0 and leaves it unchanged,
+/// and a hand-set Lambda shrinks it exactly as it shrinks `W0`.
+#[test]
+fn the_h1_estimate_meets_the_constraint_and_lambda_shrinks_it() {
+    let (sp, fact) = short_segment_stages(4, 40_000, 0.3);
+    let a = Matrix3::new(2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 0.5);
+    let auto = regularised_wiener(&sp, &fact, Estimate::H1, &a, LambdaSetting::Auto, [1.0, 80.0]).unwrap();
+    assert!(auto.constraint_residual < 1e-12, "{}", auto.constraint_residual);
+    assert!(auto.lambda.iter().all(|l| l.abs() < 1e-12), "{:?}", auto.lambda);
+    // The same bins by a direct solve (a naive reference: S_uu^-1 by nalgebra's LU).
+    let band = band_bins(&sp.frequency_hz, [1.0, 80.0]);
+    for &b in &band {
+        let direct = sp.s_xu[b] * sp.s_uu[b].try_inverse().unwrap();
+        assert!((auto.w_u[b] - direct).norm() < 1e-9 * direct.norm(), "bin {b}");
+    }
+    // The causal estimate of the same spectra does not meet it exactly (the projection's
+    // leakage), which is what auto-Lambda is for.
+    let causal = regularised_wiener(
+        &sp,
+        &fact,
+        Estimate::CausalWiener,
+        &a,
+        LambdaSetting::Auto,
+        [1.0, 80.0],
+    )
+    .unwrap();
+    assert!(causal.constraint_residual_unregularised > 1e3 * auto.constraint_residual_unregularised);
+    // Lambda = 0.1 on the first output with A = I scales that row by 0.9 and leaves the others.
+    let shrunk = regularised_wiener(
+        &sp,
+        &fact,
+        Estimate::H1,
+        &Matrix3::identity(),
+        LambdaSetting::Values([0.1, 0.0, 0.0]),
+        [1.0, 80.0],
+    )
+    .unwrap();
+    for &b in &band {
+        for j in 0..3 {
+            assert!((shrunk.w_u[b][(0, j)] - auto.w_u[b][(0, j)] * 0.9).norm() < 1e-12 * auto.w_u[b].norm());
+            assert_eq!(shrunk.w_u[b][(1, j)], fact.h1[b][(1, j)]);
+        }
+    }
+}
+
 #[test]
 fn empty_band_and_singular_weight_are_errors() {
-    let sig = synthetic(3, 8_000, k_true(), 0.1);
-    let settings = WelchSettings {
-        segment_len: 256,
-        ..WelchSettings::default()
-    };
-    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &settings).unwrap();
-    let fact = factorise(&sp, &FactorisationSettings::default()).unwrap();
-    let none = regularised_wiener(&sp, &fact, &Matrix3::identity(), LambdaSetting::Auto, [0.05, 0.1]);
+    let (sp, fact) = short_segment_stages(3, 8_000, 0.1);
+    let none = regularised_wiener(
+        &sp,
+        &fact,
+        Estimate::CausalWiener,
+        &Matrix3::identity(),
+        LambdaSetting::Auto,
+        [0.05, 0.1],
+    );
     assert!(matches!(none, Err(super::IdentError::EmptyBand { .. })));
-    let singular = regularised_wiener(&sp, &fact, &Matrix3::zeros(), LambdaSetting::Auto, [1.0, 80.0]);
+    let singular = regularised_wiener(
+        &sp,
+        &fact,
+        Estimate::CausalWiener,
+        &Matrix3::zeros(),
+        LambdaSetting::Auto,
+        [1.0, 80.0],
+    );
     assert!(matches!(singular, Err(super::IdentError::Singular(_))));
 }
 

@@ -163,6 +163,7 @@ pub fn identify_block_from(
         let wiener = Arc::new(regularised_wiener(
             &spectra,
             &factorisation,
+            settings.estimate,
             &settings.weight(),
             settings.lambda,
             band_hz,

@@ -31,6 +31,45 @@ pub enum LambdaSetting {
     Auto,
 }
 
+/// The frequency-response estimate that Lambda regularises and the structural model is fitted to
+/// ([`crate::ident::wiener`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Estimate {
+    /// `H1 = S_xu S_uu^-1` per bin: the estimate that reproduces the measured cross-spectrum
+    /// (the regularising constraint) exactly, whose covariance the fit's weights are. Each bin
+    /// depends on that bin's spectra only, so nothing outside the band moves the fit (the default).
+    #[default]
+    H1,
+    /// The paper's causal Wiener-Kolmogorov filter `W0 = [S_xu D_u^-H]_+ D_u^-1`: causal, but
+    /// each bin depends on the spectra at every frequency, so a defect above the band (a
+    /// reference's band limit) moves the estimate inside it.
+    CausalWiener,
+}
+
+impl Estimate {
+    /// Both, default first.
+    pub const ALL: [Self; 2] = [Self::H1, Self::CausalWiener];
+
+    /// The settings file's name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::H1 => "h1",
+            Self::CausalWiener => "causal_wiener",
+        }
+    }
+}
+
+impl fmt::Display for Estimate {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::H1 => "H1 (measured cross-spectrum)",
+            Self::CausalWiener => "causal Wiener W0 (paper)",
+        })
+    }
+}
+
 /// The structural order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OrderSetting {
@@ -52,6 +91,9 @@ pub struct Settings {
     /// Weight matrix A (symmetric positive definite).
     #[serde(rename = "weight_A")]
     pub weight_a: [[f64; 3]; 3],
+    /// The frequency-response estimate Lambda regularises and the structural fit uses:
+    /// `"h1"` (the default) or `"causal_wiener"` (the paper's `W0`).
+    pub estimate: Estimate,
     /// Lagrange multipliers.
     pub lambda: LambdaSetting,
     /// Structural order: one for both blocks, or one per block ([`BlockOrders`]).
@@ -75,6 +117,7 @@ impl Default for Settings {
             welch: WelchSettings::default(),
             band_hz: BandSetting::Auto,
             weight_a: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            estimate: Estimate::H1,
             lambda: LambdaSetting::Values([0.0; 3]),
             order: BlockOrders::both(OrderSetting::Auto),
             blocks: Vec::new(),

@@ -9,7 +9,7 @@ use crate::block::Block;
 use crate::diagnose::describe::describe_size;
 use crate::gui::app::{Command, RunEntry};
 use crate::ident::band::BandSetting;
-use crate::ident::settings::{LambdaSetting, OrderSetting};
+use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::model::BlockModel;
 
 fn pm(v: f64, std: Option<f64>, decimals: usize) -> String {
@@ -132,7 +132,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         figures(ui, name, m);
         super::stationarity::show(ui, name, m);
         candidates(ui, name, m);
-        fit(ui, m, id.settings.lambda == LambdaSetting::Auto);
+        fit(ui, m, &id.settings);
     }
 }
 
@@ -268,8 +268,9 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     }
 }
 
-fn fit(ui: &mut egui::Ui, m: &BlockModel, lambda_auto: bool) {
+fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
     let f = &m.fit;
+    let lambda_auto = settings.lambda == LambdaSetting::Auto;
     ui.label(format!(
         "χ² = {:.1} on {} degrees of freedom (χ²/dof {:.2}); σ widened by the bins' correlation ×{:.2}",
         f.chi2,
@@ -278,11 +279,12 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, lambda_auto: bool) {
         f.bin_correlation.max(1.0).sqrt()
     ));
     ui.label(format!(
-        "Λ = [{:.4}, {:.4}, {:.4}]{}",
+        "Λ = [{:.4}, {:.4}, {:.4}]{} on the {} estimate",
         f.lambda[0],
         f.lambda[1],
         f.lambda[2],
-        if lambda_auto { " (auto)" } else { "" }
+        if lambda_auto { " (auto)" } else { "" },
+        settings.estimate
     ));
     ui.label(format!(
         "constraint residual {:.2e}; {:.1} equivalent averages",

@@ -31,6 +31,7 @@ struct Scatter {
     tau_z: Vec<f64>,
     k_error: Vec<f64>,
     orders: Vec<usize>,
+    chi2_per_dof: Vec<f64>,
 }
 
 impl Scatter {
@@ -45,13 +46,15 @@ impl Scatter {
     fn summary(&self, block: Block) -> String {
         format!(
             "{block:?}: K error max {:.3} %, K z rms {:.2} ({:.0} % beyond 2 sigma), tau z rms {:.2} \
-             ({:.0} %), orders {:?}",
+             ({:.0} %), orders {:?}, chi2/dof {:.2}-{:.2}",
             self.k_error.iter().copied().fold(0.0, f64::max) * 100.0,
             Self::rms(&self.k_z),
             Self::beyond_2_sigma(&self.k_z) * 100.0,
             Self::rms(&self.tau_z),
             Self::beyond_2_sigma(&self.tau_z) * 100.0,
-            self.orders
+            self.orders,
+            self.chi2_per_dof.iter().copied().fold(f64::INFINITY, f64::min),
+            self.chi2_per_dof.iter().copied().fold(0.0, f64::max)
         )
     }
 }
@@ -92,6 +95,7 @@ fn campaign(seeds: std::ops::RangeInclusive<u64>, rate_hz: f64, duration_s: f64)
             let tau_true = truth.tau_s - config.stand.latency_s;
             scatter.tau_z.push((fit.tau_s - tau_true) / fit.tau_std_s);
             scatter.orders.push(fit.order);
+            scatter.chi2_per_dof.push(fit.chi2 / fit.dof as f64);
         }
     }
     eprintln!("{}", gyro.summary(Block::Gyro));
@@ -107,6 +111,18 @@ fn assert_honest(block: Block, s: &Scatter, z: &[f64]) {
     assert!(Scatter::beyond_2_sigma(z) <= 0.10, "{}", s.summary(block));
 }
 
+/// The fit's weights are the estimate's covariance: a model that holds (order 0, no effect) has
+/// chi2/dof near 1 on every run. Measured with `H1` 0.91-1.23 over 168 block fits of
+/// `--stand real` runs (README); through the causal `W0`, 0.53-0.76 (the weights counted noise the
+/// projection had removed).
+fn assert_weights_calibrated(block: Block, s: &Scatter) {
+    assert!(
+        s.chi2_per_dof.iter().all(|c| (0.8..=1.4).contains(c)),
+        "{}",
+        s.summary(block)
+    );
+}
+
 #[test]
 fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
     let (gyro, accel) = campaign(1..=12, 500.0, 120.0);
@@ -117,6 +133,7 @@ fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
     for (block, s) in [(Block::Gyro, &gyro), (Block::Accel, &accel)] {
         assert_honest(block, s, &s.k_z);
         assert_honest(block, s, &s.tau_z);
+        assert_weights_calibrated(block, s);
     }
 }
 
@@ -134,5 +151,6 @@ fn at_1_khz_a_band_limited_reference_leaves_both_blocks_sigmas_honest() {
         assert!(s.k_error.iter().all(|&e| e < k_limit), "{}", s.summary(block));
         assert_honest(block, s, &s.k_z);
         assert_honest(block, s, &s.tau_z);
+        assert_weights_calibrated(block, s);
     }
 }

@@ -7,6 +7,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::factorisation::{FactorisationSettings, factorise};
+use super::settings::Estimate;
 use super::signals::BlockSignals;
 use super::spectra::block_spectra;
 use super::warnings::{IdentWarning, block_warnings};
@@ -114,14 +115,23 @@ fn a_slow_input_needs_a_finer_grid_and_gets_it() {
         w.iter()
             .any(|w| matches!(w, IdentWarning::FactorNotCausal { .. }))
     };
-    let coarse_warnings = block_warnings(&sp, &coarse, &coarse_settings, &band);
+    let coarse_warnings = block_warnings(&sp, &coarse, &coarse_settings, &band, Estimate::CausalWiener);
     assert!(not_causal(&coarse_warnings), "{coarse_warnings:?}");
+    // A fit to H1 does not go through the input factor: nothing to say about it.
+    let h1_warnings = block_warnings(&sp, &coarse, &coarse_settings, &band, Estimate::H1);
+    assert!(!not_causal(&h1_warnings), "{h1_warnings:?}");
     assert!(
         coarse_warnings
             .iter()
             .any(|w| w.to_string().contains("not causal even on a grid 1 times finer"))
     );
-    let fine_warnings = block_warnings(&sp, &fine, &FactorisationSettings::default(), &band);
+    let fine_warnings = block_warnings(
+        &sp,
+        &fine,
+        &FactorisationSettings::default(),
+        &band,
+        Estimate::CausalWiener,
+    );
     assert!(!not_causal(&fine_warnings), "{fine_warnings:?}");
 }
 

@@ -7,6 +7,7 @@ use num_complex::Complex64;
 use super::IdentError;
 use super::excitation::{MIN_EXCITATION, check_excitation, excitation};
 use super::factorisation::{FactorisationSettings, factorise};
+use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::warnings::{IdentWarning, Spectrum, block_warnings};
 use crate::block::Block;
@@ -120,7 +121,13 @@ fn well_conditioned_spectra_give_no_warning() {
     let sp = spectra(|k| diagonal([1.0, 1.5 + (k as f64 * 0.1).sin(), 0.8]), 1e-2);
     let fact = factorise(&sp, &FactorisationSettings::default()).unwrap();
     let band: Vec<usize> = (1..BINS).collect();
-    let w = block_warnings(&sp, &fact, &FactorisationSettings::default(), &band);
+    let w = block_warnings(
+        &sp,
+        &fact,
+        &FactorisationSettings::default(),
+        &band,
+        Estimate::CausalWiener,
+    );
     assert!(w.is_empty(), "{w:?}");
 }
 
@@ -135,7 +142,7 @@ fn near_singular_input_bins_are_regularised_with_a_warning() {
     let fact = factorise(&sp, &settings).unwrap();
     assert!(all_finite(&fact), "regularised: every number finite");
     let band: Vec<usize> = (1..BINS).collect();
-    let w = block_warnings(&sp, &fact, &settings, &band);
+    let w = block_warnings(&sp, &fact, &settings, &band, Estimate::CausalWiener);
     let Some(IdentWarning::Regularised { bins, band_bins, .. }) = w.iter().find(|w| {
         matches!(
             w,
@@ -163,7 +170,7 @@ fn a_vanishing_residual_is_regularised_with_a_warning() {
     let fact = factorise(&sp, &settings).unwrap();
     assert!(all_finite(&fact));
     let band: Vec<usize> = (1..BINS).collect();
-    let w = block_warnings(&sp, &fact, &settings, &band);
+    let w = block_warnings(&sp, &fact, &settings, &band, Estimate::CausalWiener);
     assert!(
         w.iter().any(|w| matches!(
             w,

@@ -221,7 +221,13 @@ pub fn identify_block_from(
         }
     }
     let (band_hz, wiener, band, structural) = fitted;
-    let mut warnings = block_warnings(&spectra, &factorisation, &FactorisationSettings::default(), &band);
+    let mut warnings = block_warnings(
+        &spectra,
+        &factorisation,
+        &FactorisationSettings::default(),
+        &band,
+        settings.estimate,
+    );
     warnings.extend(trimmed);
     let stationarity = cached_stationarity(&spectra, band_hz);
     let structural = match &stationarity {

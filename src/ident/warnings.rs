@@ -20,6 +20,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::factorisation::{Factorisation, FactorisationSettings, INVERSE_FLOOR, residual_loading};
+use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
@@ -281,14 +282,18 @@ fn max_trace(s: &[Matrix3<Complex64>]) -> f64 {
     s.iter().map(|m| m.trace().re).fold(0.0, f64::max)
 }
 
-/// The warnings of a block's factorisation over the `band` bins (indices into the spectra).
+/// The warnings of a block's factorisation over the `band` bins (indices into the spectra), for
+/// a fit to `estimate`: the input factor `D_u` only enters the causal Wiener estimate, so its
+/// inexactness and its non-causality are said only when the fit goes through it.
 #[must_use]
 pub fn block_warnings(
     spectra: &BlockSpectra,
     fact: &Factorisation,
     settings: &FactorisationSettings,
     band: &[usize],
+    estimate: Estimate,
 ) -> Vec<IdentWarning> {
+    let through_input_factor = estimate == Estimate::CausalWiener;
     let mut warnings = Vec::new();
     let near_singular = |s: &[Matrix3<Complex64>], floor: f64| {
         band.iter()
@@ -322,7 +327,8 @@ pub fn block_warnings(
                 factor_error: error,
             });
         }
-        if error.is_nan() || error > FACTOR_ERROR_LIMIT || !fact.converged {
+        let used = spectrum == Spectrum::Residual || through_input_factor;
+        if used && (error.is_nan() || error > FACTOR_ERROR_LIMIT || !fact.converged) {
             warnings.push(IdentWarning::FactorInexact {
                 spectrum,
                 factor_error: error,
@@ -331,7 +337,7 @@ pub fn block_warnings(
         }
     }
     let negative = fact.input_factor_negative_lags;
-    if negative.is_nan() || negative > settings.causality_tolerance {
+    if through_input_factor && (negative.is_nan() || negative > settings.causality_tolerance) {
         warnings.push(IdentWarning::FactorNotCausal {
             negative_lags: negative,
             refinement: fact.input_refinement,

@@ -24,7 +24,7 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
     let mut s = settings.clone();
     ui.heading("Identifier settings");
     ui.weak(
-        "A, Λ and order changes redo only the Wiener and structural fit; Welch changes redo the spectra.",
+        "A, Λ, estimate and order changes redo only the Wiener stage and the structural fit; Welch changes redo the spectra.",
     );
     welch(ui, &mut s);
     ui.separator();

@@ -1,7 +1,8 @@
 //! Identifier settings (contract section 3): every field optional, defaults echoed into every
 //! output.
 //!
-//! `lambda` is three numbers or `"auto"`; `order` is an integer 0..=4 or `"auto"`, or one of
+//! `estimate` is `"h1"` (the default) or `"causal_wiener"` ([`Estimate`]); `lambda` is three
+//! numbers or `"auto"`; `order` is an integer 0..=4 or `"auto"`, or one of
 //! these per block (`{"gyro": 0, "accel": "auto"}`, [`BlockOrders`]). Validation
 //! against a run ([`Settings::validate`]) refuses: a band outside `(0, Nyquist]` or empty, a
 //! weight `A` that is not symmetric positive definite, a `lambda` that makes `I - A^-1 Lambda`

@@ -164,7 +164,7 @@ fn lambda(ui: &mut egui::Ui, s: &mut Settings) {
              (default): each frequency from its own spectra, with the covariance the fit's weights \
              assume. The paper's causal Wiener W0 = [S_xu D_u^-H]_+ D_u^-1 mixes every frequency, so a \
              reference band-limited inside the grid moves it in the band (measured: the \
-             accelerometer's K twice as far off at 1 kHz).",
+             accelerometer's K up to twice as far off at 1 kHz).",
         );
     ui.horizontal(|ui| {
         ui.strong("Λ per channel");

@@ -74,6 +74,8 @@ fn report_names_the_hidden_effect_with_the_contract_fields() {
     // The given model's own gap, as it is, is reported per channel.
     let given = &v["blocks"]["accel"]["given_model_gap_db"];
     assert_eq!(given.as_array().map(Vec::len), Some(3), "{given}");
+    // The model's settings are the diagnosis's, its estimate included.
+    assert_eq!(v["settings"]["estimate"], "h1", "{}", v["settings"]);
 }
 
 #[test]

@@ -20,7 +20,7 @@ pub(super) fn read_model(path: &Path) -> Result<Model, CliError> {
     let shown = path.display();
     let bytes = std::fs::read(path).map_err(|e| CliError::Input(format!("{shown}: cannot read: {e}")))?;
     let de = &mut serde_json::Deserializer::from_slice(&bytes);
-    let model: Model = serde_path_to_error::deserialize(de).map_err(|e| {
+    let mut model: Model = serde_path_to_error::deserialize(de).map_err(|e| {
         let inner = e.inner();
         CliError::Input(format!(
             "{shown}:{}:{}: not a model file at '{}': {inner}",
@@ -35,6 +35,7 @@ pub(super) fn read_model(path: &Path) -> Result<Model, CliError> {
             model.schema
         )));
     }
+    model.settle_estimate(&bytes);
     Ok(model)
 }
 

@@ -130,8 +130,18 @@ pub struct Factorisation {
     /// Whether both factors were computed from Wilson's standard start, i.e. this is what
     /// [`factorise`] gives; false when [`factorise_from`] started from a previous factorisation.
     pub from_scratch: bool,
+    /// Whether the input factor `D_u`'s iteration converged.
+    pub input_factor_converged: bool,
+    /// Whether the disturbance factor `W_psi`'s iteration converged.
+    pub noise_factor_converged: bool,
+}
+
+impl Factorisation {
     /// Whether both factorisations converged.
-    pub converged: bool,
+    #[must_use]
+    pub fn converged(&self) -> bool {
+        self.input_factor_converged && self.noise_factor_converged
+    }
 }
 
 fn factor_error(e: impl Into<super::FactorStageError>) -> IdentError {
@@ -257,7 +267,8 @@ pub fn factorise_from(
         input_factor_error: d_u.reconstruction_error,
         noise_factor_error: w_psi.reconstruction_error,
         floored_input_bins,
-        converged: d_u.converged && w_psi.converged,
+        input_factor_converged: d_u.converged,
+        noise_factor_converged: w_psi.converged,
         from_scratch: !(d_u.from_start || w_psi.from_start),
         input_factor: d_u.factor,
         input_refinement,

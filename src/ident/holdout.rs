@@ -10,8 +10,8 @@
 //!
 //! Why halves and not the stretches: a rational order needs the whole band's resolution and
 //! enough averages per bin to be fitted at all; two halves are the most data each fit can have
-//! while both stay disjoint. Why `H1` and not the Wiener estimate: the halves are only compared
-//! with each other, and `H1` needs no factorisation per half.
+//! while both stay disjoint. Why `H1` (whatever the settings' estimate): the halves are only
+//! compared with each other, and `H1` needs no factorisation per half.
 //!
 //! A record too short to cut into stretches has no held-out figures (rule 7 is then not applied,
 //! and the candidates carry no `held_out_chi2`). Units: s, Hz.

@@ -51,15 +51,6 @@ pub enum Estimate {
 impl Estimate {
     /// Both, default first.
     pub const ALL: [Self; 2] = [Self::H1, Self::CausalWiener];
-
-    /// The settings file's name.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::H1 => "h1",
-            Self::CausalWiener => "causal_wiener",
-        }
-    }
 }
 
 impl fmt::Display for Estimate {
@@ -128,11 +119,11 @@ impl Default for Settings {
     }
 }
 
-/// Largest eigenvalue of `A^-1 Lambda` allowed: the regularised estimate `(I - A^-1 Lambda) W0`
+/// Largest eigenvalue of `A^-1 Lambda` allowed: the regularised estimate `(I - A^-1 Lambda) W`
 /// is shrunk by at most half. With `A` symmetric positive definite and `Lambda >= 0` diagonal,
 /// the eigenvalues of `A^-1 Lambda` are real and non-negative (it is similar to
 /// `A^-1/2 Lambda A^-1/2`); a negative `lambda` would amplify the estimate, which the constraint
-/// (that corrects the causal projection's leakage) never justifies.
+/// (that corrects an estimate's leakage) never justifies.
 pub const MAX_SHRINK: f64 = 0.5;
 
 /// Largest eigenvalue of `A^-1 Lambda` (`+inf` when `A` is singular).

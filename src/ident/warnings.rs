@@ -139,7 +139,7 @@ pub enum IdentWarning {
         spectrum: Spectrum,
         /// Relative reconstruction error (worst bin).
         factor_error: f64,
-        /// Whether both factorisations converged.
+        /// Whether this factor's iteration converged.
         converged: bool,
     },
     /// The input's spectral factor keeps energy at negative lags even on the causal stage's
@@ -307,16 +307,18 @@ pub fn block_warnings(
     };
     let input_floor = INVERSE_FLOOR * max_trace(&spectra.s_uu).max(f64::MIN_POSITIVE);
     let residual_floor = residual_loading(spectra, &fact.noise_psd, settings);
-    for (spectrum, bins, error) in [
+    for (spectrum, bins, error, converged) in [
         (
             Spectrum::Input,
             near_singular(&spectra.s_uu, input_floor),
             fact.input_factor_error,
+            fact.input_factor_converged,
         ),
         (
             Spectrum::Residual,
             near_singular(&fact.noise_psd, residual_floor),
             fact.noise_factor_error,
+            fact.noise_factor_converged,
         ),
     ] {
         if bins > 0 {
@@ -328,11 +330,11 @@ pub fn block_warnings(
             });
         }
         let used = spectrum == Spectrum::Residual || through_input_factor;
-        if used && (error.is_nan() || error > FACTOR_ERROR_LIMIT || !fact.converged) {
+        if used && (error.is_nan() || error > FACTOR_ERROR_LIMIT || !converged) {
             warnings.push(IdentWarning::FactorInexact {
                 spectrum,
                 factor_error: error,
-                converged: fact.converged,
+                converged,
             });
         }
     }

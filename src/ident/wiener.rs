@@ -17,12 +17,13 @@
 //!
 //! Lambda `"auto"` solves the regularising constraint (READING.md): the identified model must
 //! reproduce the measured cross-spectrum, `W_u S_uu = S_xu`, which the causal projection alone does
-//! not guarantee. Over the analysis band, with `E = W0 S_uu - S_xu` and `F = W0 S_uu`, the
+//! not guarantee (`H1` meets it exactly, so for it the solution is 0). Over the analysis band,
+//! with `E = W S_uu - S_xu` and `F = W S_uu` (`W` the estimate), the
 //! A-weighted residual `sum_f tr[(E - A^-1 Lambda F)^H A (E - A^-1 Lambda F)]` is quadratic in the
 //! diagonal Lambda; its minimum solves the 3x3 system
 //! `M lambda = v`, `M_ik = (A^-1)_ik sum_f Re(F_k F_i^H)`, `v_i = sum_f Re(E_i F_i^H)`
-//! (rows `E_i`, `F_i`), solved with `lambda >= 0` (the constraint corrects the causal
-//! projection's leakage by shrinking; it never justifies amplifying the estimate) and scaled back
+//! (rows `E_i`, `F_i`), solved with `lambda >= 0` (the constraint corrects an estimate's
+//! leakage, the causal projection's, by shrinking; it never justifies amplifying it) and scaled back
 //! so that `A^-1 Lambda` shrinks the gain by at most [`MAX_SHRINK`]. With `Lambda = 0` the weight A drops out entirely (the multichannel Wiener
 //! filter is optimal for every positive-definite weight): A shapes the result only through
 //! `A^-1 Lambda` and this fit.

@@ -24,7 +24,7 @@ pub use effects::ModelEffects;
 
 use crate::faults::RecordingFault;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
-use crate::ident::settings::Settings;
+use crate::ident::settings::{Estimate, Settings};
 use crate::ident::signals::channel_names;
 use crate::ident::structural::OrderCandidate;
 use crate::ident::warnings::IdentWarning;
@@ -125,7 +125,8 @@ pub struct BlockModel {
     pub poles: Vec<[f64; 2]>,
     /// Band frequencies, Hz.
     pub frequency_hz: Vec<f64>,
-    /// Identified frequency response (regularised Wiener-Kolmogorov).
+    /// Identified frequency response `(I - A^-1 Lambda) W`, `W` the settings' estimate (`H1` by
+    /// default, or the causal Wiener-Kolmogorov `W0`).
     #[serde(rename = "W_u")]
     pub w_u: ComplexArray,
     /// Standard deviation of each element of `W_u`.
@@ -356,6 +357,25 @@ impl Model {
         }
     }
 
+    /// Reads the estimate of a model file written before the `estimate` setting existed
+    /// (26 Nov): those were fitted to the causal Wiener estimate, so a file whose settings do not
+    /// name an estimate gets `causal_wiener`, not today's default, and a diagnosis or report made
+    /// from it (`--model`) uses what its numbers came from. `bytes` is the file `self` was read
+    /// from.
+    pub fn settle_estimate(&mut self, bytes: &[u8]) {
+        #[derive(Deserialize)]
+        struct Probe {
+            settings: ProbeSettings,
+        }
+        #[derive(Deserialize)]
+        struct ProbeSettings {
+            estimate: Option<serde::de::IgnoredAny>,
+        }
+        if serde_json::from_slice::<Probe>(bytes).is_ok_and(|p| p.settings.estimate.is_none()) {
+            self.settings.estimate = Estimate::CausalWiener;
+        }
+    }
+
     /// Checks that every number is finite (JSON cannot carry NaN or infinity).
     ///
     /// # Errors
@@ -441,6 +461,31 @@ mod tests {
             describe_pole([-10.0, -100.0]),
             "-10.0000 ± 100.0000j rad/s (15.995 Hz, damping 0.10)"
         );
+    }
+
+    /// A model file written before the `estimate` setting reads back as fitted to the causal
+    /// estimate; one that names its estimate keeps it.
+    #[test]
+    fn an_older_model_file_reads_back_as_fitted_to_the_causal_estimate() {
+        let written = serde_json::to_value(empty_model()).expect("serialises");
+        assert_eq!(written["settings"]["estimate"], "h1");
+        let mut older = written.clone();
+        older["settings"]
+            .as_object_mut()
+            .expect("settings object")
+            .remove("estimate");
+        for (value, expected) in [(older, Estimate::CausalWiener), (written.clone(), Estimate::H1)] {
+            let bytes = serde_json::to_vec(&value).expect("bytes");
+            let mut model: Model = serde_json::from_slice(&bytes).expect("reads");
+            model.settle_estimate(&bytes);
+            assert_eq!(model.settings.estimate, expected, "{}", value["settings"]);
+        }
+        let mut causal = written;
+        causal["settings"]["estimate"] = "causal_wiener".into();
+        let bytes = serde_json::to_vec(&causal).expect("bytes");
+        let mut model: Model = serde_json::from_slice(&bytes).expect("reads");
+        model.settle_estimate(&bytes);
+        assert_eq!(model.settings.estimate, Estimate::CausalWiener);
     }
 
     #[test]

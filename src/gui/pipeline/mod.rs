@@ -9,11 +9,11 @@
 //! | observer + block inputs | the run (sidecar lever arm, `g`, angle noise) | [`Event::Motion`] |
 //! | spectra | block inputs + [`WelchSettings`](crate::spectral::WelchSettings) | [`Event::Spectra`] |
 //! | factorisation | the spectra (per block) | (inside the next) |
-//! | identification (Wiener + structural fit) | band, `A`, `Lambda`, order, blocks | [`Event::Identified`] |
+//! | identification (Wiener + structural fit) | band, estimate, `A`, `Lambda`, order, blocks | [`Event::Identified`] |
 //!
 //! An [`JobKind::Analyse`] job carries the whole identifier [`Settings`]; each stage looks only at
-//! its own key, so a Welch change recomputes the spectra and what follows, while a change of `A`,
-//! `Lambda` or the order redoes only `identify_block_from` (regularised Wiener + structural fit)
+//! its own key, so a Welch change recomputes the spectra and what follows, while a change of the
+//! estimate, `A`, `Lambda` or the order redoes only `identify_block_from` (regularised Wiener + structural fit)
 //! from the cached [`crate::ident::spectra::BlockSpectra`] and factorisation. The spectra are
 //! computed once, by the identifier's own code, and the spectra tab reads the same snapshot.
 //!

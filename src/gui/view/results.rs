@@ -9,7 +9,7 @@ use crate::block::Block;
 use crate::diagnose::describe::describe_size;
 use crate::gui::app::{Command, RunEntry};
 use crate::ident::band::BandSetting;
-use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
+use crate::ident::settings::{Estimate, LambdaSetting, OrderSetting, Settings};
 use crate::model::BlockModel;
 
 fn pm(v: f64, std: Option<f64>, decimals: usize) -> String {
@@ -290,9 +290,17 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
         "constraint residual {:.2e}; {:.1} equivalent averages",
         f.constraint_residual, f.equivalent_averages
     ));
+    let causal_stage = if settings.estimate == Estimate::CausalWiener {
+        format!(
+            "causal stage on a grid {}x finer than the spectra's",
+            f.causal_grid_refinement
+        )
+    } else {
+        "the causal stage is not used by the H1 fit".to_owned()
+    };
     ui.label(format!(
-        "factor errors: input {:.1e}, disturbance {:.1e}; causal stage on a grid {}x finer than the spectra's",
-        f.factor_errors[0], f.factor_errors[1], f.causal_grid_refinement
+        "factor errors: input {:.1e}, disturbance {:.1e}; {causal_stage}",
+        f.factor_errors[0], f.factor_errors[1]
     ))
     .on_hover_text(
         "the input's spectral factor must be causal for the causal Wiener estimate; a steep input \

@@ -123,6 +123,13 @@ fn assert_weights_calibrated(block: Block, s: &Scatter) {
     );
 }
 
+/// K and delay sigmas honest and the weights calibrated.
+fn assert_calibrated(block: Block, s: &Scatter) {
+    assert_honest(block, s, &s.k_z);
+    assert_honest(block, s, &s.tau_z);
+    assert_weights_calibrated(block, s);
+}
+
 #[test]
 fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
     let (gyro, accel) = campaign(1..=12, 500.0, 120.0);
@@ -131,9 +138,7 @@ fn imperfect_stands_give_order_0_small_errors_and_honest_gyro_sigmas() {
         assert!(s.k_error.iter().all(|&e| e < k_limit), "{}", s.summary(block));
     }
     for (block, s) in [(Block::Gyro, &gyro), (Block::Accel, &accel)] {
-        assert_honest(block, s, &s.k_z);
-        assert_honest(block, s, &s.tau_z);
-        assert_weights_calibrated(block, s);
+        assert_calibrated(block, s);
     }
 }
 
@@ -149,8 +154,6 @@ fn at_1_khz_a_band_limited_reference_leaves_both_blocks_sigmas_honest() {
     for (block, s, k_limit) in [(Block::Gyro, &gyro, 0.004), (Block::Accel, &accel, 0.005)] {
         assert!(s.orders.iter().all(|&o| o == 0), "{}", s.summary(block));
         assert!(s.k_error.iter().all(|&e| e < k_limit), "{}", s.summary(block));
-        assert_honest(block, s, &s.k_z);
-        assert_honest(block, s, &s.tau_z);
-        assert_weights_calibrated(block, s);
+        assert_calibrated(block, s);
     }
 }

@@ -104,6 +104,12 @@ fn model_file_has_the_contract_fields_and_round_trips() {
         let last = b["frequency_hz"][n - 1].as_f64().unwrap();
         assert!(band[0] >= 0.1 && band[1] <= 40.0 && band[0] < band[1], "{band:?}");
         assert!(f0 >= band[0] && last <= band[1], "{band:?} vs {f0}..{last}");
+        // The H1 fit does not go through the causal stage, so the input's factor is not computed
+        // (a causal fit's numbers: `tests/gui_app_ident.rs`).
+        assert!(b["fit"].get("input_factor_error").is_none(), "{}", b["fit"]);
+        assert!(b["fit"].get("causal_grid_refinement").is_none(), "{}", b["fit"]);
+        let noise_factor_error = b["fit"]["noise_factor_error"].as_f64().unwrap();
+        assert!(noise_factor_error < 1e-6, "{noise_factor_error:e}");
         // K near identity, a few-ms delay: a sanity check, not the accuracy test.
         assert!((b["K"][0][0].as_f64().unwrap() - 1.0).abs() < 0.01);
         assert!(b["tau_s"].as_f64().unwrap() > 0.0 && b["tau_s"].as_f64().unwrap() < 0.01);

@@ -164,8 +164,10 @@ fn an_order_per_block_from_the_controls_reaches_the_model_and_its_file() {
 }
 
 /// The estimate, picked in the Controls' combo box: the paper's causal Wiener instead of the
-/// default `H1`. Only the Wiener stage and the fit are redone; Results names the estimate Lambda
-/// applies to, and the exported model's settings keep it.
+/// default `H1`. The `H1` fit has no causal stage; the causal one adds it to the same
+/// factorisation (the spectra and the disturbance's factor are not redone), and back to `H1`
+/// nothing but the fit is redone. Results names the estimate Lambda applies to, and the exported
+/// model's settings keep it.
 #[test]
 fn the_estimate_from_the_controls_refits_and_is_named_in_results_and_the_model() {
     let mut harness = sample_app();
@@ -183,8 +185,19 @@ fn the_estimate_from_the_controls_refits_and_is_named_in_results_and_the_model()
     harness.run_steps(4);
     assert_eq!(harness.state().settings().estimate, Estimate::CausalWiener);
     let after = identification(&harness);
-    assert_only_the_fit_redone(&before, &after);
     for (a, b) in before.blocks().iter().zip(after.blocks()) {
+        assert!(Arc::ptr_eq(&a.spectra, &b.spectra), "spectra not redone");
+        let (fa, fb) = (&a.factorisation, &b.factorisation);
+        assert!(
+            fa.causal.is_none(),
+            "{}: an H1 fit computes no causal stage",
+            a.block
+        );
+        assert!(fb.causal.is_some(), "{}: the causal stage added", b.block);
+        assert!(
+            Arc::ptr_eq(&fa.noise_factor, &fb.noise_factor),
+            "disturbance factor not redone"
+        );
         assert_ne!(
             a.structural.k, b.structural.k,
             "{}: K is fitted to the other estimate",
@@ -206,6 +219,19 @@ fn the_estimate_from_the_controls_refits_and_is_named_in_results_and_the_model()
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).expect("exported")).expect("json");
     assert_eq!(json["settings"]["estimate"], "causal_wiener");
+    for b in json["blocks"].as_object().expect("blocks").values() {
+        let refinement = b["fit"]["causal_grid_refinement"].as_u64().expect("causal grid");
+        assert!([2, 4, 8, 16].contains(&refinement), "{refinement}");
+        assert!(b["fit"]["input_factor_error"].as_f64().expect("input factor") < 1e-6);
+    }
+
+    // Back to H1: the factorisation keeps its causal stage (cached), only the fit is redone.
+    harness.get_by_label("estimate").click();
+    harness.run_steps(2);
+    harness.get_by_label("H1 (measured cross-spectrum)").click();
+    harness.run_steps(4);
+    assert_eq!(harness.state().settings().estimate, Estimate::H1);
+    assert_only_the_fit_redone(&after, &identification(&harness));
 }
 
 #[test]

@@ -49,8 +49,9 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
             lambda_auto: false,
             constraint_residual: 0.0,
             equivalent_averages: 10.0,
-            factor_errors: [0.0; 2],
-            causal_grid_refinement: 1,
+            noise_factor_error: Some(0.0),
+            input_factor_error: Some(0.0),
+            causal_grid_refinement: Some(1),
             warnings: Vec::new(),
         },
     }

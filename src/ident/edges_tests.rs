@@ -6,7 +6,7 @@ use num_complex::Complex64;
 
 use super::IdentError;
 use super::excitation::{MIN_EXCITATION, check_excitation, excitation};
-use super::factorisation::{FactorisationSettings, factorise};
+use super::factorisation::{FactorisationSettings, factorise, factorise_from};
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::warnings::{IdentWarning, Spectrum, block_warnings};
@@ -47,14 +47,16 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
 
 /// Every number of the factorisation stage is finite.
 fn all_finite(fact: &super::factorisation::Factorisation) -> bool {
+    let causal = fact.causal.as_ref().map(|c| &c.causal_wiener);
     [
-        &fact.h1,
-        &fact.causal_wiener,
-        &fact.s_uu_inv,
-        &fact.noise_psd,
-        &fact.shaping_filter,
+        Some(&fact.h1),
+        causal,
+        Some(&fact.s_uu_inv),
+        Some(&fact.noise_psd),
+        Some(&fact.shaping_filter),
     ]
     .iter()
+    .flatten()
     .all(|v| v.iter().flatten().all(|z| z.re.is_finite() && z.im.is_finite()))
 }
 
@@ -156,10 +158,32 @@ fn near_singular_input_bins_are_regularised_with_a_warning() {
     };
     assert_eq!((*bins, *band_bins), (4, BINS - 1));
     assert!(
-        w[0].to_string().contains("near-singular in 4 of 64 band bins"),
+        w[0].to_string()
+            .contains("near-singular in 4 of 64 band bins: regularised (factor reconstruction error"),
         "{}",
         w[0]
     );
+    // An H1 fit's factorisation has no input factor: the warning says what was regularised and
+    // carries no factor error (absent from the model file, which allows no null but the
+    // deviations'), and reads back the same.
+    let h1_fact = factorise_from(&sp, &settings, None, Estimate::H1).unwrap();
+    let h1 = block_warnings(&sp, &h1_fact, &settings, &band, Estimate::H1);
+    let input = IdentWarning::Regularised {
+        spectrum: Spectrum::Input,
+        bins: 4,
+        band_bins: BINS - 1,
+        factor_error: None,
+    };
+    assert!(h1.contains(&input), "{h1:?}");
+    assert!(
+        input
+            .to_string()
+            .ends_with("near-singular in 4 of 64 band bins: regularised"),
+        "{input}"
+    );
+    let json = serde_json::to_value(&input).unwrap();
+    assert!(json.get("factor_error").is_none(), "{json}");
+    assert_eq!(serde_json::from_value::<IdentWarning>(json).unwrap(), input);
 }
 
 /// A system without disturbance: the residual spectrum is zero and only the loading factors it.

@@ -3,7 +3,8 @@
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
-use super::factorisation::{Factorisation, FactorisationSettings, factorise};
+use super::causal_stage::{CausalStage, causal_stage};
+use super::factorisation::{Factorisation, FactorisationSettings, factorise, factorise_from};
 use super::settings::{Estimate, LambdaSetting};
 use super::signals::BlockSignals;
 use super::spectra::{BlockSpectra, block_spectra};
@@ -230,22 +231,88 @@ fn refactorising_after_an_overlap_change_starts_from_the_previous_factors() {
     let settings = FactorisationSettings::default();
     let previous = factorise(&before, &settings).unwrap();
     let cold = factorise(&after, &settings).unwrap();
-    let warm = super::factorisation::factorise_from(&after, &settings, Some(&previous)).unwrap();
-    assert!(previous.from_scratch && cold.from_scratch);
-    assert!(!warm.from_scratch, "started from the previous factors");
+    let warm = factorise_from(&after, &settings, Some(&previous), Estimate::CausalWiener).unwrap();
+    assert!(previous.from_scratch() && cold.from_scratch());
+    assert!(!warm.from_scratch(), "started from the previous factors");
     assert!(warm.converged());
-    assert!(warm.input_factor_error < 1e-9 && warm.noise_factor_error < 1e-9);
+    let (w0, w0_cold, w0_previous) = (causal(&warm), causal(&cold), causal(&previous));
+    assert!(
+        !w0.from_scratch && !warm.noise_from_scratch,
+        "both factors warm-started"
+    );
+    assert!(w0.input_factor_error < 1e-9 && warm.noise_factor_error < 1e-9);
     // Within the factor's own indeterminacy on this grid (about 1e-4), far below the estimate's
     // noise.
     let band = band_bins(&after.frequency_hz, [1.0, 80.0]);
     for &k in &band {
-        let d = (warm.causal_wiener[k] - cold.causal_wiener[k]).norm();
-        assert!(d < 1e-3 * cold.causal_wiener[k].norm(), "bin {k}: {d:e}");
+        let d = (w0.causal_wiener[k] - w0_cold.causal_wiener[k]).norm();
+        assert!(d < 1e-3 * w0_cold.causal_wiener[k].norm(), "bin {k}: {d:e}");
     }
     // The overlap changed the spectra: the previous factors are not the answer.
     let moved = band
         .iter()
-        .map(|&k| (previous.causal_wiener[k] - cold.causal_wiener[k]).norm())
+        .map(|&k| (w0_previous.causal_wiener[k] - w0_cold.causal_wiener[k]).norm())
         .fold(0.0, f64::max);
     assert!(moved > 1e-4, "{moved:e}");
+}
+
+/// The causal stage [`factorise`] computed.
+fn causal(f: &Factorisation) -> &CausalStage {
+    f.causal.as_deref().expect("factorise computes the causal stage")
+}
+
+/// The `H1` fit's factorisation has no causal stage and is otherwise the whole one to the bit;
+/// the causal estimate is refused on it (not silently replaced), and the causal stage added
+/// afterwards is the one the whole factorisation computes.
+#[test]
+fn the_h1_factorisation_skips_the_causal_stage_and_it_can_be_added() {
+    let sig = synthetic(6, 40_000, k_true(), 0.05);
+    let welch = WelchSettings {
+        segment_len: 1024,
+        ..WelchSettings::default()
+    };
+    let sp = block_spectra(&mut WelchPlanner::new(), &sig, RATE, &welch).unwrap();
+    let settings = FactorisationSettings::default();
+    let whole = factorise(&sp, &settings).unwrap();
+    let h1_only = factorise_from(&sp, &settings, None, Estimate::H1).unwrap();
+    assert!(h1_only.causal.is_none());
+    assert!(h1_only.from_scratch() && h1_only.converged());
+    assert_eq!(h1_only.h1, whole.h1);
+    assert_eq!(h1_only.noise_psd, whole.noise_psd);
+    assert_eq!(h1_only.noise_factor, whole.noise_factor);
+    assert_eq!(h1_only.shaping_filter, whole.shaping_filter);
+    assert!(h1_only.causal_for(Estimate::CausalWiener).is_none());
+    assert!(
+        whole.causal_for(Estimate::H1).is_none(),
+        "an H1 fit does not use it"
+    );
+
+    let fit = |fact: &Factorisation, estimate| {
+        regularised_wiener(
+            &sp,
+            fact,
+            estimate,
+            &Matrix3::identity(),
+            LambdaSetting::Auto,
+            [1.0, 80.0],
+        )
+    };
+    assert!(matches!(
+        fit(&h1_only, Estimate::CausalWiener),
+        Err(super::IdentError::Factor(super::FactorStageError::NoCausalStage))
+    ));
+    assert_eq!(
+        fit(&h1_only, Estimate::H1).unwrap().w_u,
+        fit(&whole, Estimate::H1).unwrap().w_u
+    );
+
+    let added = h1_only.with_causal_stage(causal_stage(&sp, &settings, None).unwrap());
+    assert!(added.from_scratch());
+    assert!(std::sync::Arc::ptr_eq(&added.noise_factor, &h1_only.noise_factor));
+    assert_eq!(causal(&added).causal_wiener, causal(&whole).causal_wiener);
+    assert_eq!(causal(&added).input_refinement, causal(&whole).input_refinement);
+    assert_eq!(
+        fit(&added, Estimate::CausalWiener).unwrap().w_u,
+        fit(&whole, Estimate::CausalWiener).unwrap().w_u
+    );
 }

@@ -113,7 +113,7 @@ impl RunIdentification {
     pub fn provisional(&self) -> bool {
         self.blocks
             .iter()
-            .any(|b| !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch)
+            .any(|b| !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch())
     }
 }
 

@@ -9,6 +9,7 @@ pub mod band;
 pub mod band_cache;
 pub mod band_top;
 pub mod block_orders;
+pub mod causal_stage;
 pub mod excitation;
 pub mod factorisation;
 pub mod holdout;
@@ -113,6 +114,9 @@ pub enum FactorStageError {
     /// The finer grid of the causal stage.
     #[error(transparent)]
     Refine(#[from] crate::spectral::refine::RefineError),
+    /// The causal estimate was asked of a factorisation computed without its causal stage.
+    #[error("the causal estimate needs the factorisation's causal stage, which was not computed")]
+    NoCausalStage,
 }
 
 impl IdentError {

@@ -6,6 +6,7 @@
 //! | observer (motion) and block signals | the run | never |
 //! | spectra | block, Welch settings, span | the Welch settings or the span (`span_s`) change |
 //! | factorisation | block, spectra | the spectra change |
+//! | its causal stage (`D_u`, `W0`) | block, spectra | the spectra change, if the estimate is causal |
 //! | Wiener and structural fit | settings | any other setting changes |
 //!
 //! Each stage's preconditions are checked in one place: the settings against the run
@@ -27,9 +28,10 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::IdentError;
+use super::causal_stage::causal_stage;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
 use super::identify::{BlockIdentification, FitStart, IdentStep, RunIdentification, identify_block_from};
-use super::settings::Settings;
+use super::settings::{Estimate, Settings};
 use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
 use crate::block::Block;
@@ -212,19 +214,31 @@ impl Session {
     ) -> Result<PerBlock<Factorisation>, IdentError> {
         let spectra = self.spectra(settings, blocks)?;
         let (known, previous) = (&self.factorisations, &self.previous_factorisations);
+        let estimate = settings.estimate;
+        let factor_settings = FactorisationSettings::default();
         let done: Vec<Result<_, IdentError>> = spectra
             .into_par_iter()
             .map(|(block, spectra)| {
-                // A warm-started factorisation is no answer to a cold request.
-                if let Some(f) = of_block(known, block).filter(|f| start == Start::Warm || f.from_scratch) {
-                    return Ok((block, f, false));
-                }
                 let warm = match start {
                     Start::Warm => of_block(previous, block),
                     Start::Cold => None,
                 };
-                let f = factorise_from(&spectra, &FactorisationSettings::default(), warm.as_deref())?;
-                Ok((block, Arc::new(f), true))
+                // A warm-started factorisation is no answer to a cold request.
+                let Some(f) = of_block(known, block).filter(|f| start == Start::Warm || f.from_scratch())
+                else {
+                    let f = factorise_from(&spectra, &factor_settings, warm.as_deref(), estimate)?;
+                    return Ok((block, Arc::new(f), true));
+                };
+                if estimate == Estimate::H1 || f.causal.is_some() {
+                    return Ok((block, f, false));
+                }
+                // The estimate moved to the causal one: only the causal stage is computed.
+                let stage = causal_stage(
+                    &spectra,
+                    &factor_settings,
+                    warm.as_ref().and_then(|w| w.causal.as_deref()),
+                )?;
+                Ok((block, Arc::new(f.with_causal_stage(stage)), true))
             })
             .collect();
         let mut out = Vec::new();

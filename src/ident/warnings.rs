@@ -57,8 +57,11 @@ pub enum IdentWarning {
         bins: usize,
         /// Bins in the band.
         band_bins: usize,
-        /// Relative reconstruction error of its spectral factor.
-        factor_error: f64,
+        /// Relative reconstruction error of its spectral factor (`None` for the input when the
+        /// fit does not go through the input's factor, which is then not computed: absent from
+        /// the file).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        factor_error: Option<f64>,
     },
     /// Stretches of a user's band where the input estimate cannot be trusted (multiple coherence
     /// below [`super::band::MIN_COHERENCE`]).
@@ -161,12 +164,17 @@ impl fmt::Display for IdentWarning {
                 bins,
                 band_bins,
                 factor_error,
-            } => write!(
-                f,
-                "{} near-singular in {bins} of {band_bins} band bins: regularised \
-                 (factor reconstruction error {factor_error:.1e})",
-                spectrum.name()
-            ),
+            } => {
+                write!(
+                    f,
+                    "{} near-singular in {bins} of {band_bins} band bins: regularised",
+                    spectrum.name()
+                )?;
+                match factor_error {
+                    Some(e) => write!(f, " (factor reconstruction error {e:.1e})"),
+                    None => Ok(()),
+                }
+            }
             IdentWarning::UntrustedBand { ranges_hz } => {
                 write!(f, "the input estimate cannot be trusted in ")?;
                 for (i, [lo, hi]) in ranges_hz.iter().enumerate() {
@@ -283,8 +291,9 @@ fn max_trace(s: &[Matrix3<Complex64>]) -> f64 {
 }
 
 /// The warnings of a block's factorisation over the `band` bins (indices into the spectra), for
-/// a fit to `estimate`: the input factor `D_u` only enters the causal Wiener estimate, so its
-/// inexactness and its non-causality are said only when the fit goes through it.
+/// a fit to `estimate`: the input factor `D_u` only enters the causal Wiener estimate (and is
+/// only computed for it), so its inexactness and its non-causality are said only when the fit
+/// goes through it.
 #[must_use]
 pub fn block_warnings(
     spectra: &BlockSpectra,
@@ -293,7 +302,7 @@ pub fn block_warnings(
     band: &[usize],
     estimate: Estimate,
 ) -> Vec<IdentWarning> {
-    let through_input_factor = estimate == Estimate::CausalWiener;
+    let causal = fact.causal_for(estimate);
     let mut warnings = Vec::new();
     let near_singular = |s: &[Matrix3<Complex64>], floor: f64| {
         band.iter()
@@ -307,18 +316,16 @@ pub fn block_warnings(
     };
     let input_floor = INVERSE_FLOOR * max_trace(&spectra.s_uu).max(f64::MIN_POSITIVE);
     let residual_floor = residual_loading(spectra, &fact.noise_psd, settings);
-    for (spectrum, bins, error, converged) in [
+    for (spectrum, bins, factor) in [
         (
             Spectrum::Input,
             near_singular(&spectra.s_uu, input_floor),
-            fact.input_factor_error,
-            fact.input_factor_converged,
+            causal.map(|c| (c.input_factor_error, c.input_factor_converged)),
         ),
         (
             Spectrum::Residual,
             near_singular(&fact.noise_psd, residual_floor),
-            fact.noise_factor_error,
-            fact.noise_factor_converged,
+            Some((fact.noise_factor_error, fact.noise_factor_converged)),
         ),
     ] {
         if bins > 0 {
@@ -326,11 +333,12 @@ pub fn block_warnings(
                 spectrum,
                 bins,
                 band_bins: band.len(),
-                factor_error: error,
+                factor_error: factor.map(|(error, _)| error),
             });
         }
-        let used = spectrum == Spectrum::Residual || through_input_factor;
-        if used && (error.is_nan() || error > FACTOR_ERROR_LIMIT || !converged) {
+        if let Some((error, converged)) = factor
+            && (error.is_nan() || error > FACTOR_ERROR_LIMIT || !converged)
+        {
             warnings.push(IdentWarning::FactorInexact {
                 spectrum,
                 factor_error: error,
@@ -338,12 +346,14 @@ pub fn block_warnings(
             });
         }
     }
-    let negative = fact.input_factor_negative_lags;
-    if through_input_factor && (negative.is_nan() || negative > settings.causality_tolerance) {
-        warnings.push(IdentWarning::FactorNotCausal {
-            negative_lags: negative,
-            refinement: fact.input_refinement,
-        });
+    if let Some(c) = causal {
+        let negative = c.input_factor_negative_lags;
+        if negative.is_nan() || negative > settings.causality_tolerance {
+            warnings.push(IdentWarning::FactorNotCausal {
+                negative_lags: negative,
+                refinement: c.input_refinement,
+            });
+        }
     }
     warnings
 }

@@ -80,7 +80,8 @@ pub fn band_bins(frequency_hz: &[f64], band_hz: [f64; 2]) -> Vec<usize> {
 ///
 /// # Errors
 /// [`IdentError::EmptyBand`] when no bin lies in the band; [`IdentError::Singular`] when A cannot be
-/// inverted or the auto-Lambda system is singular (an output or input with no power in the band).
+/// inverted or the auto-Lambda system is singular (an output or input with no power in the band);
+/// [`IdentError::Factor`] for the causal estimate of a factorisation without its causal stage.
 pub fn regularised_wiener(
     spectra: &BlockSpectra,
     fact: &Factorisation,
@@ -97,10 +98,7 @@ pub fn regularised_wiener(
         });
     }
     let a_inv = weight_a.try_inverse().ok_or(IdentError::Singular("weight_A"))?;
-    let base = match estimate {
-        Estimate::H1 => &fact.h1,
-        Estimate::CausalWiener => &fact.causal_wiener,
-    };
+    let base = fact.estimate(estimate)?;
     let e: Vec<Matrix3<Complex64>> = band
         .iter()
         .map(|&k| base[k] * spectra.s_uu[k] - spectra.s_xu[k])

@@ -199,12 +199,18 @@ pub struct Fit {
     pub constraint_residual: f64,
     /// Overlap-corrected number of Welch averages.
     pub equivalent_averages: f64,
-    /// Reconstruction errors of the input and disturbance spectral factors.
-    pub factor_errors: [f64; 2],
+    /// Reconstruction error of the disturbance's spectral factor `W_psi` (relative, worst bin);
+    /// absent in files written before it had its own name (`factor_errors[1]` then, not read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_factor_error: Option<f64>,
+    /// Reconstruction error of the input's spectral factor `D_u`; absent when the fit did not go
+    /// through the causal stage (`ident::causal_stage`), which alone factors the input.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_factor_error: Option<f64>,
     /// How many times finer than the spectra's the causal stage's grid was
-    /// (`ident::factorisation`, item 4).
-    #[serde(default)]
-    pub causal_grid_refinement: usize,
+    /// (`ident::causal_stage`, item 3); absent when the fit did not go through it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub causal_grid_refinement: Option<usize>,
     /// What was regularised or is inexact (absent or empty when all is well).
     #[serde(default)]
     pub warnings: Vec<IdentWarning>,
@@ -239,6 +245,7 @@ impl BlockModel {
         let s = &b.structural;
         let w = &b.wiener;
         let f = &b.factorisation;
+        let causal = f.causal_for(w.estimate);
         let band = &b.band;
         Self {
             inputs: inputs.map(str::to_owned),
@@ -279,8 +286,9 @@ impl BlockModel {
                 lambda_auto: w.lambda_auto,
                 constraint_residual: w.constraint_residual,
                 equivalent_averages: b.spectra.equivalent_averages,
-                factor_errors: [f.input_factor_error, f.noise_factor_error],
-                causal_grid_refinement: f.input_refinement,
+                noise_factor_error: Some(f.noise_factor_error),
+                input_factor_error: causal.map(|c| c.input_factor_error),
+                causal_grid_refinement: causal.map(|c| c.input_refinement),
                 warnings: b.warnings.clone(),
             },
         }

@@ -700,17 +700,14 @@ mod tests {
         worker.submit(job(4, analyse(&rewelched)));
         let sent = identified(&worker);
         assert_eq!(sent.len(), 2, "the provisional result, then the one from scratch");
-        assert!(sent[0].1.blocks().iter().all(|b| !b.factorisation.from_scratch));
+        assert!(sent[0].1.blocks().iter().all(|b| !b.factorisation.from_scratch()));
         assert!(sent[0].1.provisional());
         let polished = &sent[1].1;
         assert!(!polished.provisional());
         let reference = identify_run(&run, &rewelched).expect("identify");
         for (shown, cold) in polished.blocks().iter().zip(&reference.blocks) {
             assert_eq!(*shown.structural, *cold.structural, "{:?}", shown.block);
-            assert_eq!(
-                shown.factorisation.causal_wiener,
-                cold.factorisation.causal_wiener
-            );
+            assert_eq!(shown.factorisation.noise_factor, cold.factorisation.noise_factor);
         }
     }
 }

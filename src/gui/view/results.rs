@@ -290,17 +290,17 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
         "constraint residual {:.2e}; {:.1} equivalent averages",
         f.constraint_residual, f.equivalent_averages
     ));
-    let causal_stage = if settings.estimate == Estimate::CausalWiener {
-        format!(
-            "causal stage on a grid {}x finer than the spectra's",
-            f.causal_grid_refinement
-        )
-    } else {
-        "the causal stage is not used by the H1 fit".to_owned()
+    let error = |e: Option<f64>| e.map_or_else(|| "not recorded".to_owned(), |e| format!("{e:.1e}"));
+    let causal_stage = match (settings.estimate, f.causal_grid_refinement) {
+        (Estimate::H1, _) => "the H1 fit does not go through the causal stage".to_owned(),
+        (Estimate::CausalWiener, Some(r)) => format!("causal stage on a grid {r}x finer than the spectra's"),
+        (Estimate::CausalWiener, None) => "causal stage's grid not recorded".to_owned(),
     };
     ui.label(format!(
-        "factor errors: input {:.1e}, disturbance {:.1e}; {causal_stage}",
-        f.factor_errors[0], f.factor_errors[1]
+        "factor errors: {}disturbance {}; {causal_stage}",
+        f.input_factor_error
+            .map_or_else(String::new, |e| format!("input {e:.1e}, ")),
+        error(f.noise_factor_error)
     ))
     .on_hover_text(
         "the input's spectral factor must be causal for the causal Wiener estimate; a steep input \

@@ -121,6 +121,28 @@ fn model_file_has_the_contract_fields_and_round_trips() {
         v,
         "lossless round trip"
     );
+
+    // A file written before the causal stage was skipped for H1 (both factor errors in one array,
+    // the causal grid always, a number in every `regularised` warning) still reads.
+    let mut older = v.clone();
+    let fit = older["blocks"]["gyro"]["fit"].as_object_mut().unwrap();
+    fit.remove("noise_factor_error");
+    fit.insert("factor_errors".into(), serde_json::json!([2.5e-12, 3.5e-13]));
+    fit.insert("causal_grid_refinement".into(), 4.into());
+    fit.insert(
+        "warnings".into(),
+        serde_json::json!([{"kind": "regularised", "spectrum": "input", "bins": 4,
+                             "band_bins": 64, "factor_error": 1.2e-12}]),
+    );
+    let older: Model = serde_json::from_value(older).expect("an older model file reads");
+    let fit = &older.blocks["gyro"].fit;
+    assert_eq!(fit.causal_grid_refinement, Some(4));
+    assert_eq!((fit.input_factor_error, fit.noise_factor_error), (None, None));
+    assert!(
+        fit.warnings[0]
+            .to_string()
+            .ends_with("(factor reconstruction error 1.2e-12)")
+    );
 }
 
 #[test]

@@ -185,6 +185,10 @@ fn the_estimate_from_the_controls_refits_and_is_named_in_results_and_the_model()
     harness.run_steps(4);
     assert_eq!(harness.state().settings().estimate, Estimate::CausalWiener);
     let after = identification(&harness);
+    assert!(
+        !after.provisional(),
+        "settled: the causal stage and the fit from scratch"
+    );
     for (a, b) in before.blocks().iter().zip(after.blocks()) {
         assert!(Arc::ptr_eq(&a.spectra, &b.spectra), "spectra not redone");
         let (fa, fb) = (&a.factorisation, &b.factorisation);

@@ -37,8 +37,9 @@
 //!    [`CausalStage::input_factor_negative_lags`] says so and the warnings report it.
 //!
 //! Units and contracts are the factorisation stage's (`super::factorisation`): one-sided spectra
-//! on the spectra's grid in, `W0` per one-sided bin out; non-finite or empty spectra are refused
-//! by the factorisation, never propagated.
+//! on the spectra's grid in, `W0` per one-sided bin out (output units per input unit); empty,
+//! non-finite or odd-grid spectra are refused by this stage's own Wilson factorisation
+//! ([`IdentError::Factor`]), never propagated.
 //!
 //! [`Estimate::CausalWiener`]: super::settings::Estimate::CausalWiener
 
@@ -83,8 +84,8 @@ pub struct CausalStage {
 /// [`super::factorisation::factorise_from`]).
 ///
 /// # Errors
-/// [`IdentError::Factor`] when the input's factorisation is refused or its factor cannot be
-/// inverted.
+/// [`IdentError::Factor`] when the input's factorisation is refused (empty or non-finite spectra,
+/// a bin that is entirely zero, an odd grid) or its factor cannot be inverted.
 pub fn causal_stage(
     spectra: &BlockSpectra,
     settings: &FactorisationSettings,
@@ -143,7 +144,8 @@ pub fn causal_stage(
 }
 
 impl Factorisation {
-    /// This factorisation with `stage` as its causal stage.
+    /// This factorisation with `stage` as its causal stage, which must be of the same spectra
+    /// (the session adds it only to the factorisation of the spectra it computed it from).
     #[must_use]
     pub fn with_causal_stage(&self, stage: CausalStage) -> Self {
         Self {

@@ -110,11 +110,13 @@ impl Factorisation {
         self.noise_factor_converged && self.causal.as_ref().is_none_or(|c| c.input_factor_converged)
     }
 
-    /// Whether every factor was computed from Wilson's standard start, i.e. this is what
-    /// [`factorise_from`] gives without a previous factorisation; false when it started from one.
+    /// Whether every factor `estimate` goes through (the disturbance's, and the input's for the
+    /// causal estimate) was computed from Wilson's standard start, i.e. is what [`factorise_from`]
+    /// gives without a previous factorisation; false when one started from a previous one. A
+    /// causal stage an `H1` fit does not use does not count.
     #[must_use]
-    pub fn from_scratch(&self) -> bool {
-        self.noise_from_scratch && self.causal.as_ref().is_none_or(|c| c.from_scratch)
+    pub fn from_scratch_for(&self, estimate: Estimate) -> bool {
+        self.noise_from_scratch && self.causal_for(estimate).is_none_or(|c| c.from_scratch)
     }
 
     /// The causal stage when `estimate` goes through it (the causal estimate) and it was
@@ -167,7 +169,7 @@ pub fn factorise(
 /// non-causality, so the result can differ from a cold one at that level: on the 30-minute, 1 kHz
 /// cruise run the input factors differ by up to 7e-5 (relative), which moves the identified K of
 /// a causal fit by up to about one standard deviation. Such a result is provisional
-/// ([`Factorisation::from_scratch`] false): the app shows it while the settings move and then
+/// ([`Factorisation::from_scratch_for`] false): the app shows it while the settings move and then
 /// refactorises from scratch. A `previous` on another grid is ignored.
 ///
 /// # Errors
@@ -203,7 +205,8 @@ pub fn factorise_from(
         })
         .collect();
 
-    // The two factorisations are independent: one per core.
+    // The disturbance's factorisation and the causal stage (the input's) are independent: one per
+    // core when both are computed.
     let residual_eps = residual_loading(spectra, &noise_psd, settings);
     let (causal, w_psi) = rayon::join(
         || match estimate {

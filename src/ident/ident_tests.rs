@@ -232,8 +232,13 @@ fn refactorising_after_an_overlap_change_starts_from_the_previous_factors() {
     let previous = factorise(&before, &settings).unwrap();
     let cold = factorise(&after, &settings).unwrap();
     let warm = factorise_from(&after, &settings, Some(&previous), Estimate::CausalWiener).unwrap();
-    assert!(previous.from_scratch() && cold.from_scratch());
-    assert!(!warm.from_scratch(), "started from the previous factors");
+    assert!(
+        previous.from_scratch_for(Estimate::CausalWiener) && cold.from_scratch_for(Estimate::CausalWiener)
+    );
+    assert!(
+        !warm.from_scratch_for(Estimate::CausalWiener),
+        "started from the previous factors"
+    );
     assert!(warm.converged());
     let (w0, w0_cold, w0_previous) = (causal(&warm), causal(&cold), causal(&previous));
     assert!(
@@ -248,6 +253,13 @@ fn refactorising_after_an_overlap_change_starts_from_the_previous_factors() {
         let d = (w0.causal_wiener[k] - w0_cold.causal_wiener[k]).norm();
         assert!(d < 1e-3 * w0_cold.causal_wiener[k].norm(), "bin {k}: {d:e}");
     }
+    // A warm causal stage beside a cold disturbance factor makes the factorisation provisional for
+    // the causal estimate only: an H1 fit does not go through it.
+    let mixed = factorise_from(&after, &settings, None, Estimate::H1)
+        .unwrap()
+        .with_causal_stage(w0.clone());
+    assert!(mixed.from_scratch_for(Estimate::H1));
+    assert!(!mixed.from_scratch_for(Estimate::CausalWiener));
     // The overlap changed the spectra: the previous factors are not the answer.
     let moved = band
         .iter()
@@ -276,7 +288,7 @@ fn the_h1_factorisation_skips_the_causal_stage_and_it_can_be_added() {
     let whole = factorise(&sp, &settings).unwrap();
     let h1_only = factorise_from(&sp, &settings, None, Estimate::H1).unwrap();
     assert!(h1_only.causal.is_none());
-    assert!(h1_only.from_scratch() && h1_only.converged());
+    assert!(h1_only.from_scratch_for(Estimate::H1) && h1_only.converged());
     assert_eq!(h1_only.h1, whole.h1);
     assert_eq!(h1_only.noise_psd, whole.noise_psd);
     assert_eq!(h1_only.noise_factor, whole.noise_factor);
@@ -307,7 +319,7 @@ fn the_h1_factorisation_skips_the_causal_stage_and_it_can_be_added() {
     );
 
     let added = h1_only.with_causal_stage(causal_stage(&sp, &settings, None).unwrap());
-    assert!(added.from_scratch());
+    assert!(added.from_scratch_for(Estimate::CausalWiener));
     assert!(std::sync::Arc::ptr_eq(&added.noise_factor, &h1_only.noise_factor));
     assert_eq!(causal(&added).causal_wiener, causal(&whole).causal_wiener);
     assert_eq!(causal(&added).input_refinement, causal(&whole).input_refinement);

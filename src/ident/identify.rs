@@ -111,9 +111,9 @@ impl RunIdentification {
     /// ([`Start::Warm`]): close to, but not exactly, what `imu-attest identify` gives.
     #[must_use]
     pub fn provisional(&self) -> bool {
-        self.blocks
-            .iter()
-            .any(|b| !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch())
+        self.blocks.iter().any(|b| {
+            !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch_for(b.wiener.estimate)
+        })
     }
 }
 

@@ -200,9 +200,9 @@ impl Session {
         Ok(out)
     }
 
-    /// The factorisations of `blocks`' spectra under `settings`, the missing ones computed in
-    /// parallel (each block's two Wilson factorisations take unequal times; together they keep
-    /// the cores busy).
+    /// The factorisations of `blocks`' spectra under `settings` (with the causal stage for the
+    /// causal estimate), the missing ones computed in parallel over the blocks (and, within a
+    /// block, the disturbance's factor beside the causal stage when both are needed).
     ///
     /// # Errors
     /// The spectra's errors, or a factorisation's.
@@ -223,16 +223,20 @@ impl Session {
                     Start::Warm => of_block(previous, block),
                     Start::Cold => None,
                 };
-                // A warm-started factorisation is no answer to a cold request.
-                let Some(f) = of_block(known, block).filter(|f| start == Start::Warm || f.from_scratch())
-                else {
+                // A warm-started factor is no answer to a cold request: the disturbance's factor
+                // decides whether the cached factorisation is kept, the causal stage whether it is
+                // redone (only for the causal estimate, which alone goes through it).
+                let kept = |fresh: bool| start == Start::Warm || fresh;
+                let Some(f) = of_block(known, block).filter(|f| kept(f.noise_from_scratch)) else {
                     let f = factorise_from(&spectra, &factor_settings, warm.as_deref(), estimate)?;
                     return Ok((block, Arc::new(f), true));
                 };
-                if estimate == Estimate::H1 || f.causal.is_some() {
+                let causal_kept = f.causal.as_ref().is_some_and(|c| kept(c.from_scratch));
+                if estimate == Estimate::H1 || causal_kept {
                     return Ok((block, f, false));
                 }
-                // The estimate moved to the causal one: only the causal stage is computed.
+                // The causal estimate without a causal stage fit for this request: only that stage
+                // is computed.
                 let stage = causal_stage(
                     &spectra,
                     &factor_settings,
@@ -379,3 +383,7 @@ impl Session {
 fn of_block<T>(list: &[(Block, Arc<T>)], block: Block) -> Option<Arc<T>> {
     list.iter().find(|(b, _)| *b == block).map(|(_, v)| v.clone())
 }
+
+#[cfg(test)]
+#[path = "session_tests.rs"]
+mod tests;

@@ -700,7 +700,13 @@ mod tests {
         worker.submit(job(4, analyse(&rewelched)));
         let sent = identified(&worker);
         assert_eq!(sent.len(), 2, "the provisional result, then the one from scratch");
-        assert!(sent[0].1.blocks().iter().all(|b| !b.factorisation.from_scratch()));
+        assert!(
+            sent[0]
+                .1
+                .blocks()
+                .iter()
+                .all(|b| !b.factorisation.from_scratch_for(b.wiener.estimate))
+        );
         assert!(sent[0].1.provisional());
         let polished = &sent[1].1;
         assert!(!polished.provisional());

@@ -292,3 +292,54 @@ fn effects_accepted_from_a_list_or_a_discrepancy_report() {
     let o = identify(&list, &list);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// A run without a gyro block has no witness of the motion, so the stand's angle-noise colour
+/// cannot be estimated: the accelerometer's model says so (on the command line and in the file).
+/// The same block identified alone from a run that has a gyro does not: the gyro is the witness
+/// whether or not it is identified.
+#[test]
+fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
+    let dir = tempfile::tempdir().unwrap();
+    let kind = "angle_noise_colour_unknown";
+    let warned = |model: &Path| -> bool {
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(model).unwrap()).unwrap();
+        v["blocks"]["accel"]["fit"]["warnings"]
+            .as_array()
+            .is_some_and(|w| w.iter().any(|w| w["kind"] == kind))
+    };
+    let accel_only = simulated_run_as(
+        dir.path(),
+        "accel_only.csv",
+        &["--seed", "3", "--blocks", "accel", "--stand", "real"],
+    );
+    let out = dir.path().join("accel_only_model.json");
+    let o = imu_attest(&[
+        "identify",
+        accel_only.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("accel block: no gyro block in this run to check the stand's angle noise against"),
+        "{err}"
+    );
+    assert!(warned(&out));
+
+    let both = simulated_run_as(dir.path(), "both.csv", &["--seed", "3", "--stand", "real"]);
+    let settings = dir.path().join("accel.json");
+    std::fs::write(&settings, r#"{"blocks": ["accel"]}"#).unwrap();
+    let out = dir.path().join("both_model.json");
+    let o = imu_attest(&[
+        "identify",
+        both.to_str().unwrap(),
+        "--settings",
+        settings.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("no gyro block"));
+    assert!(!warned(&out));
+}

@@ -34,10 +34,13 @@ use super::identify::{BlockIdentification, FitStart, IdentStep, RunIdentificatio
 use super::settings::{Estimate, Settings};
 use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
+use super::warnings::IdentWarning;
 use crate::block::Block;
 use crate::run::Run;
 use crate::spectral::{WelchPlanner, WelchSettings};
-use crate::stand::observer::{ObserverEstimate, ObserverSettings, observe_with_witness};
+use crate::stand::observer::{
+    NoiseColour, NoiseSource, ObserverEstimate, ObserverSettings, observe_with_witness,
+};
 
 /// Where the factorisation and the structural fit start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -342,7 +345,16 @@ impl Session {
             })
             .collect();
         // The first block's error in the settings' order, whichever thread failed first.
-        let identified: Vec<BlockIdentification> = identified.into_iter().collect::<Result<_, _>>()?;
+        let mut identified: Vec<BlockIdentification> = identified.into_iter().collect::<Result<_, _>>()?;
+        if motion.noise_colour == NoiseColour::White {
+            // No witness of the motion: what the observer could not check, every block says.
+            for b in &mut identified {
+                b.warnings.push(IdentWarning::AngleNoiseColourUnknown {
+                    angle_noise_rad: motion.angle_noise_rad,
+                    declared: motion.noise_source == NoiseSource::Declared,
+                });
+            }
+        }
         step("done", None, 0);
         let id = Arc::new(RunIdentification {
             motion,

@@ -145,6 +145,18 @@ pub enum IdentWarning {
         /// Whether this factor's iteration converged.
         converged: bool,
     },
+    /// The run has no gyro block, so nothing in it measures the motion a second way and the
+    /// angle noise's colour cannot be estimated (`stand::colour`): the observer takes it as white
+    /// at the level below. A stand whose angle noise is coloured inside the motion's band (an
+    /// optical reference, an encoder's interpolation error) then passes it into this block's
+    /// inputs as motion: gains biased low where the motion is weak, and a gain falling with
+    /// frequency that an order above 0 "explains" with poles standing in for the delay.
+    AngleNoiseColourUnknown {
+        /// The white level assumed per angle (roll, yaw, pitch): its standard deviation, rad.
+        angle_noise_rad: [f64; 3],
+        /// Whether the level is the sidecar's (`true`) or estimated from the angles.
+        declared: bool,
+    },
     /// The input's spectral factor keeps energy at negative lags even on the causal stage's
     /// finest grid: the causal projection then cuts part of the gain (mostly at the lowest
     /// frequencies), so `W_u` and everything fitted to it may be off there.
@@ -265,6 +277,25 @@ impl fmt::Display for IdentWarning {
                 "factor of the {} is inexact: reconstruction error {factor_error:.1e}{}",
                 spectrum.name(),
                 if *converged { "" } else { " (not converged)" }
+            ),
+            IdentWarning::AngleNoiseColourUnknown {
+                angle_noise_rad,
+                declared,
+            } => write!(
+                f,
+                "no gyro block in this run to check the stand's angle noise against: it is taken \
+                 as white, {:.1e} / {:.1e} / {:.1e} rad ({}); if the stand's angle noise is \
+                 coloured (an optical reference, an encoder's interpolation), this block's gains \
+                 are biased low where the motion is weak and poles may stand in for its delay: \
+                 certify with a gyro on the stand, or fix the order at 0 and compare",
+                angle_noise_rad[0],
+                angle_noise_rad[1],
+                angle_noise_rad[2],
+                if *declared {
+                    "declared"
+                } else {
+                    "estimated from the angles"
+                }
             ),
             IdentWarning::FactorNotCausal {
                 negative_lags,

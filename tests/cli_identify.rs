@@ -326,6 +326,22 @@ fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
         "{err}"
     );
     assert!(warned(&out));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(accel_only.with_extension("json")).unwrap()).unwrap();
+    let warning = v["blocks"]["accel"]["fit"]["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["kind"] == kind)
+        .unwrap();
+    assert_eq!(warning["declared"], true, "{warning}");
+    // The sidecar's one declared level, on every axis.
+    assert_eq!(
+        warning["angle_noise_rad"],
+        serde_json::Value::from(vec![sidecar["angle_noise_rad"].clone(); 3]),
+        "{warning}"
+    );
 
     let both = simulated_run_as(dir.path(), "both.csv", &["--seed", "3", "--stand", "real"]);
     let settings = dir.path().join("accel.json");

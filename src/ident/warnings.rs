@@ -284,7 +284,8 @@ impl fmt::Display for IdentWarning {
             } => write!(
                 f,
                 "no gyro block in this run to check the stand's angle noise against: it is taken \
-                 as white, {:.1e} / {:.1e} / {:.1e} rad ({}); if the stand's angle noise is \
+                 as white, roll {:.1e}, yaw {:.1e}, pitch {:.1e} rad per sample ({}); if the \
+                 stand's angle noise is \
                  coloured (an optical reference, an encoder's interpolation), this block's gains \
                  are biased low where the motion is weak and poles may stand in for its delay: \
                  certify with a gyro on the stand, or fix the order at 0 and compare",

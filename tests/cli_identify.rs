@@ -26,6 +26,18 @@ fn simulated_run_as(dir: &Path, file: &str, extra: &[&str]) -> PathBuf {
     run
 }
 
+/// `identify RUN --settings SETTINGS --out OUT`.
+fn identify_with(run: &Path, settings: &Path, out: &Path) -> std::process::Output {
+    imu_attest(&[
+        "identify",
+        run.to_str().unwrap(),
+        "--settings",
+        settings.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 fn keys(v: &serde_json::Value) -> Vec<String> {
     let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
     k.sort();
@@ -43,14 +55,7 @@ fn model_file_has_the_contract_fields_and_round_trips() {
     )
     .unwrap();
     let out = dir.path().join("model.json");
-    let o = imu_attest(&[
-        "identify",
-        run.to_str().unwrap(),
-        "--settings",
-        settings.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = identify_with(&run, &settings, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -176,14 +181,7 @@ fn bad_settings_and_inputs_exit_2_with_one_line() {
     for (text, needle) in cases {
         let s = dir.path().join("s.json");
         std::fs::write(&s, text).unwrap();
-        let o = imu_attest(&[
-            "identify",
-            run_s,
-            "--settings",
-            s.to_str().unwrap(),
-            "--out",
-            out_s,
-        ]);
+        let o = identify_with(&run, &s, &out);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{text}: {err}");
         assert_eq!(err.trim_end().lines().count(), 1, "{text}: {err}");
@@ -300,12 +298,16 @@ fn effects_accepted_from_a_list_or_a_discrepancy_report() {
 #[test]
 fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
     let dir = tempfile::tempdir().unwrap();
-    let kind = "angle_noise_colour_unknown";
-    let warned = |model: &Path| -> bool {
-        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(model).unwrap()).unwrap();
-        v["blocks"]["accel"]["fit"]["warnings"]
-            .as_array()
-            .is_some_and(|w| w.iter().any(|w| w["kind"] == kind))
+    let read = |path: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    // The accelerometer's angle-noise warning in a model file, if any.
+    let warning_in = |model: &Path| -> Option<serde_json::Value> {
+        read(model)["blocks"]["accel"]["fit"]["warnings"]
+            .as_array()?
+            .iter()
+            .find(|w| w["kind"] == "angle_noise_colour_unknown")
+            .cloned()
     };
     let accel_only = simulated_run_as(
         dir.path(),
@@ -325,16 +327,8 @@ fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
         err.contains("accel block: no gyro block in this run to check the stand's angle noise against"),
         "{err}"
     );
-    assert!(warned(&out));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    let sidecar: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(accel_only.with_extension("json")).unwrap()).unwrap();
-    let warning = v["blocks"]["accel"]["fit"]["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|w| w["kind"] == kind)
-        .unwrap();
+    let warning = warning_in(&out).expect("the accelerometer-only model says it");
+    let sidecar = read(&accel_only.with_extension("json"));
     assert_eq!(warning["declared"], true, "{warning}");
     // The sidecar's one declared level, on every axis.
     assert_eq!(
@@ -347,15 +341,8 @@ fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
     let settings = dir.path().join("accel.json");
     std::fs::write(&settings, r#"{"blocks": ["accel"]}"#).unwrap();
     let out = dir.path().join("both_model.json");
-    let o = imu_attest(&[
-        "identify",
-        both.to_str().unwrap(),
-        "--settings",
-        settings.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = identify_with(&both, &settings, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(!String::from_utf8_lossy(&o.stderr).contains("no gyro block"));
-    assert!(!warned(&out));
+    assert_eq!(warning_in(&out), None);
 }

@@ -48,7 +48,8 @@ use num_complex::Complex64;
 
 use super::IdentError;
 use super::factorisation::{
-    Factorisation, FactorisationSettings, INVERSE_FLOOR, factor_error, floored_inverse, loaded_two_sided,
+    Factorisation, FactorisationSettings, factor_error, floored_inverse, input_floor, loaded_two_sided,
+    max_trace,
 };
 use super::spectra::BlockSpectra;
 use crate::spectral::causal::CausalProjector;
@@ -91,9 +92,8 @@ pub fn causal_stage(
     settings: &FactorisationSettings,
     previous: Option<&CausalStage>,
 ) -> Result<CausalStage, IdentError> {
-    let max_trace = spectra.s_uu.iter().map(|s| s.trace().re).fold(0.0, f64::max);
-    let floor = INVERSE_FLOOR * max_trace.max(f64::MIN_POSITIVE);
-    let eps = settings.loading * max_trace / 3.0;
+    let floor = input_floor(&spectra.s_uu);
+    let eps = settings.loading * max_trace(&spectra.s_uu) / 3.0;
     let (d_u, input_refinement, input_factor_negative_lags) = causal_input_factor(
         &spectra.s_uu,
         eps,

@@ -180,8 +180,7 @@ pub fn factorise_from(
     previous: Option<&Factorisation>,
     estimate: Estimate,
 ) -> Result<Factorisation, IdentError> {
-    let max_trace = spectra.s_uu.iter().map(|s| s.trace().re).fold(0.0, f64::max);
-    let floor = INVERSE_FLOOR * max_trace.max(f64::MIN_POSITIVE);
+    let floor = input_floor(&spectra.s_uu);
     let mut floored_input_bins = 0;
     let s_uu_inv: Vec<Matrix3<Complex64>> = spectra
         .s_uu
@@ -275,6 +274,19 @@ fn coherence(spectra: &BlockSpectra, noise_psd: &[Matrix3<Complex64>]) -> Vec<[f
         .collect()
 }
 
+/// Largest trace over all bins (0 for none).
+#[must_use]
+pub fn max_trace(s: &[Matrix3<Complex64>]) -> f64 {
+    s.iter().map(|m| m.trace().re).fold(0.0, f64::max)
+}
+
+/// The eigenvalue floor below which `S_uu` is near-singular and floored to be inverted:
+/// [`INVERSE_FLOOR`] times its largest trace (never 0).
+#[must_use]
+pub fn input_floor(s_uu: &[Matrix3<Complex64>]) -> f64 {
+    INVERSE_FLOOR * max_trace(s_uu).max(f64::MIN_POSITIVE)
+}
+
 /// The uniform loading added to the residual spectrum before its factorisation:
 /// `loading * max_f tr S_psi / 3`, but never below `loading * INVERSE_FLOOR * max_f tr S_xx / 3`,
 /// so that a residual that vanishes (an output explained exactly by the inputs) is still factored
@@ -285,7 +297,6 @@ pub fn residual_loading(
     noise_psd: &[Matrix3<Complex64>],
     settings: &FactorisationSettings,
 ) -> f64 {
-    let max_trace = |s: &[Matrix3<Complex64>]| s.iter().map(|m| m.trace().re).fold(0.0, f64::max);
     let scale = max_trace(noise_psd).max(INVERSE_FLOOR * max_trace(&spectra.s_xx));
     settings.loading * scale / 3.0
 }

@@ -19,7 +19,7 @@ use nalgebra::{Matrix3, SymmetricEigen};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use super::factorisation::{Factorisation, FactorisationSettings, INVERSE_FLOOR, residual_loading};
+use super::factorisation::{Factorisation, FactorisationSettings, input_floor, residual_loading};
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 
@@ -317,11 +317,6 @@ fn min_eigenvalue(m: &Matrix3<Complex64>) -> f64 {
     SymmetricEigen::new(h).eigenvalues.min()
 }
 
-/// Largest trace over all bins.
-fn max_trace(s: &[Matrix3<Complex64>]) -> f64 {
-    s.iter().map(|m| m.trace().re).fold(0.0, f64::max)
-}
-
 /// The warnings of a block's factorisation over the `band` bins (indices into the spectra), for
 /// a fit to `estimate`: the input factor `D_u` only enters the causal Wiener estimate (and is
 /// only computed for it), so its inexactness and its non-causality are said only when the fit
@@ -346,12 +341,12 @@ pub fn block_warnings(
             })
             .count()
     };
-    let input_floor = INVERSE_FLOOR * max_trace(&spectra.s_uu).max(f64::MIN_POSITIVE);
+    let floor = input_floor(&spectra.s_uu);
     let residual_floor = residual_loading(spectra, &fact.noise_psd, settings);
     for (spectrum, bins, factor) in [
         (
             Spectrum::Input,
-            near_singular(&spectra.s_uu, input_floor),
+            near_singular(&spectra.s_uu, floor),
             causal.map(|c| (c.input_factor_error, c.input_factor_converged)),
         ),
         (

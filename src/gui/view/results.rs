@@ -9,7 +9,7 @@ use crate::block::Block;
 use crate::diagnose::describe::describe_size;
 use crate::gui::app::{Command, RunEntry};
 use crate::ident::band::BandSetting;
-use crate::ident::settings::{Estimate, LambdaSetting, OrderSetting, Settings};
+use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::model::BlockModel;
 
 fn pm(v: f64, std: Option<f64>, decimals: usize) -> String {
@@ -291,11 +291,11 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
         f.constraint_residual, f.equivalent_averages
     ));
     let error = |e: Option<f64>| e.map_or_else(|| "not recorded".to_owned(), |e| format!("{e:.1e}"));
-    let causal_stage = match (settings.estimate, f.causal_grid_refinement) {
-        (Estimate::H1, _) => "the H1 fit does not go through the causal stage".to_owned(),
-        (Estimate::CausalWiener, Some(r)) => format!("causal stage on a grid {r}x finer than the spectra's"),
-        (Estimate::CausalWiener, None) => "causal stage's grid not recorded".to_owned(),
-    };
+    // Recorded only for a fit through the causal stage (the causal estimate).
+    let causal_stage = f.causal_grid_refinement.map_or_else(
+        || "the H1 fit does not go through the causal stage".to_owned(),
+        |r| format!("causal stage on a grid {r}x finer than the spectra's"),
+    );
     ui.label(format!(
         "factor errors: {}disturbance {}; {causal_stage}",
         f.input_factor_error

@@ -13,8 +13,13 @@ use imu_attest::run::{LoadOptions, load};
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, simulate};
+use imu_attest::spectral::WelchSettings;
 
 fn identified(duration_s: f64, effects: &[&str], seed: u64) -> RunIdentification {
+    identified_with(duration_s, effects, seed, &Settings::default())
+}
+
+fn identified_with(duration_s: f64, effects: &[&str], seed: u64, settings: &Settings) -> RunIdentification {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut config = SimConfig::new(Regime::Cruise);
     config.duration_s = duration_s;
@@ -23,11 +28,7 @@ fn identified(duration_s: f64, effects: &[&str], seed: u64) -> RunIdentification
     config.effects = effects.iter().map(|e| e.parse().expect("effect")).collect();
     let path = dir.path().join("run.csv");
     write_run(&simulate(&config).expect("simulated"), &path).expect("written");
-    identify_run(
-        &load(&path, &LoadOptions::default()).expect("loads"),
-        &Settings::default(),
-    )
-    .expect("identified")
+    identify_run(&load(&path, &LoadOptions::default()).expect("loads"), settings).expect("identified")
 }
 
 fn held_out(id: &RunIdentification, block: Block) -> Vec<Option<f64>> {
@@ -84,9 +85,18 @@ fn a_record_too_short_for_the_stationarity_check_is_still_halved() {
 
 #[test]
 fn a_record_too_short_to_halve_has_no_held_out_figures() {
-    // 30 s: 6 segments, not two halves of six.
-    let id = identified(30.0, &[], 6);
+    // 40 s with a given segment of 4096: 8 segments, not two halves of six (and said).
+    let given = Settings {
+        welch: WelchSettings {
+            segment_len: 4096,
+            segment_auto: false,
+            ..WelchSettings::default()
+        },
+        ..Settings::default()
+    };
+    let id = identified_with(40.0, &[], 6, &given);
     for b in &id.blocks {
+        assert_eq!(b.spectra.n_averages, 8);
         let h = held_out(&id, b.block);
         assert!(h.iter().all(Option::is_none), "{}: {h:?}", b.block);
         assert!(
@@ -96,6 +106,25 @@ fn a_record_too_short_to_halve_has_no_held_out_figures() {
             )),
             "{}: rule 7 is not applied without halves",
             b.block
+        );
+        assert!(
+            b.warnings
+                .iter()
+                .any(|w| matches!(w, IdentWarning::FewSegments { segments: 8, .. })),
+            "{}: {:?}",
+            b.block,
+            b.warnings
+        );
+    }
+    // The same record with the segment left to the program: 2048, 18 segments, halved.
+    let id = identified(40.0, &[], 6);
+    for b in &id.blocks {
+        assert_eq!((b.spectra.segment_len, b.spectra.n_averages), (2048, 18));
+        assert!(held_out(&id, b.block).iter().all(Option::is_some), "{}", b.block);
+        assert!(
+            !b.warnings
+                .iter()
+                .any(|w| matches!(w, IdentWarning::FewSegments { .. }))
         );
     }
 }

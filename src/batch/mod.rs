@@ -56,10 +56,7 @@ pub fn run_rows(path: &Path, settings: &Settings, diagnose: bool) -> Vec<BatchRo
         Ok(run) => Arc::new(run),
         Err(e) => return vec![BatchRow::failed(&file, &e.to_string())],
     };
-    let settings = Settings {
-        blocks: settings.blocks_for(&run.blocks()),
-        ..settings.clone()
-    };
+    let settings = settings.for_run(&run);
     let mut session = Session::new(run);
     let model = match identified_model(&mut session, &settings, &mut |_| {}) {
         Ok(model) => model,

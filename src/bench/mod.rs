@@ -253,10 +253,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let bytes = |id: &crate::ident::identify::RunIdentification, name: &str| {
             let file = dir.path().join(name);
-            let resolved = crate::ident::settings::Settings {
-                blocks: settings.blocks_for(&run.blocks()),
-                ..settings.clone()
-            };
+            let resolved = settings.for_run(&run);
             Model::from_identification(&run, &resolved, id)
                 .write_file(&file)
                 .unwrap();

@@ -121,7 +121,7 @@ impl BenchState {
 
 fn load_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let run = load(&state.path, &LoadOptions::default())?;
-    state.settings.blocks = state.settings.blocks_for(&run.blocks());
+    state.settings = state.settings.for_run(&run);
     state
         .settings
         .validate(run.len(), run.sample_rate_hz, &run.blocks())
@@ -308,10 +308,7 @@ fn bare_stage(state: &mut BenchState) -> Result<(), BenchError> {
 fn open_to_model_stage(state: &mut BenchState) -> Result<(), BenchError> {
     state.session = None;
     let run = load(&state.path, &LoadOptions::default())?;
-    let settings = Settings {
-        blocks: state.settings.blocks_for(&run.blocks()),
-        ..state.settings.clone()
-    };
+    let settings = state.settings.for_run(&run);
     let mut session = Session::new(Arc::new(run));
     std::hint::black_box(session.identify(&settings, Start::Cold, &mut |_| {})?);
     state.session = Some(session);

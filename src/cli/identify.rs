@@ -86,10 +86,7 @@ pub(super) fn identify_in(
     settings: &Settings,
     accepted: &[(Block, Effect)],
 ) -> Result<Model, CliError> {
-    let settings = Settings {
-        blocks: settings.blocks_for(&session.run().blocks()),
-        ..settings.clone()
-    };
+    let settings = settings.for_run(session.run());
     // Settings that do not fit this run are the user's input; anything else is ours.
     let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
     let model = extended_model(session, &settings, accepted, &mut |step| {

@@ -61,10 +61,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         }
         let settings = match (&settings_path, &model) {
             (None, Some(m)) => m.settings.clone(),
-            _ => crate::ident::settings::Settings {
-                blocks: settings.blocks_for(&run.blocks()),
-                ..settings.clone()
-            },
+            _ => settings.for_run(&run),
         };
         let bar = super::progress::bar(1, "{spinner} reporting {msg} {elapsed}");
         bar.set_message(path.display().to_string());

@@ -112,9 +112,8 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     let band_hz = BandSetting::Fixed(settings.band_hz.search_limits(run.sample_rate_hz));
     let settings = Settings {
         order: OrderSetting::Fixed(0).into(),
-        blocks: settings.blocks_for(&run.blocks()),
         band_hz,
-        ..settings.clone()
+        ..settings.for_run(run)
     };
     let id = session.identify_aside(&settings)?;
     let span = session.span(&settings)?;

@@ -15,6 +15,8 @@
 //!   reference's gain rise is fitted that way: measured on a real run's 64 s stretch, order 2 with
 //!   -4.8 ms for the delay-only model's +4.2 ms).
 //! - **Inadmissible order**: a fixed order that breaks a rule of [`super::structural::admissible`].
+//! - **Few segments**: fewer Welch segments than [`AUTO_MIN_SEGMENTS`] (a segment given by the
+//!   user on a short record): weights on few averages, no held-out check of the order.
 //!
 //! Units: `K` dimensionless (block units over input units), delays in s, frequencies in Hz.
 
@@ -23,7 +25,7 @@ use std::sync::Arc;
 use num_complex::Complex64;
 
 use super::identify::row_weights;
-use super::settings::{OrderSetting, Settings};
+use super::settings::{AUTO_MIN_SEGMENTS, OrderSetting, Settings};
 use super::signals::channel_names;
 use super::spectra::BlockSpectra;
 use super::structural::StructuralFit;
@@ -75,6 +77,13 @@ pub fn self_check(
     settings: &Settings,
 ) -> Vec<IdentWarning> {
     let mut out = Vec::new();
+    if spectra.n_averages < AUTO_MIN_SEGMENTS {
+        out.push(IdentWarning::FewSegments {
+            segments: spectra.n_averages,
+            segment_len: spectra.segment_len,
+            wanted: AUTO_MIN_SEGMENTS,
+        });
+    }
     let per_dof = fit.chi2 / fit.dof.max(1) as f64;
     if per_dof > POOR_FIT {
         let chi2 = chi2_per_bin(spectra, noise, wiener, band, fit);

@@ -296,11 +296,8 @@ impl Session {
     ) -> Result<Arc<RunIdentification>, IdentError> {
         let run = self.run.clone();
         let span = self.span(settings)?;
+        let settings = settings.for_run(&run);
         settings.validate(span.len(), run.sample_rate_hz, &run.blocks())?;
-        let settings = Settings {
-            blocks: settings.blocks_for(&run.blocks()),
-            ..settings.clone()
-        };
         if let Some((_, id)) = self
             .identification
             .as_ref()

@@ -6,7 +6,9 @@
 //! these per block (`{"gyro": 0, "accel": "auto"}`, [`BlockOrders`]). Validation
 //! against a run ([`Settings::validate`]) refuses: a band outside `(0, Nyquist]` or empty, a
 //! weight `A` that is not symmetric positive definite, a `lambda` that makes `I - A^-1 Lambda`
-//! singular, a negative `lambda` or one that shrinks the gain by more than [`MAX_SHRINK`], an order above 4, a segment longer than the run, a block the run does not have.
+//! singular, a negative `lambda` or one that shrinks the gain by more than [`MAX_SHRINK`], an order above 4, a segment longer than the run or a record holding fewer than [`MIN_SEGMENTS`]
+//! of it, a block the run does not have. A segment left out of the settings file is the program's:
+//! [`Settings::for_run`] shortens it for a short record ([`welch_for_record`]).
 
 use std::fmt;
 use std::path::Path;
@@ -18,10 +20,44 @@ use serde::{Deserialize, Serialize, Serializer};
 use super::band::BandSetting;
 pub use super::block_orders::BlockOrders;
 use crate::block::Block;
-use crate::spectral::WelchSettings;
+use crate::spectral::{MIN_SEGMENT_LEN, WelchSettings};
 
 /// Highest structural order.
 pub const MAX_ORDER: usize = 4;
+
+/// Fewest Welch segments the identifier accepts. The 3-input `H1` estimate leaves the disturbance
+/// spectrum `n_eq - 3` degrees of freedom per bin (`n_eq` the equivalent number of averages, about
+/// 0.95 per Hann segment at half overlap), and the fit's weights are its inverse, whose mean is
+/// `nu / (nu - 2)` times the truth: infinite at 3 segments or fewer (where the estimate fits
+/// the output exactly and the disturbance is zero), 2x at 6, 1.7x at 8.
+pub const MIN_SEGMENTS: usize = 8;
+
+/// Fewest segments a segment left to the program leaves the record: two halves of six, so the
+/// order choice can be checked on held-out data (admissibility rule 7).
+pub const AUTO_MIN_SEGMENTS: usize = 12;
+
+/// Shortest segment the program picks (a 30 s record at 250 Hz still gets 256 samples, 1 Hz
+/// apart); below it a record is refused unless a shorter segment is given.
+pub const AUTO_MIN_SEGMENT_LEN: usize = 256;
+
+/// `welch` for a record of `n_samples`: unchanged when its segment was given; left to the
+/// program, the segment is halved from its default until the record holds [`AUTO_MIN_SEGMENTS`],
+/// not below [`AUTO_MIN_SEGMENT_LEN`]. Records of at least `6.5 x 4096` samples (93 s at 286 Hz,
+/// 53 s at 500 Hz) keep 4096.
+#[must_use]
+pub fn welch_for_record(welch: WelchSettings, n_samples: usize) -> WelchSettings {
+    let mut w = welch;
+    if !w.segment_auto {
+        return w;
+    }
+    while w.segment_len / 2 >= AUTO_MIN_SEGMENT_LEN
+        && w.segment_len.is_multiple_of(4)
+        && w.n_segments(n_samples) < AUTO_MIN_SEGMENTS
+    {
+        w.segment_len /= 2;
+    }
+    w
+}
 
 /// The Lagrange multipliers of the regularising constraint.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -202,6 +238,26 @@ pub enum SettingsError {
     /// Welch settings refused.
     #[error("welch: {0}")]
     Welch(String),
+    /// The record holds too few Welch segments for the 3-input estimate ([`MIN_SEGMENTS`]).
+    #[error(
+        "welch: too few samples for the chosen spectral segment: {n_samples} samples hold \
+         {segments} segments of {segment_len} (overlap {overlap}), and the identifier needs at \
+         least {min}: {advice}"
+    )]
+    TooFewSegments {
+        /// Samples in the record (or span).
+        n_samples: usize,
+        /// The segment length.
+        segment_len: usize,
+        /// The overlap.
+        overlap: f64,
+        /// Segments the record holds.
+        segments: usize,
+        /// Fewest accepted ([`MIN_SEGMENTS`]).
+        min: usize,
+        /// What to do, in words.
+        advice: String,
+    },
     /// A block the run does not have.
     #[error("block '{0}' is not in this run")]
     MissingBlock(&'static str),
@@ -266,6 +322,26 @@ impl Settings {
         }
     }
 
+    /// These settings as used on `run`: the blocks filled in from the run when empty
+    /// ([`Self::blocks_for`]), a segment left to the program fitted to the samples of the span
+    /// ([`welch_for_record`]; the whole record when the span does not fit it, which
+    /// [`Self::validate`] then refuses). Every output echoes these.
+    #[must_use]
+    pub fn for_run(&self, run: &crate::run::Run) -> Settings {
+        let n = self.span_range(&run.time_s).map_or(run.len(), |r| r.len());
+        self.for_record(n, &run.blocks())
+    }
+
+    /// [`Self::for_run`] for a record of `n_samples` having the blocks `present`.
+    #[must_use]
+    pub fn for_record(&self, n_samples: usize, present: &[Block]) -> Settings {
+        Settings {
+            blocks: self.blocks_for(present),
+            welch: welch_for_record(self.welch, n_samples),
+            ..self.clone()
+        }
+    }
+
     /// The samples of `span_s` in a record with times `time_s` (all of them without a span).
     ///
     /// # Errors
@@ -314,6 +390,29 @@ impl Settings {
         self.welch
             .validate(n_samples)
             .map_err(|e| SettingsError::Welch(e.to_string()))?;
+        let segments = self.welch.n_segments(n_samples);
+        if segments < MIN_SEGMENTS {
+            let mut fits = self.welch;
+            while fits.segment_len > MIN_SEGMENT_LEN && fits.n_segments(n_samples) < MIN_SEGMENTS {
+                fits.segment_len = (fits.segment_len / 2).max(MIN_SEGMENT_LEN) & !1;
+            }
+            let advice = if fits.n_segments(n_samples) >= MIN_SEGMENTS {
+                format!(
+                    "give a segment of at most {} samples, or a longer record",
+                    fits.segment_len
+                )
+            } else {
+                "the record is too short to identify".to_owned()
+            };
+            return Err(SettingsError::TooFewSegments {
+                n_samples,
+                segment_len: self.welch.segment_len,
+                overlap: self.welch.overlap,
+                segments,
+                min: MIN_SEGMENTS,
+                advice,
+            });
+        }
         if blocks.is_empty() {
             return Err(SettingsError::NoBlocks);
         }

@@ -12,7 +12,101 @@ fn empty_file_gives_defaults_and_round_trips() {
     assert!(
         text.contains("\"weight_A\"") && text.contains("\"band_hz\"") && text.contains("\"order\":\"auto\"")
     );
+    assert!(text.contains("\"segment_auto\":true"), "{text}");
     assert_eq!(parse(&text).unwrap(), s);
+}
+
+/// Segments of `len` with half overlap in `n` samples, counted by hand.
+fn segments_by_hand(n: usize, len: usize) -> usize {
+    if n < len { 0 } else { (n - len) / (len / 2) + 1 }
+}
+
+#[test]
+fn a_segment_left_to_the_program_is_halved_until_the_record_holds_twelve() {
+    let auto = Settings::default().welch;
+    // Real and simulated record lengths: 30 s, 60 s and 128 s at 285.7 Hz, 60 s at 500 Hz,
+    // 300 s at 500 Hz, 10 s at 100 Hz, and one too short for even the shortest segment.
+    for (n, expected) in [
+        (8_571, 1024),
+        (17_142, 2048),
+        (36_600, 4096),
+        (30_000, 4096),
+        (150_000, 4096),
+        (1_000, 256),
+        (100, 256),
+    ] {
+        let w = welch_for_record(auto, n);
+        assert_eq!(w.segment_len, expected, "{n} samples");
+        // The longest power of two that leaves 12 segments (the shortest allowed otherwise).
+        assert!(
+            expected == 256 || segments_by_hand(n, expected) >= AUTO_MIN_SEGMENTS,
+            "{n}"
+        );
+        assert!(
+            expected == 4096 || segments_by_hand(n, 2 * expected) < AUTO_MIN_SEGMENTS,
+            "{n}"
+        );
+        assert_eq!(w.n_segments(n), segments_by_hand(n, expected));
+        assert!(w.segment_auto, "still the program's");
+        // Fitting it again changes nothing.
+        assert_eq!(welch_for_record(w, n), w);
+    }
+    // A given segment is kept, whatever the record.
+    let given = WelchSettings {
+        segment_len: 4096,
+        segment_auto: false,
+        ..auto
+    };
+    assert_eq!(welch_for_record(given, 8_571), given);
+}
+
+#[test]
+fn too_few_segments_are_refused_with_the_numbers_and_what_to_give() {
+    let given = |segment_len| Settings {
+        welch: WelchSettings {
+            segment_len,
+            segment_auto: false,
+            ..WelchSettings::default()
+        },
+        ..Settings::default()
+    };
+    // 30 s at 285.7 Hz: 3 segments of 4096 (the crash this refusal replaces), 7 of 2048.
+    for (len, segments) in [(4096, 3), (2048, 7)] {
+        let err = given(len).validate(8_571, 285.714, &[Block::Gyro]).unwrap_err();
+        let SettingsError::TooFewSegments {
+            segments: got, min, ..
+        } = &err
+        else {
+            panic!("{err}")
+        };
+        assert_eq!((*got, *min), (segments, MIN_SEGMENTS));
+        let msg = err.to_string();
+        assert!(
+            msg.contains("too few samples for the chosen spectral segment")
+                && msg.contains(&format!("{segments} segments of {len}"))
+                && msg.contains("at most 1024"),
+            "{msg}"
+        );
+    }
+    assert!(given(1024).validate(8_571, 285.714, &[Block::Gyro]).is_ok());
+    // The program's segment on the same record passes; on a record too short for 8 segments of
+    // 256 the refusal says so.
+    let auto = Settings::default().for_record(8_571, &[Block::Gyro]);
+    assert!(auto.validate(8_571, 285.714, &[Block::Gyro]).is_ok());
+    let short = Settings::default().for_record(1_000, &[Block::Gyro]);
+    let msg = short
+        .validate(1_000, 100.0, &[Block::Gyro])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("6 segments of 256") && msg.contains("at most 128"),
+        "{msg}"
+    );
+    let msg = given(8)
+        .validate(30, 100.0, &[Block::Gyro])
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("too short to identify"), "{msg}");
 }
 
 #[test]

@@ -157,6 +157,17 @@ pub enum IdentWarning {
         /// Whether the level is the sidecar's (`true`) or estimated from the angles.
         declared: bool,
     },
+    /// The record holds fewer Welch segments than a segment left to the program would give it
+    /// ([`super::settings::AUTO_MIN_SEGMENTS`]): the fit's weights rest on few averages, and the
+    /// order choice cannot be checked on held-out data.
+    FewSegments {
+        /// Segments of the record (or span).
+        segments: usize,
+        /// The segment length, samples.
+        segment_len: usize,
+        /// Segments a segment left to the program gives a record.
+        wanted: usize,
+    },
     /// The input's spectral factor keeps energy at negative lags even on the causal stage's
     /// finest grid: the causal projection then cuts part of the gain (mostly at the lowest
     /// frequencies), so `W_u` and everything fitted to it may be off there.
@@ -297,6 +308,17 @@ impl fmt::Display for IdentWarning {
                 } else {
                     "estimated from the angles"
                 }
+            ),
+            IdentWarning::FewSegments {
+                segments,
+                segment_len,
+                wanted,
+            } => write!(
+                f,
+                "only {segments} Welch segments of {segment_len} samples: the noise weights rest \
+                 on few averages, so the deviations may be too small, and the order cannot be \
+                 checked on half of the record predicting the other (that needs {wanted}); leave \
+                 segment_len out to let the program fit it to the record"
             ),
             IdentWarning::FactorNotCausal {
                 negative_lags,

@@ -57,6 +57,6 @@ mod window;
 pub use detrend::Detrend;
 pub use error::SpectralError;
 pub use matrix::SpectralMatrix;
-pub use settings::{MIN_SEGMENT_LEN, WelchSettings};
+pub use settings::{DEFAULT_SEGMENT_LEN, MIN_SEGMENT_LEN, WelchSettings};
 pub use welch::{WelchPlanner, welch_matrix};
 pub use window::Window;

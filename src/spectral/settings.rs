@@ -6,33 +6,73 @@ use serde::{Deserialize, Serialize};
 /// The smallest segment length accepted, samples.
 pub const MIN_SEGMENT_LEN: usize = 8;
 
+/// The segment length when none is given, samples.
+pub const DEFAULT_SEGMENT_LEN: usize = 4096;
+
 /// How a run is cut into segments and what is done to each. Every field is optional in JSON; an
 /// unknown one is refused (a misspelt `segment_len` would otherwise be silently ignored).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "WelchSettingsFile")]
 pub struct WelchSettings {
-    /// Samples per segment `N`: even and at least [`MIN_SEGMENT_LEN`]. Default 4096.
-    #[serde(default = "default_segment_len")]
+    /// Samples per segment `N`: even and at least [`MIN_SEGMENT_LEN`]. Default
+    /// [`DEFAULT_SEGMENT_LEN`].
     pub segment_len: usize,
+    /// `segment_len` is left to the program (the default: `segment_len` absent from the settings
+    /// file, or `"segment_auto": true` beside it): it is then the longest segment tried, and a
+    /// user of these settings may shorten it for a record too short to hold enough segments (the
+    /// identifier does: [`crate::ident::settings::Settings::for_run`]). Written out only when
+    /// true, beside the segment used, so an echo read back chooses the same segment.
+    #[serde(skip_serializing_if = "is_false")]
+    pub segment_auto: bool,
     /// Fraction of a segment shared with the next one, in `[0, 1)`. Default 0.5.
     #[serde(default = "default_overlap")]
     pub overlap: f64,
     /// Taper applied after detrending. Default Hann.
-    #[serde(default)]
     pub window: Window,
     /// What is removed from each segment before windowing. Default the mean.
-    #[serde(default)]
     pub detrend: Detrend,
     /// FFT length (scipy's `nfft`): each windowed segment is zero-padded to it. Even and at least
     /// `segment_len`; absent (`None`), it equals `segment_len`. Padding samples the same estimate
     /// on a finer grid: with `fft_len >= 2 segment_len` the grid holds the estimate's whole
     /// correlation without aliasing.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub fft_len: Option<usize>,
 }
 
-fn default_segment_len() -> usize {
-    4096
+/// [`WelchSettings`] as a settings file gives them: every field optional, unknown ones refused.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WelchSettingsFile {
+    #[serde(default)]
+    segment_len: Option<usize>,
+    #[serde(default)]
+    segment_auto: Option<bool>,
+    #[serde(default = "default_overlap")]
+    overlap: f64,
+    #[serde(default)]
+    window: Window,
+    #[serde(default)]
+    detrend: Detrend,
+    #[serde(default)]
+    fft_len: Option<usize>,
+}
+
+impl From<WelchSettingsFile> for WelchSettings {
+    fn from(f: WelchSettingsFile) -> Self {
+        Self {
+            segment_len: f.segment_len.unwrap_or(DEFAULT_SEGMENT_LEN),
+            segment_auto: f.segment_auto.unwrap_or(f.segment_len.is_none()),
+            overlap: f.overlap,
+            window: f.window,
+            detrend: f.detrend,
+            fft_len: f.fft_len,
+        }
+    }
+}
+
+#[expect(clippy::trivially_copy_pass_by_ref)] // serde's skip_serializing_if passes a reference
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 fn default_overlap() -> f64 {
@@ -42,7 +82,8 @@ fn default_overlap() -> f64 {
 impl Default for WelchSettings {
     fn default() -> Self {
         Self {
-            segment_len: default_segment_len(),
+            segment_len: DEFAULT_SEGMENT_LEN,
+            segment_auto: true,
             overlap: default_overlap(),
             window: Window::default(),
             detrend: Detrend::default(),
@@ -144,6 +185,25 @@ mod tests {
         );
         let round_trip: WelchSettings = serde_json::from_str(&serde_json::to_string(&s).unwrap()).unwrap();
         assert_eq!(round_trip, s);
+        assert!(!s.segment_auto, "a given segment is the user's");
+        let given = serde_json::to_value(s).unwrap();
+        assert!(given.get("segment_auto").is_none(), "{given}");
+        // Left out, the segment is the program's, and the echo says so beside the segment.
+        let auto: WelchSettings = serde_json::from_str(r#"{"overlap": 0.25}"#).unwrap();
+        assert!(auto.segment_auto && auto.segment_len == 4096);
+        let echoed = serde_json::to_value(auto).unwrap();
+        assert_eq!(
+            (&echoed["segment_len"], &echoed["segment_auto"]),
+            (&4096.into(), &true.into())
+        );
+        let back: WelchSettings = serde_json::from_value(echoed).unwrap();
+        assert_eq!(back, auto);
+        // "segment_auto" beside a segment: the longest the program tries.
+        let up_to: WelchSettings =
+            serde_json::from_str(r#"{"segment_len": 1024, "segment_auto": true}"#).unwrap();
+        assert!(up_to.segment_auto && up_to.segment_len == 1024);
+        let typo = serde_json::from_str::<WelchSettings>(r#"{"segment": 1024}"#).unwrap_err();
+        assert!(typo.to_string().contains("unknown field"), "{typo}");
     }
 
     #[test]

@@ -29,10 +29,11 @@ pub fn views(channels: &[Vec<f64>]) -> Vec<&[f64]> {
     channels.iter().map(Vec::as_slice).collect()
 }
 
-/// Settings from their four fields, in declaration order.
+/// Settings from their four fields, in declaration order (the segment given).
 pub fn settings(segment_len: usize, overlap: f64, window: Window, detrend: Detrend) -> WelchSettings {
     WelchSettings {
         segment_len,
+        segment_auto: false,
         overlap,
         window,
         detrend,

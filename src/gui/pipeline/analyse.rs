@@ -67,10 +67,7 @@ impl RunCache {
     /// # Errors
     /// The diagnosis's (the identification's, a record too short for it).
     pub fn prepared(&mut self, settings: &Settings) -> Result<Arc<Prepared>, DiagnoseError> {
-        let settings = Settings {
-            blocks: settings.blocks_for(&self.session.run().blocks()),
-            ..settings.clone()
-        };
+        let settings = settings.for_run(self.session.run());
         if let Some((s, p)) = &self.prepared
             && *s == settings
         {
@@ -113,6 +110,8 @@ impl Analysis<'_> {
     /// Brings every stage of `cache` up to date with `settings`, sending each new result.
     pub fn analyse(&self, cache: &mut RunCache, settings: &Settings, stage: &mut Stage) {
         let (run, generation) = (self.run, self.generation);
+        // The spectra shown are the identification's: on the segment used for this run.
+        let settings = &settings.for_run(cache.session.run());
         *stage = Stage::Motion;
         if cache.motion.is_none() {
             match cache.session.motion() {

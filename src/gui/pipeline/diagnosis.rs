@@ -65,10 +65,7 @@ pub(super) fn report(
     path: &std::path::Path,
 ) -> Result<(), (String, bool)> {
     let run = cache.session.run().clone();
-    let settings = Settings {
-        blocks: settings.blocks_for(&run.blocks()),
-        ..settings.clone()
-    };
+    let settings = settings.for_run(&run);
     let report = crate::report::run_report(&mut cache.session, &settings, None)
         .map_err(|e| (e.to_string(), e.is_input_error()))?;
     let (page, _) = crate::report::render(&[report], None, &crate::report::utc_now());

@@ -9,7 +9,7 @@ use crate::block::Block;
 use crate::gui::app::Command;
 use crate::gui::pipeline::RunSummary;
 use crate::ident::settings::{Estimate, LambdaSetting, MAX_ORDER, OrderSetting, Settings};
-use crate::spectral::{Detrend, Window};
+use crate::spectral::{DEFAULT_SEGMENT_LEN, Detrend, Window};
 
 const WINDOWS: [Window; 4] = [
     Window::Rectangular,
@@ -91,7 +91,9 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
         }
     });
     if let Some(run) = run
-        && let Err(e) = s.validate(run.n_samples, run.sample_rate_hz, &run.blocks)
+        && let Err(e) =
+            s.for_record(run.n_samples, &run.blocks)
+                .validate(run.n_samples, run.sample_rate_hz, &run.blocks)
     {
         ui.colored_label(ui.visuals().error_fg_color, format!("for {}: {e}", run.file_name));
     }
@@ -109,14 +111,31 @@ fn welch(ui: &mut egui::Ui, s: &mut Settings) {
                 ui.selectable_value(&mut s.welch.window, w, w.scipy_name());
             }
         });
+    // (left to the program, longest segment): "auto" is the default, shortened for a short
+    // record; a number is the user's, kept as given.
+    let mut segment = (s.welch.segment_auto, s.welch.segment_len);
+    let shown = |(auto, n): (bool, usize)| {
+        if auto {
+            format!("auto (up to {n})")
+        } else {
+            n.to_string()
+        }
+    };
     ComboBox::from_label("segment length")
-        .selected_text(s.welch.segment_len.to_string())
+        .selected_text(shown(segment))
         .show_ui(ui, |ui| {
+            let auto = (true, DEFAULT_SEGMENT_LEN);
+            ui.selectable_value(&mut segment, auto, shown(auto))
+                .on_hover_text(
+                    "the program's choice: the default segment, halved for a record too short \
+                     to hold 12 segments (the Spectra tab names the segment used)",
+                );
             for k in 6..=16 {
                 let n = 1usize << k;
-                ui.selectable_value(&mut s.welch.segment_len, n, n.to_string());
+                ui.selectable_value(&mut segment, (false, n), n.to_string());
             }
         });
+    (s.welch.segment_auto, s.welch.segment_len) = segment;
     ui.add(Slider::new(&mut s.welch.overlap, 0.0..=0.9).text("overlap"));
     ComboBox::from_label("detrend")
         .selected_text(format!("{:?}", s.welch.detrend))

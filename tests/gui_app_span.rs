@@ -126,6 +126,28 @@ fn a_stretch_is_not_carried_into_the_next_launch() {
     assert!(Prefs::restored("{not json").is_none());
 }
 
+/// Preferences written before the segment could be left to the program carried the default's
+/// 4096 as a number: read back, it is the program's again, while a segment picked since (4096
+/// included) stays the user's.
+#[test]
+fn the_segment_of_older_preferences_is_the_programs_and_a_picked_one_is_kept() {
+    use imu_attest::gui::app::Prefs;
+    let older = r#"{"settings": {"welch": {"segment_len": 4096, "overlap": 0.5}}, "recent": []}"#;
+    let back = Prefs::restored(older).expect("reads");
+    assert!(back.settings.welch.segment_auto);
+    let older_picked = r#"{"settings": {"welch": {"segment_len": 1024}}}"#;
+    let back = Prefs::restored(older_picked).expect("reads");
+    assert!(!back.settings.welch.segment_auto && back.settings.welch.segment_len == 1024);
+    let mut prefs = Prefs::default();
+    assert!(prefs.settings.welch.segment_auto);
+    prefs.settings.welch.segment_auto = false;
+    let json = serde_json::to_string(&prefs).expect("serialises");
+    let back = Prefs::restored(&json).expect("reads back");
+    assert!(!back.settings.welch.segment_auto && back.settings.welch.segment_len == 4096);
+    let auto = serde_json::to_string(&Prefs::default()).expect("serialises");
+    assert!(Prefs::restored(&auto).expect("reads").settings.welch.segment_auto);
+}
+
 /// Right-click sets cursor A; hovering elsewhere reads the time since A and each value's change
 /// from it; Esc clears A.
 #[test]

@@ -128,3 +128,23 @@ fn a_record_too_short_to_halve_has_no_held_out_figures() {
         );
     }
 }
+
+/// The control of the short-record changes: on 40 s (the program's segment: 2048, 18 segments)
+/// a real sensor lag is still found and kept, with nothing to say; rule 4 (a negative delay the data
+/// cannot tell from the poles' lag) does not touch it, nor the accelerometer's order 0.
+#[test]
+fn a_sensor_lag_on_a_short_record_is_kept() {
+    for seed in [3, 4] {
+        let id = identified(40.0, &["sensor_lag:gyro"], seed);
+        let gyro = id.blocks.iter().find(|b| b.block == Block::Gyro).expect("gyro");
+        assert_eq!(gyro.spectra.segment_len, 2048, "seed {seed}");
+        assert_eq!(
+            gyro.structural.order, 1,
+            "seed {seed}: {:?}",
+            gyro.structural.candidates
+        );
+        assert!(gyro.warnings.is_empty(), "seed {seed}: {:?}", gyro.warnings);
+        let accel = id.blocks.iter().find(|b| b.block == Block::Accel).expect("accel");
+        assert_eq!(accel.structural.order, 0, "seed {seed}");
+    }
+}

@@ -162,7 +162,8 @@ fn poles_standing_in_for_the_delay_are_flagged() {
     // The first minute of the tapping run: a second-order model fixed by the user fits it better
     // than the delay alone with a negative delay (about -10.7 +- 1.4 ms on segments of 2048: a
     // pair whose lag replaces the 4.2 ms delay and whose gain rise matches the reference's band
-    // limit). Under auto it is not admissible (rule 4), so only a fixed order shows it.
+    // limit). Under auto it is not admissible (rule 4: negative beyond 3 sigma), so only a fixed
+    // order shows it.
     let run = real("broad25_tapping");
     let stretch = |order| Settings {
         span_s: Some([39.6, 99.6]),
@@ -271,9 +272,9 @@ fn short_stretches_get_a_segment_that_fits_and_the_known_delay() {
     }
 }
 
-/// Admissibility rule 3: on this minute of the fast run, order 2 fits better than the delay alone
-/// and predicts the other half better too, with a pair near 50 Hz whose lag (3.6 ms) its delay
-/// (-3.7 +- 4.5 ms) gives back: the reference's band limit, not the gyro. Not admissible.
+/// Admissibility rule 4: on this minute of the fast run, order 2 fits better than the delay alone
+/// and predicts the other half better too, with a pair near 50 Hz whose lag (3.6 ms) its negative
+/// delay (-3.7 +- 4.5 ms) gives back: the reference's band limit, not the gyro. Not admissible.
 #[test]
 fn poles_whose_lag_the_delay_gives_back_are_not_admissible() {
     let b = gyro(&real("broad07_fast_rotation"), &stretch([51.5, 111.5]));
@@ -328,7 +329,7 @@ fn a_given_segment_with_few_segments_is_warned_or_refused() {
     let msg = err.to_string();
     assert!(err.is_input_error(), "{msg}");
     assert!(
-        msg.contains("4 segments of 4096") && msg.contains("at most 2048"),
+        msg.contains("4 segments of 4096") && msg.contains("segment of 2048 samples"),
         "{msg}"
     );
 }

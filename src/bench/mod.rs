@@ -153,7 +153,6 @@ pub fn run_bench(
     settings: crate::ident::settings::Settings,
     on_stage: &mut dyn FnMut(&'static str, usize),
 ) -> Result<BenchReport, BenchError> {
-    let segment_len = settings.welch.segment_len;
     let mut state = BenchState::new(path.to_owned(), settings);
     let mut stages = standard_stages();
     let count = stages.len();
@@ -175,7 +174,8 @@ pub fn run_bench(
         samples,
         rate_hz,
         channels: state.channels(),
-        segment_len,
+        // As used on the run (the load stage fits a segment left to the program to it).
+        segment_len: state.settings.welch.segment_len,
         stages: times,
         peak_rss_mb: memory::peak_rss_bytes().map(mb),
         load_peak_rss_mb,

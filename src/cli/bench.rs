@@ -2,8 +2,9 @@
 //! identifier's stages on RUN, or on a simulated run of M minutes at HZ (default 30 min at 1 kHz)
 //! written to a temporary CSV. Prints a table, or with `--json` one JSON object on one line.
 //!
-//! `--segment` defaults to the identifier's default (4096); for a simulated run shorter than four
-//! such segments it is halved until four fit (at least 64).
+//! Without `--segment` the segment is the identifier's own choice (4096, halved for a run too
+//! short to hold 12 segments, `ident::settings::welch_for_record`); the report gives the segment
+//! used. `--segment L` is kept as given.
 //!
 //! Whole commands are timed in child processes after the stages: `identify` and `discrepancy` on
 //! the run, and with `--batch-runs N` a campaign: N runs of 300 s at 500 Hz simulated into a
@@ -41,6 +42,10 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
     let batch_runs: usize = args.parsed_or("batch-runs", 0)?;
     args.reject_unknown()?;
     let mut settings = Settings::default();
+    if let Some(segment_len) = segment {
+        settings.welch.segment_len = segment_len;
+        settings.welch.segment_auto = false;
+    }
     let temp;
     let path = match args.positional.as_slice() {
         [] => {
@@ -48,15 +53,10 @@ pub(super) fn run(argv: &[String]) -> Result<(), CliError> {
                 minutes.unwrap_or(DEFAULT_MINUTES),
                 rate.unwrap_or(DEFAULT_RATE_HZ),
             );
-            settings.welch.segment_len =
-                segment.unwrap_or_else(|| default_segment(settings.welch.segment_len, minutes * 60.0 * rate));
             temp = simulate(minutes, rate)?;
             temp.path().to_owned()
         }
-        [run] if minutes.is_none() && rate.is_none() => {
-            settings.welch.segment_len = segment.unwrap_or(settings.welch.segment_len);
-            Path::new(run).to_owned()
-        }
+        [run] if minutes.is_none() && rate.is_none() => Path::new(run).to_owned(),
         [_] => {
             return Err(CliError::Input(
                 "bench: --minutes and --rate size the simulated run; they cannot be given with RUN".into(),
@@ -187,17 +187,6 @@ fn time_batch(n: usize) -> Result<crate::bench::CommandFigure, CliError> {
     let figure = time_command("batch", std::slice::from_ref(&dir), &Settings::default());
     let _ = std::fs::remove_dir_all(&dir);
     figure
-}
-
-/// The segment of a simulated run of `samples` when `--segment` is not given: the settings'
-/// default, halved while the run holds fewer than four segments (a short test run still has
-/// several averages).
-fn default_segment(default: usize, samples: f64) -> usize {
-    let mut segment = default;
-    while segment > 64 && (segment * 4) as f64 > samples {
-        segment /= 2;
-    }
-    segment
 }
 
 /// Simulates the benchmark run in a child process (`imu-attest simulate`), so that the

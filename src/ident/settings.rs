@@ -6,8 +6,8 @@
 //! these per block (`{"gyro": 0, "accel": "auto"}`, [`BlockOrders`]). Validation
 //! against a run ([`Settings::validate`]) refuses: a band outside `(0, Nyquist]` or empty, a
 //! weight `A` that is not symmetric positive definite, a `lambda` that makes `I - A^-1 Lambda`
-//! singular, a negative `lambda` or one that shrinks the gain by more than [`MAX_SHRINK`], an order above 4, a segment longer than the run or a record holding fewer than [`MIN_SEGMENTS`]
-//! of it, a block the run does not have. A segment left out of the settings file is the program's:
+//! singular, a negative `lambda` or one that shrinks the gain by more than [`MAX_SHRINK`], an order above 4, a segment longer than the run or a record holding fewer than
+//! [`MIN_EQUIVALENT_AVERAGES`] of it, a block the run does not have. A segment left out of the settings file is the program's:
 //! [`Settings::for_run`] shortens it for a short record ([`welch_for_record`]).
 
 use std::fmt;
@@ -25,25 +25,49 @@ use crate::spectral::{MIN_SEGMENT_LEN, WelchSettings};
 /// Highest structural order.
 pub const MAX_ORDER: usize = 4;
 
-/// Fewest Welch segments the identifier accepts. The 3-input `H1` estimate leaves the disturbance
-/// spectrum `n_eq - 3` degrees of freedom per bin (`n_eq` the equivalent number of averages, about
-/// 0.95 per Hann segment at half overlap), and the fit's weights are its inverse, whose mean is
-/// `nu / (nu - 2)` times the truth: infinite at 3 segments or fewer (where the estimate fits
-/// the output exactly and the disturbance is zero), 2x at 6, 1.7x at 8.
-pub const MIN_SEGMENTS: usize = 8;
+/// Fewest equivalent averages the identifier accepts (8 Hann segments at half overlap give 7.63).
+/// The 3-input `H1` estimate leaves the disturbance spectrum `nu = n_eq - 3` degrees of freedom per
+/// bin (`n_eq` Welch's equivalent number of averages, which falls with the overlap: 8 segments
+/// give 4.4 at 0.75, 2.0 at 0.9), and the fit's weights are its inverse, whose mean is
+/// `nu / (nu - 2)` times the truth: infinite at `n_eq <= 5` (at `n_eq <= 3` the estimate fits the
+/// output exactly and the disturbance is zero), 1.8x at 7.5.
+pub const MIN_EQUIVALENT_AVERAGES: f64 = 7.5;
 
-/// Fewest segments a segment left to the program leaves the record: two halves of six, so the
-/// order choice can be checked on held-out data (admissibility rule 7).
+/// What a segment left to the program leaves the record: 12 segments (two halves of six, so the
+/// order choice can be checked on held-out data, admissibility rule 7) and 11 equivalent averages
+/// (12 Hann segments at half overlap give 11.42). Fewer is warned (`few_segments`).
 pub const AUTO_MIN_SEGMENTS: usize = 12;
 
+/// See [`AUTO_MIN_SEGMENTS`].
+pub const AUTO_MIN_EQUIVALENT_AVERAGES: f64 = 11.0;
+
 /// Shortest segment the program picks (a 30 s record at 250 Hz still gets 256 samples, 1 Hz
-/// apart); below it a record is refused unless a shorter segment is given.
+/// apart); a record too short for it is refused unless a shorter segment is given.
 pub const AUTO_MIN_SEGMENT_LEN: usize = 256;
 
+/// Welch's equivalent number of averages of `welch` over `n_samples`
+/// ([`crate::ident::spectra::equivalent_averages`], the figure the fit's weights use).
+#[must_use]
+pub fn equivalent_averages_of(welch: &WelchSettings, n_samples: usize) -> f64 {
+    let window = welch.window.coefficients(welch.segment_len);
+    super::spectra::equivalent_averages(&window, welch.step(), welch.n_segments(n_samples))
+}
+
+/// Whether `welch` leaves a record of `n_samples` what a segment left to the program must.
+fn enough_for_auto(welch: &WelchSettings, n_samples: usize) -> bool {
+    welch.n_segments(n_samples) >= AUTO_MIN_SEGMENTS
+        && equivalent_averages_of(welch, n_samples) >= AUTO_MIN_EQUIVALENT_AVERAGES
+}
+
+fn enough_for_floor(floor: &WelchSettings, n_samples: usize) -> bool {
+    equivalent_averages_of(floor, n_samples) >= MIN_EQUIVALENT_AVERAGES
+}
+
 /// `welch` for a record of `n_samples`: unchanged when its segment was given; left to the
-/// program, the segment is halved from its default until the record holds [`AUTO_MIN_SEGMENTS`],
-/// not below [`AUTO_MIN_SEGMENT_LEN`]. Records of at least `6.5 x 4096` samples (93 s at 286 Hz,
-/// 53 s at 500 Hz) keep 4096.
+/// program, the segment is halved from its default until the record holds [`AUTO_MIN_SEGMENTS`]
+/// and [`AUTO_MIN_EQUIVALENT_AVERAGES`], not below [`AUTO_MIN_SEGMENT_LEN`]. At the default
+/// overlap, records of at least `6.5 x 4096` samples (93 s at 286 Hz, 53 s at 500 Hz, 27 s at
+/// 1 kHz) keep 4096.
 #[must_use]
 pub fn welch_for_record(welch: WelchSettings, n_samples: usize) -> WelchSettings {
     let mut w = welch;
@@ -52,7 +76,7 @@ pub fn welch_for_record(welch: WelchSettings, n_samples: usize) -> WelchSettings
     }
     while w.segment_len / 2 >= AUTO_MIN_SEGMENT_LEN
         && w.segment_len.is_multiple_of(4)
-        && w.n_segments(n_samples) < AUTO_MIN_SEGMENTS
+        && !enough_for_auto(&w, n_samples)
     {
         w.segment_len /= 2;
     }
@@ -238,11 +262,12 @@ pub enum SettingsError {
     /// Welch settings refused.
     #[error("welch: {0}")]
     Welch(String),
-    /// The record holds too few Welch segments for the 3-input estimate ([`MIN_SEGMENTS`]).
+    /// The record holds too few Welch averages for the 3-input estimate
+    /// ([`MIN_EQUIVALENT_AVERAGES`]).
     #[error(
         "welch: too few samples for the chosen spectral segment: {n_samples} samples hold \
-         {segments} segments of {segment_len} (overlap {overlap}), and the identifier needs at \
-         least {min}: {advice}"
+         {segments} segments of {segment_len} (overlap {overlap}), {averages:.1} equivalent \
+         averages, and the identifier needs at least {min}: {advice}"
     )]
     TooFewSegments {
         /// Samples in the record (or span).
@@ -253,8 +278,10 @@ pub enum SettingsError {
         overlap: f64,
         /// Segments the record holds.
         segments: usize,
-        /// Fewest accepted ([`MIN_SEGMENTS`]).
-        min: usize,
+        /// Their equivalent number of averages.
+        averages: f64,
+        /// Fewest accepted ([`MIN_EQUIVALENT_AVERAGES`]).
+        min: f64,
         /// What to do, in words.
         advice: String,
     },
@@ -332,6 +359,20 @@ impl Settings {
         self.for_record(n, &run.blocks())
     }
 
+    /// Whether `self` and `other`, each as used on its run, were the same request: equal, or
+    /// differing only in the segment the program fitted to each record.
+    #[must_use]
+    pub fn same_request(&self, other: &Settings) -> bool {
+        let asked = |s: &Settings| {
+            let mut s = s.clone();
+            if s.welch.segment_auto {
+                s.welch.segment_len = crate::spectral::DEFAULT_SEGMENT_LEN;
+            }
+            s
+        };
+        asked(self) == asked(other)
+    }
+
     /// [`Self::for_run`] for a record of `n_samples` having the blocks `present`.
     #[must_use]
     pub fn for_record(&self, n_samples: usize, present: &[Block]) -> Settings {
@@ -390,28 +431,9 @@ impl Settings {
         self.welch
             .validate(n_samples)
             .map_err(|e| SettingsError::Welch(e.to_string()))?;
-        let segments = self.welch.n_segments(n_samples);
-        if segments < MIN_SEGMENTS {
-            let mut fits = self.welch;
-            while fits.segment_len > MIN_SEGMENT_LEN && fits.n_segments(n_samples) < MIN_SEGMENTS {
-                fits.segment_len = (fits.segment_len / 2).max(MIN_SEGMENT_LEN) & !1;
-            }
-            let advice = if fits.n_segments(n_samples) >= MIN_SEGMENTS {
-                format!(
-                    "give a segment of at most {} samples, or a longer record",
-                    fits.segment_len
-                )
-            } else {
-                "the record is too short to identify".to_owned()
-            };
-            return Err(SettingsError::TooFewSegments {
-                n_samples,
-                segment_len: self.welch.segment_len,
-                overlap: self.welch.overlap,
-                segments,
-                min: MIN_SEGMENTS,
-                advice,
-            });
+        let averages = equivalent_averages_of(&self.welch, n_samples);
+        if averages < MIN_EQUIVALENT_AVERAGES {
+            return Err(self.too_few_segments(n_samples, averages));
         }
         if blocks.is_empty() {
             return Err(SettingsError::NoBlocks);
@@ -420,6 +442,46 @@ impl Settings {
             return Err(SettingsError::MissingBlock(b.name()));
         }
         Ok(())
+    }
+
+    /// The refusal of a record holding `averages` equivalent averages of the settings' segment,
+    /// with what would do: the longest power-of-two segment that is enough, or the record length
+    /// the program's shortest segment needs.
+    fn too_few_segments(&self, n_samples: usize, averages: f64) -> SettingsError {
+        let enough = |w: &WelchSettings| equivalent_averages_of(w, n_samples) >= MIN_EQUIVALENT_AVERAGES;
+        let mut shorter = self.welch;
+        while shorter.segment_len > MIN_SEGMENT_LEN && !enough(&shorter) {
+            shorter.segment_len = (shorter.segment_len / 2).max(MIN_SEGMENT_LEN) & !1;
+        }
+        let floor = WelchSettings {
+            segment_len: AUTO_MIN_SEGMENT_LEN,
+            ..self.welch
+        };
+        let needed = (AUTO_MIN_SEGMENT_LEN..)
+            .step_by(floor.step().max(1))
+            .find(|&n| enough_for_floor(&floor, n))
+            .unwrap_or(usize::MAX);
+        let advice = match (self.welch.segment_auto, enough(&shorter)) {
+            (true, _) => format!(
+                "the record needs at least {needed} samples for the program's shortest segment \
+                 ({AUTO_MIN_SEGMENT_LEN}), or give a shorter segment"
+            ),
+            (false, true) => format!(
+                "give a segment of {} samples (the longest power of two that fits), or a longer \
+                 record",
+                shorter.segment_len
+            ),
+            (false, false) => "the record is too short to identify".to_owned(),
+        };
+        SettingsError::TooFewSegments {
+            n_samples,
+            segment_len: self.welch.segment_len,
+            overlap: self.welch.overlap,
+            segments: self.welch.n_segments(n_samples),
+            averages,
+            min: MIN_EQUIVALENT_AVERAGES,
+            advice,
+        }
     }
 
     /// Checks `A` (symmetric positive definite) and `Lambda` (`I - A^-1 Lambda` invertible).

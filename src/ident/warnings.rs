@@ -157,16 +157,19 @@ pub enum IdentWarning {
         /// Whether the level is the sidecar's (`true`) or estimated from the angles.
         declared: bool,
     },
-    /// The record holds fewer Welch segments than a segment left to the program would give it
-    /// ([`super::settings::AUTO_MIN_SEGMENTS`]): the fit's weights rest on few averages, and the
-    /// order choice cannot be checked on held-out data.
+    /// The record holds fewer Welch segments or equivalent averages than a segment left to the
+    /// program must leave it ([`super::settings::AUTO_MIN_SEGMENTS`],
+    /// [`super::settings::AUTO_MIN_EQUIVALENT_AVERAGES`]): the fit's weights rest on few averages,
+    /// and the order choice may not be checkable on held-out data.
     FewSegments {
         /// Segments of the record (or span).
         segments: usize,
+        /// Their equivalent number of averages.
+        equivalent_averages: f64,
         /// The segment length, samples.
         segment_len: usize,
-        /// Segments a segment left to the program gives a record.
-        wanted: usize,
+        /// Whether the segment was the program's (then already its shortest).
+        segment_auto: bool,
     },
     /// The input's spectral factor keeps energy at negative lags even on the causal stage's
     /// finest grid: the causal projection then cuts part of the gain (mostly at the lowest
@@ -311,14 +314,22 @@ impl fmt::Display for IdentWarning {
             ),
             IdentWarning::FewSegments {
                 segments,
+                equivalent_averages,
                 segment_len,
-                wanted,
+                segment_auto,
             } => write!(
                 f,
-                "only {segments} Welch segments of {segment_len} samples: the noise weights rest \
-                 on few averages, so the deviations may be too small, and the order cannot be \
-                 checked on half of the record predicting the other (that needs {wanted}); leave \
-                 segment_len out to let the program fit it to the record"
+                "only {segments} Welch segments of {segment_len} samples ({equivalent_averages:.1} \
+                 equivalent averages): the noise weights rest on few averages, so the deviations \
+                 may be too small, and the order may not be checked on half of the record \
+                 predicting the other; {}",
+                if *segment_auto {
+                    "the record is short even for the program's shortest segment: a longer record \
+                     is the mend"
+                } else {
+                    "leave segment_len out to let the program fit it to the record, or lower the \
+                     overlap"
+                }
             ),
             IdentWarning::FactorNotCausal {
                 negative_lags,

@@ -123,7 +123,9 @@ impl App {
             .filter_map(|r| r.diagnosis.value.as_deref())
             .collect();
         // Only diagnoses made under one set of settings are comparable.
-        let same_settings = reports.windows(2).all(|w| w[0].settings == w[1].settings);
+        let same_settings = reports
+            .windows(2)
+            .all(|w| w[0].settings.same_request(&w[1].settings));
         if let Some(c) = comparison
             .as_mut()
             .filter(|_| reports.len() == entries.len() && same_settings)

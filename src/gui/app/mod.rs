@@ -32,6 +32,7 @@ use crate::compare::Comparison;
 use crate::gui::pipeline::{RunId, Worker, WorkerMode};
 use crate::ident::settings::Settings;
 use crate::run::LoadOptions;
+use crate::spectral::DEFAULT_SEGMENT_LEN;
 pub use entry::{LoadedRun, Reading, RunEntry};
 pub use errors::{ErrorEntry, ErrorLog, ErrorTopic};
 pub use record::StageRecord;
@@ -153,7 +154,7 @@ impl Default for ViewState {
 }
 
 /// Everything kept between launches.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Prefs {
     /// Identifier settings.
@@ -162,6 +163,25 @@ pub struct Prefs {
     pub view: ViewState,
     /// Recently opened runs, newest first (File > Open recent).
     pub recent: Vec<PathBuf>,
+    /// The preferences' version: 0 (absent) before the segment could be left to the program
+    /// (26 Nov), when every file carried the segment as a number; [`PREFS_VERSION`] since.
+    /// Absent from a file, 0 (not the default's current version).
+    #[serde(default)]
+    pub version: u32,
+}
+
+/// The preferences' version written now ([`Prefs::version`]).
+pub const PREFS_VERSION: u32 = 1;
+
+impl Default for Prefs {
+    fn default() -> Self {
+        Self {
+            settings: Settings::default(),
+            view: ViewState::default(),
+            recent: Vec::new(),
+            version: PREFS_VERSION,
+        }
+    }
 }
 
 impl Prefs {
@@ -172,6 +192,11 @@ impl Prefs {
     pub fn restored(json: &str) -> Option<Self> {
         let mut prefs: Self = serde_json::from_str(json).ok()?;
         prefs.settings.span_s = None;
+        // Before version 1 the segment was always written: the default's 4096 was the program's.
+        if prefs.version < 1 && prefs.settings.welch.segment_len == DEFAULT_SEGMENT_LEN {
+            prefs.settings.welch.segment_auto = true;
+        }
+        prefs.version = PREFS_VERSION;
         Some(prefs)
     }
 }

@@ -235,18 +235,12 @@ impl Pipeline {
                     cache.accepted = accepted;
                 }
                 self.analyse(run, generation, &settings, stage);
-                // The identification of these settings (blocks resolved), if the job ended with one.
-                let current = self
-                    .runs
-                    .get(&run)
-                    .and_then(|c| c.identification.as_ref())
-                    .filter(|i| {
-                        i.settings
-                            == Settings {
-                                blocks: i.settings.blocks.clone(),
-                                ..(*settings).clone()
-                            }
-                    });
+                // The identification of these settings (as used on the run: blocks and segment
+                // resolved), if the job ended with one.
+                let current = self.runs.get(&run).and_then(|c| {
+                    let used = settings.for_run(c.session.run());
+                    c.identification.as_ref().filter(|i| i.settings == used)
+                });
                 if current.is_some_and(|i| i.provisional()) {
                     self.unpolished.insert(run, generation);
                 } else {

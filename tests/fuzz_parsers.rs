@@ -16,7 +16,7 @@ use std::io::Write as _;
 use std::path::Path;
 
 use imu_attest::ident::band::BandSetting;
-use imu_attest::ident::settings::Settings;
+use imu_attest::ident::settings::{MIN_EQUIVALENT_AVERAGES, Settings, equivalent_averages_of};
 use imu_attest::run::{Block, LoadError, LoadOptions, Run, load_bytes, parse_sidecar};
 use proptest::prelude::*;
 
@@ -295,6 +295,9 @@ proptest! {
                         prop_assert!(low > 0.0 && low < high && high <= rate / 2.0);
                     }
                     prop_assert!(s.welch.segment_len <= n_samples);
+                    // Enough averages for the 3-input estimate (at most one per segment).
+                    prop_assert!(s.welch.n_segments(n_samples) >= 8);
+                    prop_assert!(equivalent_averages_of(&s.welch, n_samples) >= MIN_EQUIVALENT_AVERAGES);
                 }
                 // Whatever parsed writes back as JSON and reads back the same.
                 let text = serde_json::to_string(&s).unwrap();

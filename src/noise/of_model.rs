@@ -86,7 +86,8 @@ pub fn bare_model(
 ) -> Result<Model, IdentError> {
     let run = session.run().clone();
     let id = session.identify(settings, Start::Cold, progress)?;
-    Ok(Model::from_identification(&run, settings, &id))
+    // The echo is the settings as used (a caller's unresolved ones would name another segment).
+    Ok(Model::from_identification(&run, &settings.for_run(&run), &id))
 }
 
 /// Fills `noise` of every block of `model` (identified from `session`'s run under `settings`).

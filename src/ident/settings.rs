@@ -41,8 +41,8 @@ pub const AUTO_MIN_SEGMENTS: usize = 12;
 /// See [`AUTO_MIN_SEGMENTS`].
 pub const AUTO_MIN_EQUIVALENT_AVERAGES: f64 = 11.0;
 
-/// Shortest segment the program picks (a 30 s record at 250 Hz still gets 256 samples, 1 Hz
-/// apart); a record too short for it is refused unless a shorter segment is given.
+/// Shortest segment the program picks (256 samples at 250 Hz are 1 s: bins 1 Hz apart, the band
+/// then starts near 1 Hz); a record too short for it is refused unless a shorter segment is given.
 pub const AUTO_MIN_SEGMENT_LEN: usize = 256;
 
 /// Welch's equivalent number of averages of `welch` over `n_samples`

@@ -15,9 +15,9 @@
 //!   reference's gain rise is fitted that way: measured on a real run's 64 s stretch, order 2 with
 //!   -4.8 ms for the delay-only model's +4.2 ms, before a short record got a segment fitted to it).
 //! - **Inadmissible order**: a fixed order that breaks a rule of [`super::structural::admissible`].
-//! - **Few segments**: fewer Welch segments than [`AUTO_MIN_SEGMENTS`] or equivalent averages
-//!   than [`AUTO_MIN_EQUIVALENT_AVERAGES`] (a segment or overlap given by the user on a short
-//!   record): weights on few averages, maybe no held-out check of the order.
+//! - **Few segments**: fewer Welch segments or equivalent averages than [`leaves_enough`] asks (a
+//!   segment or overlap given by the user on a short record): weights on few averages, maybe no
+//!   held-out check of the order.
 //!
 //! Units: `K` dimensionless (block units over input units), delays in s, frequencies in Hz.
 
@@ -26,7 +26,7 @@ use std::sync::Arc;
 use num_complex::Complex64;
 
 use super::identify::row_weights;
-use super::settings::{AUTO_MIN_EQUIVALENT_AVERAGES, AUTO_MIN_SEGMENTS, OrderSetting, Settings};
+use super::settings::{OrderSetting, Settings, leaves_enough};
 use super::signals::channel_names;
 use super::spectra::BlockSpectra;
 use super::structural::StructuralFit;
@@ -78,7 +78,7 @@ pub fn self_check(
     settings: &Settings,
 ) -> Vec<IdentWarning> {
     let mut out = Vec::new();
-    if spectra.n_averages < AUTO_MIN_SEGMENTS || spectra.equivalent_averages < AUTO_MIN_EQUIVALENT_AVERAGES {
+    if !leaves_enough(spectra.n_averages, spectra.equivalent_averages) {
         out.push(IdentWarning::FewSegments {
             segments: spectra.n_averages,
             equivalent_averages: spectra.equivalent_averages,

@@ -53,14 +53,25 @@ pub fn equivalent_averages_of(welch: &WelchSettings, n_samples: usize) -> f64 {
     super::spectra::equivalent_averages(&window, welch.step(), welch.n_segments(n_samples))
 }
 
-/// Whether `welch` leaves a record of `n_samples` what a segment left to the program must.
-fn enough_for_auto(welch: &WelchSettings, n_samples: usize) -> bool {
-    welch.n_segments(n_samples) >= AUTO_MIN_SEGMENTS
-        && equivalent_averages_of(welch, n_samples) >= AUTO_MIN_EQUIVALENT_AVERAGES
+/// Whether `segments` Welch segments of `averages` equivalent averages are what a segment left to
+/// the program must leave a record ([`AUTO_MIN_SEGMENTS`], [`AUTO_MIN_EQUIVALENT_AVERAGES`]);
+/// fewer is warned (`few_segments`).
+#[must_use]
+pub fn leaves_enough(segments: usize, averages: f64) -> bool {
+    segments >= AUTO_MIN_SEGMENTS && averages >= AUTO_MIN_EQUIVALENT_AVERAGES
 }
 
-fn enough_for_floor(floor: &WelchSettings, n_samples: usize) -> bool {
-    equivalent_averages_of(floor, n_samples) >= MIN_EQUIVALENT_AVERAGES
+fn enough_for_auto(welch: &WelchSettings, n_samples: usize) -> bool {
+    leaves_enough(
+        welch.n_segments(n_samples),
+        equivalent_averages_of(welch, n_samples),
+    )
+}
+
+/// Whether `welch` leaves a record of `n_samples` the identifier's minimum
+/// ([`MIN_EQUIVALENT_AVERAGES`]).
+fn enough_to_identify(welch: &WelchSettings, n_samples: usize) -> bool {
+    equivalent_averages_of(welch, n_samples) >= MIN_EQUIVALENT_AVERAGES
 }
 
 /// `welch` for a record of `n_samples`: unchanged when its segment was given; left to the
@@ -448,24 +459,25 @@ impl Settings {
     /// with what would do: the longest power-of-two segment that is enough, or the record length
     /// the program's shortest segment needs.
     fn too_few_segments(&self, n_samples: usize, averages: f64) -> SettingsError {
-        let enough = |w: &WelchSettings| equivalent_averages_of(w, n_samples) >= MIN_EQUIVALENT_AVERAGES;
         let mut shorter = self.welch;
-        while shorter.segment_len > MIN_SEGMENT_LEN && !enough(&shorter) {
+        while shorter.segment_len > MIN_SEGMENT_LEN && !enough_to_identify(&shorter, n_samples) {
             shorter.segment_len = (shorter.segment_len / 2).max(MIN_SEGMENT_LEN) & !1;
         }
-        let floor = WelchSettings {
-            segment_len: AUTO_MIN_SEGMENT_LEN,
-            ..self.welch
-        };
-        let needed = (AUTO_MIN_SEGMENT_LEN..)
-            .step_by(floor.step().max(1))
-            .find(|&n| enough_for_floor(&floor, n))
-            .unwrap_or(usize::MAX);
-        let advice = match (self.welch.segment_auto, enough(&shorter)) {
-            (true, _) => format!(
-                "the record needs at least {needed} samples for the program's shortest segment \
-                 ({AUTO_MIN_SEGMENT_LEN}), or give a shorter segment"
-            ),
+        let advice = match (self.welch.segment_auto, enough_to_identify(&shorter, n_samples)) {
+            (true, _) => {
+                let floor = WelchSettings {
+                    segment_len: AUTO_MIN_SEGMENT_LEN,
+                    ..self.welch
+                };
+                let needed = (AUTO_MIN_SEGMENT_LEN..)
+                    .step_by(floor.step().max(1))
+                    .find(|&n| enough_to_identify(&floor, n))
+                    .unwrap_or(usize::MAX);
+                format!(
+                    "the record needs at least {needed} samples for the program's shortest \
+                     segment ({AUTO_MIN_SEGMENT_LEN}), or give a shorter segment"
+                )
+            }
             (false, true) => format!(
                 "give a segment of {} samples (the longest power of two that fits), or a longer \
                  record",

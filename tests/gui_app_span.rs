@@ -107,6 +107,39 @@ fn a_dragged_span_is_clamped_to_the_record_and_refused_when_shorter_than_16_samp
     );
 }
 
+/// The settings panel checks a stretch's samples, as the pipeline does: a given segment of 4096
+/// is fine for the whole 120 s sample but refused, in the panel, for 30 s of it.
+#[test]
+fn the_settings_panel_checks_the_segment_against_the_stretch() {
+    use imu_attest::gui::app::Command;
+    let mut harness = gui_common::app(
+        gui_common::options(vec![sample_run_path().expect("sample")], WorkerMode::Synchronous),
+        4,
+    );
+    let start = harness.state().runs()[0].summary().expect("loaded").start_s;
+    let mut settings = harness.state().settings().clone();
+    settings.welch.segment_auto = false;
+    settings.welch.segment_len = 4096;
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings.clone())));
+    harness.run_steps(3);
+    let refusal = "too few samples for the chosen spectral segment";
+    assert!(
+        harness.query_by_label_contains(refusal).is_none(),
+        "the whole record holds 28 segments"
+    );
+    settings.span_s = Some([start + 20.0, start + 50.0]);
+    harness
+        .state_mut()
+        .push_command(Command::SetSettings(Box::new(settings)));
+    harness.run_steps(3);
+    // 30 s at 500 Hz, both ends in: 15001 samples.
+    harness.get_by_label_contains(&format!(
+        "for cruise.csv.gz: welch: {refusal}: 15001 samples hold 6 segments of 4096"
+    ));
+}
+
 /// The stretch belongs to the run it was chosen on: the preferences a new launch starts from
 /// keep every other setting but not the span.
 #[test]

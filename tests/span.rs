@@ -129,3 +129,52 @@ fn a_span_outside_the_record_is_refused() {
     assert!(stderr.contains("span_s [100, 400] s"), "{stderr}");
     assert!(!dir.path().join("m.json").exists());
 }
+
+/// The settings as used on a span are fitted to, and checked against, the span's samples, not the
+/// whole record's: the program's segment shrinks with the span, a given one that the span cannot
+/// average enough is refused, and the session refuses the same.
+#[test]
+fn settings_are_used_on_the_span_s_samples() {
+    use imu_attest::ident::session::Session;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (clean, _) = runs(dir.path(), 0.0);
+    let start = clean.time_s[0];
+    let whole = Settings::default().used_on(&clean).expect("whole record");
+    assert_eq!(whole.welch.segment_len, 4096, "150 s at 500 Hz keeps 4096");
+    // 30 s = 15000 samples: 4096 leaves 6 segments, 2048 leaves 13 (the program's rule: 12).
+    let short = Settings {
+        span_s: Some([start + 20.0, start + 50.0]),
+        ..Settings::default()
+    };
+    let used = short
+        .used_on(&clean)
+        .expect("the program's segment fits the span");
+    assert_eq!(used.welch.segment_len, 2048);
+    let mut given = short.clone();
+    given.welch.segment_auto = false;
+    given.welch.segment_len = 4096;
+    let err = given.used_on(&clean).expect_err("6 segments of 4096");
+    assert!(
+        matches!(err, SettingsError::TooFewSegments { segments: 6, .. }),
+        "{err}"
+    );
+    // The same 4096 over the whole record is fine.
+    given.span_s = None;
+    assert!(given.used_on(&clean).is_ok());
+    // The session (the app's and the command line's pipeline) refuses exactly so.
+    given.span_s = short.span_s;
+    let mut session = Session::new(std::sync::Arc::new(clean.clone()));
+    let refused = session.identify_aside(&given).expect_err("refused");
+    assert!(
+        matches!(
+            refused,
+            IdentError::Settings(SettingsError::TooFewSegments { segments: 6, .. })
+        ),
+        "{refused}"
+    );
+    let outside = Settings {
+        span_s: Some([start - 5.0, start + 10.0]),
+        ..Settings::default()
+    };
+    assert!(matches!(outside.used_on(&clean), Err(SettingsError::Span { .. })));
+}

@@ -295,9 +295,7 @@ impl Session {
         keep: bool,
     ) -> Result<Arc<RunIdentification>, IdentError> {
         let run = self.run.clone();
-        let span = self.span(settings)?;
-        let settings = settings.for_run(&run);
-        settings.validate(span.len(), run.sample_rate_hz, &run.blocks())?;
+        let settings = settings.used_on(&run)?;
         if let Some((_, id)) = self
             .identification
             .as_ref()

@@ -370,6 +370,20 @@ impl Settings {
         self.for_record(n, &run.blocks())
     }
 
+    /// [`Self::for_run`], checked ([`Self::validate`]) against the samples of the span it
+    /// analyses: what the pipeline runs with, or why it refuses.
+    ///
+    /// # Errors
+    /// [`SettingsError::Span`] when the span is not inside the record; otherwise the first rule
+    /// of [`Self::validate`] the settings as used break on the span.
+    pub fn used_on(&self, run: &crate::run::Run) -> Result<Settings, SettingsError> {
+        let span = self.span_range(&run.time_s)?;
+        let present = run.blocks();
+        let used = self.for_record(span.len(), &present);
+        used.validate(span.len(), run.sample_rate_hz, &present)?;
+        Ok(used)
+    }
+
     /// Whether `self` and `other`, each as used on its run, were the same request: equal, or
     /// differing only in the segment the program fitted to each record.
     #[must_use]

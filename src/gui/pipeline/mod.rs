@@ -219,6 +219,8 @@ pub struct RunSummary {
     /// Faults of the recording itself (glitches, held samples, clipping), as `identify` finds
     /// them: shown with the run and written into the exported model.
     pub recording_faults: Vec<crate::faults::RecordingFault>,
+    /// The run itself, shared (the settings panel checks a span's samples against it).
+    pub run: Arc<crate::run::Run>,
 }
 
 /// A message from the worker.

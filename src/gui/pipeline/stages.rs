@@ -79,6 +79,7 @@ pub fn split_run(run: &Arc<Run>) -> (RunSummary, Measured) {
         sha256: run.source.sha256.clone(),
         notices: run.notices.clone(),
         recording_faults: crate::faults::detect(run),
+        run: run.clone(),
     };
     let column = |k: usize| Series::of_run(run, Channel::ALL[k]);
     let triple = |first: usize| [column(first), column(first + 1), column(first + 2)];

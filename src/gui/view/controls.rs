@@ -19,7 +19,8 @@ const WINDOWS: [Window; 4] = [
 ];
 const DETRENDS: [Detrend; 3] = [Detrend::None, Detrend::Mean, Detrend::Linear];
 
-/// Draws the panel for `settings`, validated against `run` when one is selected.
+/// Draws the panel for `settings`, validated against `run` (its span's samples) when one is
+/// selected.
 pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, commands: &mut Vec<Command>) {
     let mut s = settings.clone();
     ui.heading("Identifier settings");
@@ -91,9 +92,7 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
         }
     });
     if let Some(run) = run
-        && let Err(e) =
-            s.for_record(run.n_samples, &run.blocks)
-                .validate(run.n_samples, run.sample_rate_hz, &run.blocks)
+        && let Err(e) = s.used_on(&run.run)
     {
         ui.colored_label(ui.visuals().error_fg_color, format!("for {}: {e}", run.file_name));
     }

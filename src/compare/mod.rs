@@ -29,7 +29,9 @@ pub const SIGNIFICANCE_SIGMAS: f64 = 3.0;
 pub struct Comparison {
     /// Always [`COMPARISON_SCHEMA`].
     pub schema: String,
-    /// The identifier settings (those of the first run's model).
+    /// The identifier settings as used on the first run (its model's echo). A run on which they
+    /// were used otherwise (a segment the program fitted to a shorter record) carries its own
+    /// ([`ComparedRun::settings`]).
     pub settings: Settings,
     /// The significance threshold, in combined standard deviations.
     pub significance_sigmas: f64,
@@ -87,6 +89,10 @@ impl Comparison {
 pub struct ComparedRun {
     /// Where the model came from.
     pub source: Source,
+    /// The settings as used on this run, when they differ from [`Comparison::settings`];
+    /// absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settings: Option<Settings>,
     /// Per block (`"gyro"`, `"accel"`).
     pub blocks: BTreeMap<String, BlockFigures>,
     /// The diagnosis's verdict, when the runs' findings are compared.
@@ -196,6 +202,7 @@ pub fn compare(models: &[Model]) -> Result<Comparison, CompareError> {
         .iter()
         .map(|m| ComparedRun {
             source: m.source.clone(),
+            settings: (m.settings != first.settings).then(|| m.settings.clone()),
             blocks: m
                 .blocks
                 .iter()

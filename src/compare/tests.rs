@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{COMPARISON_SCHEMA, CompareError, Delta, compare};
+use super::{COMPARISON_SCHEMA, CompareError, Comparison, Delta, compare};
 use crate::ident::settings::Settings;
 use crate::model::{BlockModel, ComplexArray, Fit, MODEL_SCHEMA, Model, Source};
 
@@ -117,6 +117,31 @@ fn differences_and_significance_follow_the_combined_std() {
     .expect("two runs");
     assert!(c.orders_differ("gyro"));
     assert!(!c.orders_differ("accel"), "no such block: nothing differs");
+}
+
+/// The comparison echoes the first run's settings; a run whose settings as used differ (the
+/// program fitted a shorter segment to a shorter record) carries its own, and only such a run.
+#[test]
+fn a_run_whose_settings_as_used_differ_carries_its_own() {
+    let gyro = || vec![("gyro", block(1.0, Some(0.001), 0.004, Some(1e-4)))];
+    let mut short = model("short", gyro());
+    short.settings.welch.segment_len = 1024;
+    let c = compare(&[model("cruise", gyro()), short, model("approach", gyro())]).expect("three runs");
+    assert_eq!(c.settings.welch.segment_len, 4096);
+    let own: Vec<Option<usize>> = c
+        .runs
+        .iter()
+        .map(|r| r.settings.as_ref().map(|s| s.welch.segment_len))
+        .collect();
+    assert_eq!(own, [None, Some(1024), None]);
+    let json = serde_json::to_value(&c).expect("serialises");
+    assert!(
+        json["runs"][0].get("settings").is_none(),
+        "written only where it differs"
+    );
+    assert_eq!(json["runs"][1]["settings"]["welch"]["segment_len"], 1024);
+    let back: Comparison = serde_json::from_value(json).expect("reads back");
+    assert_eq!(back, c);
 }
 
 #[test]

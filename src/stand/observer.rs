@@ -11,7 +11,8 @@
 //!    wide).
 //! 3. The measurement noise has per-axis variance `N = diag(sigma^2)` per bin. Its white floor is
 //!    the declared `angle_noise_rad`, or else estimated from the periodogram's floor between 0.70
-//!    and 0.95 of Nyquist (median / ln 2, the median of an exponential being ln 2 times its mean).
+//!    and 0.95 of Nyquist (median / ln 2, the median of an exponential being ln 2 times its mean),
+//!    and never below [`RESOLUTION_FLOOR`] of the axis's motion (numerical resolution).
 //!    Given a witness of the motion (the gyro's outputs as Euler rates,
 //!    [`observe_with_witness`]), the noise is coloured: per bin, the part of each angle the
 //!    witness does not explain, never below the floor ([`super::colour`]). Without one it is the
@@ -40,6 +41,17 @@ use crate::fourier::{RecordFft, fast_len};
 
 /// Fewest samples the observer accepts.
 pub const MIN_SAMPLES: usize = 64;
+
+/// The white floor is never below this fraction of each axis's motion (rms, its line removed),
+/// whatever was declared or estimated: far below any angle sensor (a good encoder's noise is
+/// 1e-7..1e-6 rad, a small stand motion 1e-2 rad), and at the level of the observer's own
+/// artefacts on exactly computed angles (the record's extension rings at 1e-7 of the motion, which
+/// is what the floor's estimate reads on such data). A declared `angle_noise_rad` of 0 with a gyro
+/// as witness let the noise model give one axis no noise at all beside another's at the gyro's
+/// level, and the gain `N^1/2 G N^-1/2` then carried the quiet axis into the noisy one by the
+/// ratio of their noises: on an exact simulated run, a 100 Hz oscillation of 1e-3 rad in yaw and
+/// an accelerometer gain of 0.02 (`observer_tests`).
+pub const RESOLUTION_FLOOR: f64 = 1e-7;
 
 /// Observer settings.
 #[derive(Clone, Debug, PartialEq)]
@@ -240,16 +252,19 @@ pub fn observe_with_witness(
     let witness = witness.filter(|w| w.iter().all(|c| c.len() == n && c.iter().all(|v| v.is_finite())));
     let mut trends = [(0.0, 0.0); 3];
     let mut spectra: [Vec<Complex64>; 3] = Default::default();
+    let mut residuals: [Vec<f64>; 3] = Default::default();
     for axis in 0..3 {
         let (offset, slope, residual) = remove_line(angles[axis], sample_rate_hz);
         trends[axis] = (offset, slope);
         spectra[axis] = fft.forward(&extend(&residual, pad, &taper, fft.len()));
+        residuals[axis] = residual;
     }
 
     let (noise_var, noise_source) = match settings.angle_noise_rad {
         Some(sigma) => ([sigma * sigma; 3], NoiseSource::Declared),
         None => (estimate_noise(&spectra, effective_len), NoiseSource::Estimated),
     };
+    let noise_var = std::array::from_fn(|a| noise_var[a].max(resolution_floor(&residuals[a])));
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
     let (noise, noise_colour) = match witness {
         Some(w) => {
@@ -364,6 +379,13 @@ pub(super) fn remove_line(x: &[f64], rate: f64) -> (f64, f64, Vec<f64>) {
         .map(|(i, v)| v - offset - slope * i as f64 / rate)
         .collect();
     (offset, slope, residual)
+}
+
+/// The white floor's least variance on an axis whose angles, their line removed, are `residual`:
+/// [`RESOLUTION_FLOOR`] of their rms, squared.
+fn resolution_floor(residual: &[f64]) -> f64 {
+    let mean_square = residual.iter().map(|v| v * v).sum::<f64>() / residual.len().max(1) as f64;
+    RESOLUTION_FLOOR * RESOLUTION_FLOOR * mean_square
 }
 
 /// Weights rising from near 0 (far end of a pad) to near 1 (next to the data), flat at both ends.

@@ -173,3 +173,68 @@ fn bad_input_is_refused_not_propagated() {
     let still = observe([&ok, &ok, &ok], 100.0, &zero).unwrap();
     assert!(still.euler.rate.iter().flatten().all(|v| v.abs() < 1e-12));
 }
+
+/// Exact angles (a few large slow sines and many small fast ones, in closed form) declared
+/// noise-free (`angle_noise_rad: 0`, as a perfect simulator or a lab trusting its encoders would
+/// declare), with a gyro witness whose three axes are unequally noisy: the angular accelerations
+/// are the closed form's. Without the resolution floor, the white floor of 0 let the witness's
+/// noise model give one axis a noise of zero beside another's of the gyro's level, and the
+/// smoother's gain `N^1/2 G N^-1/2` then carried the quiet axis into the noisy one by their
+/// ratio: a 100 Hz oscillation of 10^-3 rad in yaw, accelerations of 10^3 rad/s^2.
+#[test]
+fn exact_angles_declared_noise_free_give_the_exact_accelerations() {
+    let rate = 500.0;
+    let n = 60_000;
+    let mut rng = crate::rng::Rng::new(5);
+    // Per axis: (amplitude rad, frequency Hz, phase).
+    let sines: Vec<Vec<(f64, f64, f64)>> = (0..3)
+        .map(|_| {
+            let mut s: Vec<(f64, f64, f64)> = (0..3)
+                .map(|_| (0.06, 0.15 + 1.3 * rng.uniform(), 6.3 * rng.uniform()))
+                .collect();
+            s.extend((0..200).map(|_| (2e-4, 0.1 + 19.9 * rng.uniform(), 6.3 * rng.uniform())));
+            s
+        })
+        .collect();
+    let w = |f: f64| 2.0 * std::f64::consts::PI * f;
+    let value = |axis: usize, i: usize, derivative: usize| -> f64 {
+        let t = i as f64 / rate;
+        sines[axis]
+            .iter()
+            .map(|&(a, f, p)| {
+                let x = w(f) * t + p;
+                [a * x.sin(), a * w(f) * x.cos(), -a * w(f) * w(f) * x.sin()][derivative]
+            })
+            .sum()
+    };
+    let series =
+        |d: usize| -> [Vec<f64>; 3] { std::array::from_fn(|a| (0..n).map(|i| value(a, i, d)).collect()) };
+    let exact = EulerSeries {
+        angle: series(0),
+        rate: series(1),
+        accel: series(2),
+    };
+    // The gyro: body rates plus white noise of 3e-5, 8e-5 and 6e-5 rad/s/sqrt(Hz).
+    let mut gyro = exact.body_rates();
+    for (axis, asd) in [3e-5, 8e-5, 6e-5].into_iter().enumerate() {
+        let sd = asd * (rate / 2.0_f64).sqrt();
+        gyro[axis].iter_mut().for_each(|v| *v += sd * rng.normal());
+    }
+    let settings = ObserverSettings {
+        angle_noise_rad: Some(0.0),
+        ..ObserverSettings::default()
+    };
+    let angles = exact.angle.each_ref().map(Vec::as_slice);
+    for witness in [None, Some(gyro.each_ref().map(Vec::as_slice))] {
+        let est = observe_with_witness(angles, rate, &settings, witness).unwrap();
+        for axis in 0..3 {
+            let ctx = format!("witness {}, axis {axis}", witness.is_some());
+            let (e, p) = band_error_power(&est.euler.accel[axis], &exact.accel[axis], rate, 0.0, rate / 2.0);
+            assert!(
+                e < 2e-4 * p,
+                "{ctx}: acceleration error power {:e} of the motion's",
+                e / p
+            );
+        }
+    }
+}

@@ -116,3 +116,60 @@ fn auto_order_is_zero_on_clean_runs_and_at_least_one_with_a_lag() {
         }
     }
 }
+
+/// The self-check's imprecise gain: a gyro with white noise of half its signal's rms added (a
+/// motion too weak for the sensor) leaves K known only to more than a percent, which is said
+/// (`imprecise_gain`, once, for the least determined element); the same run with the gyro's own
+/// noise is not.
+#[test]
+fn an_imprecise_gain_is_said_and_a_precise_one_is_not() {
+    use imu_attest::ident::warnings::IdentWarning;
+    use imu_attest::rng::Rng;
+    let dir = tempfile::tempdir().unwrap();
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.seed = 61;
+    config.duration_s = 60.0;
+    config.blocks = vec![Block::Gyro];
+    let path = dir.path().join("run.csv");
+    write_run(&simulate(&config).unwrap(), &path).unwrap();
+    let clean = load(&path, &LoadOptions::default()).unwrap();
+    let mut noisy = clean.clone();
+    let mut rng = Rng::new(62);
+    for channel in noisy.gyro.as_mut().unwrap() {
+        let rms = (channel.iter().map(|v| v * v).sum::<f64>() / channel.len() as f64).sqrt();
+        for v in channel.iter_mut() {
+            *v += 0.5 * rms * rng.normal();
+        }
+    }
+    let imprecise = |run| -> Vec<(f64, f64)> {
+        let id = identify_run(run, &Settings::default()).unwrap();
+        let gyro = &id.blocks[0];
+        gyro.warnings
+            .iter()
+            .filter_map(|w| match w {
+                IdentWarning::ImpreciseGain {
+                    std, output, input, ..
+                } => {
+                    let (i, j) = (
+                        ["gx", "gy", "gz"].iter().position(|c| c == output)?,
+                        ["wx", "wy", "wz"].iter().position(|c| c == input)?,
+                    );
+                    Some((*std, gyro.structural.k_std[i][j]))
+                }
+                _ => None,
+            })
+            .collect()
+    };
+    let said = imprecise(&noisy);
+    assert_eq!(
+        said.len(),
+        1,
+        "one warning, for the least determined element: {said:?}"
+    );
+    let (std, k_std) = said[0];
+    assert!(
+        std > 0.01 && (std - k_std).abs() < 1e-12 * k_std,
+        "{std} against the fit's {k_std}"
+    );
+    assert!(imprecise(&clean).is_empty());
+}

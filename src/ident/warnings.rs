@@ -98,6 +98,18 @@ pub enum IdentWarning {
         /// `K[output][input]`.
         value: f64,
     },
+    /// A gain element whose standard deviation exceeds [`super::selfcheck::IMPRECISE_GAIN`]: the
+    /// run does not determine the block's gain to a percent (too weak a motion for the noise).
+    ImpreciseGain {
+        /// Output channel name.
+        output: String,
+        /// Input axis name.
+        input: String,
+        /// `K[output][input]`.
+        value: f64,
+        /// Its standard deviation.
+        std: f64,
+    },
     /// A delay that is negative beyond its uncertainty: the block answers before the stand moves.
     NegativeDelay {
         /// The delay, s.
@@ -243,6 +255,17 @@ impl fmt::Display for IdentWarning {
                 f,
                 "K[{output}][{input}] = {value:.4} is implausible for a calibrated block (diagonal \
                  near 1, cross-couplings below 0.1): check units, axis order and signs, or the band"
+            ),
+            IdentWarning::ImpreciseGain {
+                output,
+                input,
+                value,
+                std,
+            } => write!(
+                f,
+                "K[{output}][{input}] = {value:.4} +- {std:.4} (one sigma): this run does not \
+                 determine the block's gain to a percent, too little motion for the noise; move \
+                 the stand more, or record longer, before certifying from it"
             ),
             IdentWarning::NegativeDelay { tau_s, tau_std_s } => write!(
                 f,

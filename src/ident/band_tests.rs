@@ -18,6 +18,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
     let frequency_hz: Vec<f64> = (0..BINS).map(|k| k as f64 * RATE / fft_len as f64).collect();
     let one = Matrix3::<Complex64>::identity();
     BlockSpectra {
+        centroid_hz: Vec::new(),
         s_uu: vec![one; BINS],
         s_xu: vec![one; BINS],
         s_xx: frequency_hz

@@ -58,7 +58,7 @@ pub fn held_out(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<HeldOut> {
     let halves = [merged(first)?, merged(second)?];
     let native = native_bins(spectra, band_hz);
     let step = spectra.native_step();
-    let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
+    let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.fit_frequency_hz(k)).collect();
     let [(w1, o1), (w2, o2)] = [
         h1_estimate(&halves[0], &native, step)?,
         h1_estimate(&halves[1], &native, step)?,

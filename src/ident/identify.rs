@@ -330,7 +330,10 @@ pub fn structural_fit(
     held_out: Option<&HeldOut>,
     previous: Option<&StructuralFit>,
 ) -> Result<StructuralFit, IdentError> {
-    let frequency_hz: Vec<f64> = band.iter().map(|&k| spectra.frequency_hz[k]).collect();
+    let frequency_hz: Vec<f64> = band
+        .iter()
+        .map(|&k| spectra.model_frequency_hz(k, wiener.estimate))
+        .collect();
     let response: Vec<Matrix3<Complex64>> = band.iter().map(|&k| wiener.w_u[k]).collect();
     let dof = (spectra.equivalent_averages - 3.0).max(1.0);
     let row_weight: Vec<[Matrix3<Complex64>; 3]> = band

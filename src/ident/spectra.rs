@@ -40,6 +40,10 @@ pub struct BlockSpectra {
     pub held_out_cache: super::holdout::HeldOutCache,
     /// Variance inflation from the correlation of neighbouring native bins ([`bin_correlation`]).
     pub bin_correlation: f64,
+    /// Per native bin, the inputs' power centroid ([`crate::spectral::centroid`]), Hz: the
+    /// frequency at which the structural model is evaluated there ([`Self::fit_frequency_hz`]).
+    /// Empty: the bin centres.
+    pub centroid_hz: Vec<f64>,
     /// Sample rate, Hz.
     pub sample_rate_hz: f64,
     /// FFT length (the two-sided grid length), samples.
@@ -55,6 +59,29 @@ impl BlockSpectra {
     #[must_use]
     pub fn native_step(&self) -> usize {
         (self.fft_len / self.segment_len.max(1)).max(1)
+    }
+
+    /// Where the model is compared with an `H1` estimate (a ratio of the bin's own spectra) at
+    /// bin `k`: the inputs' power centroid at a native bin ([`Self::centroid_hz`]), else the
+    /// bin's centre.
+    #[must_use]
+    pub fn fit_frequency_hz(&self, k: usize) -> f64 {
+        let step = self.native_step();
+        match self.centroid_hz.get(k / step) {
+            Some(&c) if k.is_multiple_of(step) => c,
+            _ => self.frequency_hz[k],
+        }
+    }
+
+    /// Where the model is compared with `estimate` at bin `k`: [`Self::fit_frequency_hz`] for
+    /// `H1`; the bin's centre for the causal Wiener filter, which is a filter's response on the
+    /// grid (each bin made from the spectra at every frequency), not a ratio of the bin's content.
+    #[must_use]
+    pub fn model_frequency_hz(&self, k: usize, estimate: super::settings::Estimate) -> f64 {
+        match estimate {
+            super::settings::Estimate::H1 => self.fit_frequency_hz(k),
+            super::settings::Estimate::CausalWiener => self.frequency_hz[k],
+        }
     }
 }
 
@@ -119,7 +146,9 @@ pub fn block_spectra(
         }
         None => None,
     };
+    let centroid_hz = planner.centroid_hz(&channels[..3], sample_rate_hz, settings)?;
     Ok(BlockSpectra {
+        centroid_hz,
         stretches,
         finer_stretches,
         stationarity_cache: StationarityCache::default(),

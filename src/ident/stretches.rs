@@ -191,7 +191,7 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
     };
     let (stretches, segment_len) = if spectra.stretches.len() >= MIN_STRETCHES {
         let native = native_bins(spectra, band_hz);
-        let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
+        let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.fit_frequency_hz(k)).collect();
         (
             fitted(&spectra.stretches, &native, spectra.native_step(), &frequency_hz),
             None,

@@ -42,6 +42,7 @@
 //! ```
 
 pub mod causal;
+pub mod centroid;
 pub mod cepstral;
 mod detrend;
 mod error;

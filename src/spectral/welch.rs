@@ -76,6 +76,11 @@ impl WelchPlanner {
         }
     }
 
+    /// The forward real FFT of length `len` (planned once, then shared).
+    pub(super) fn real_fft(&mut self, len: usize) -> Arc<dyn RealToComplex<f64>> {
+        self.fft.plan_fft_forward(len)
+    }
+
     /// The periodic `window` of length `n`, computed once per `(window, n)` and then shared.
     pub fn window(&mut self, window: Window, n: usize) -> Arc<[f64]> {
         Arc::clone(
@@ -251,7 +256,7 @@ pub fn welch_matrix(
 }
 
 /// The input checks of [`WelchPlanner::welch_matrix`], in its documented order.
-fn check_input(
+pub(super) fn check_input(
     channels: &[&[f64]],
     sample_rate_hz: f64,
     settings: &WelchSettings,

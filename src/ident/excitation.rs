@@ -31,6 +31,14 @@ use crate::block::Block;
 /// axis held still, its angle sensor's noise (1e-5 rad) remaining, gives 3e-5 to 5e-5 (gyro).
 pub const MIN_EXCITATION: f64 = 1e-3;
 
+/// The largest standard deviation of a weak direction's gains for which its run is still
+/// identified rather than refused: a tenth, the plausibility tolerance of a calibrated block's
+/// gains ([`super::selfcheck::GAIN_TOLERANCE`]). Below [`MIN_EXCITATION`] the fit decides: an
+/// independent simulator's runs with one axis at 3.8e-4 to 9.3e-4 of the strongest's power
+/// (refused before) gave K within 0.13 % and honest sigmas (z rms 0.3-1.0); an axis held still
+/// leaves its column undetermined and is refused as before.
+pub const UNDETERMINED: f64 = 0.1;
+
 /// The band's principal input powers.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Excitation {

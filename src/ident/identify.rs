@@ -24,6 +24,7 @@ use super::holdout::{HeldOut, cached_held_out};
 use super::selfcheck::{chi2_per_bin, self_check};
 use super::session::{Session, Start};
 use super::settings::{OrderSetting, Settings};
+use super::signals::channel_names;
 use super::spectra::BlockSpectra;
 use super::stretches::{Stationarity, cached_stationarity, widen};
 use super::structural::{
@@ -141,8 +142,8 @@ pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification,
 /// the same refusals.
 ///
 /// # Errors
-/// No usable band, an input axis not excited in it, an empty band, a singular A or auto-Lambda
-/// system, or a structural fit failure.
+/// No usable band, an input axis too weakly excited for the fit to determine its gains, an empty
+/// band, a singular A or auto-Lambda system, or a structural fit failure.
 pub fn identify_block_from(
     block: Block,
     spectra: Arc<BlockSpectra>,
@@ -151,14 +152,45 @@ pub fn identify_block_from(
     previous: Option<&FitStart>,
 ) -> Result<BlockIdentification, IdentError> {
     // Excitation first, over the band asked for (or the auto search limits): a stand axis held
-    // still is named as such, not as a band without coherence.
-    check_excitation(
+    // still is named as such, not as a band without coherence. A weak direction is refused only
+    // when the fit cannot determine its gains ([`excitation::UNDETERMINED`]): a weaker axis
+    // whose gains the data still give to a tenth is identified (its sigmas say how well).
+    let weak = check_excitation(
         &spectra,
         block,
         settings.band_hz.search_limits(spectra.sample_rate_hz),
-    )?;
+    )
+    .err();
+    let identified = identify_excited(block, spectra, factorisation, settings, previous);
+    match (identified, weak) {
+        (Ok(id), Some(refusal)) if !determined(&id.structural, block, &refusal) => Err(refusal),
+        (Ok(id), _) => Ok(id),
+        (Err(e), weak) => Err(weak.unwrap_or(e)),
+    }
+}
+
+/// Whether `fit` determines the gains of the input axis `refusal` names: its column of `K` has
+/// no standard deviation above [`excitation::UNDETERMINED`].
+fn determined(fit: &StructuralFit, block: Block, refusal: &IdentError) -> bool {
+    let IdentError::NotExcited { axis, .. } = refusal else {
+        return true;
+    };
+    let Some(j) = channel_names(block).0.iter().position(|a| a == axis) else {
+        return false;
+    };
+    (0..3).all(|i| fit.k_std[i][j] <= super::excitation::UNDETERMINED)
+}
+
+/// [`identify_block_from`] past the first excitation check.
+fn identify_excited(
+    block: Block,
+    spectra: Arc<BlockSpectra>,
+    factorisation: Arc<Factorisation>,
+    settings: &Settings,
+    previous: Option<&FitStart>,
+) -> Result<BlockIdentification, IdentError> {
     let found = resolve_band(&spectra, block, settings.band_hz)?;
-    check_excitation(&spectra, block, found)?;
+    let weak = check_excitation(&spectra, block, found).err();
     let fit_over = |band_hz: [f64; 2], previous: Option<&StructuralFit>| -> Result<_, IdentError> {
         let wiener = Arc::new(regularised_wiener(
             &spectra,
@@ -261,6 +293,9 @@ pub fn identify_block_from(
         &structural,
         settings,
     ));
+    if let Some(refusal) = weak.filter(|r| !determined(&structural, block, r)) {
+        return Err(refusal);
+    }
     Ok(BlockIdentification {
         block,
         spectra,

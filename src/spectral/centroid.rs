@@ -18,6 +18,8 @@
 //!
 //! summed over the segments and the channels (one centroid per bin for the three inputs). It is
 //! exact for a line (any offset inside the main lobe) and averages to `f_k` for a flat spectrum.
+//! It is held within [`MAIN_LOBE_BINS`] bins of `f_k` and at or above `f_k / 2` (a drift's image
+//! from the negative frequencies put a bin at 0.12 Hz at -0.02 Hz).
 //! `Dh` is the window's circular central difference times `fs` (for the rectangular window 0: no
 //! correction).
 //!
@@ -27,6 +29,12 @@
 //! Welch estimate refuses it.
 
 use super::welch::WelchPlanner;
+
+/// Half the widest main lobe of the windows offered (Hann, Hamming: 2 bins; Blackman-Harris: 4),
+/// in bins: a centroid farther from its bin than [`MAIN_LOBE_BINS`] bins is held there. The
+/// centroid is also held at or above half its bin's frequency: near 0 Hz a bin's main lobe
+/// reaches the negative frequencies, whose image of a slow drift would put it below 0 Hz.
+const MAIN_LOBE_BINS: f64 = 4.0;
 use super::{SpectralError, WelchSettings};
 
 impl WelchPlanner {
@@ -76,7 +84,11 @@ impl WelchPlanner {
             .map(|k| {
                 let f = k as f64 * df;
                 let c = f - num[k] / den[k] / (2.0 * std::f64::consts::PI);
-                if den[k] > 0.0 && c.is_finite() { c } else { f }
+                if den[k] > 0.0 && c.is_finite() {
+                    c.clamp((f - MAIN_LOBE_BINS * df).max(0.5 * f), f + MAIN_LOBE_BINS * df)
+                } else {
+                    f
+                }
             })
             .collect())
     }
@@ -130,6 +142,27 @@ mod tests {
             mean.abs() < 3.0 * rms / (offsets.len() as f64).sqrt(),
             "mean {mean}, rms {rms}"
         );
+    }
+
+    /// A slow drift's power near 0 Hz reaches the first bins through the main lobe, its image from
+    /// the negative frequencies too: the centroid stays at or above half the bin's frequency.
+    #[test]
+    fn near_zero_hertz_the_centroid_stays_positive() {
+        let (rate, n) = (500.0, 1024);
+        let x: Vec<f64> = (0..8 * n)
+            .map(|t| {
+                let s = f64::from(u32::try_from(t).unwrap()) / rate;
+                1e-3 * s * s + 1e-6 * (2.0 * std::f64::consts::PI * 40.0 * s).sin()
+            })
+            .collect();
+        let c = WelchPlanner::new()
+            .centroid_hz(&[&x], rate, &settings(n, Window::Hann))
+            .unwrap();
+        let df = rate / n as f64;
+        for (k, f) in c.iter().enumerate().skip(1).take(8) {
+            let centre = k as f64 * df;
+            assert!(*f >= 0.5 * centre && *f <= centre + 4.0 * df, "bin {k}: {f}");
+        }
     }
 
     /// The rectangular window has no derivative: the bin centres are kept.

@@ -257,8 +257,8 @@ fn physical_rejection(data: &Prepared, model: &Model, inflation: f64) -> Option<
         return Some(Rejection::Unstable);
     }
     let w_ref = data.omega_ref;
-    let low = data.omega.first().copied().unwrap_or(w_ref) / POLE_REACH;
-    let high = data.omega.last().copied().unwrap_or(w_ref) * POLE_REACH;
+    let low = data.omega.iter().copied().reduce(f64::min).unwrap_or(w_ref) / POLE_REACH;
+    let high = data.omega.iter().copied().reduce(f64::max).unwrap_or(w_ref) * POLE_REACH;
     let (low_hz, high_hz) = (low / (2.0 * PI), high / (2.0 * PI));
     let poles = rational::roots(&model.den);
     if poles.len() < order {
@@ -277,7 +277,11 @@ fn physical_rejection(data: &Prepared, model: &Model, inflation: f64) -> Option<
             });
         }
     }
-    if let Some(edge) = resonance_at_edge(&poles, w_ref, data.omega.last().copied().unwrap_or(w_ref)) {
+    if let Some(edge) = resonance_at_edge(
+        &poles,
+        w_ref,
+        data.omega.iter().copied().reduce(f64::max).unwrap_or(w_ref),
+    ) {
         return Some(edge);
     }
     let std: Vec<f64> = model

@@ -92,7 +92,8 @@ pub const MAX_ORDER: usize = 4;
 /// A frequency-response estimate over an analysis band, with its weights.
 #[derive(Clone, Copy, Debug)]
 pub struct ResponseEstimate<'a> {
-    /// The band's bins, Hz: ascending, finite, `> 0`.
+    /// The band's bins, Hz: finite, `> 0`, in the bins' order (not necessarily ascending: each at its
+    /// inputs' power centroid, `spectral::centroid`).
     pub frequency_hz: &'a [f64],
     /// `W(f)` at each bin: row `i` output channel, column `j` input axis.
     pub response: &'a [Matrix3<Complex64>],
@@ -310,7 +311,7 @@ pub enum StructuralError {
         weights: usize,
     },
     /// A frequency is not finite, not positive, or not above the previous one.
-    #[error("frequency {value} Hz at bin {bin} is not finite, positive and ascending")]
+    #[error("frequency {value} Hz at bin {bin} is not finite and positive")]
     BadFrequency {
         /// The bin.
         bin: usize,
@@ -526,12 +527,12 @@ fn validate(input: &ResponseEstimate) -> Result<(), StructuralError> {
     if nf == 0 {
         return Err(StructuralError::EmptyBand);
     }
-    let mut previous = 0.0;
+    // Not necessarily ascending: the model is compared with each bin at its inputs' power
+    // centroid (`spectral::centroid`), and two bins beside one line share the line's frequency.
     for (bin, &f) in input.frequency_hz.iter().enumerate() {
-        if !(f.is_finite() && f > previous) {
+        if !(f.is_finite() && f > 0.0) {
             return Err(StructuralError::BadFrequency { bin, value: f });
         }
-        previous = f;
     }
     for (bin, w) in input.response.iter().enumerate() {
         for row in 0..3 {

@@ -51,7 +51,7 @@ pub(super) struct Prepared {
 }
 
 impl Prepared {
-    /// Precomputes from a validated estimate (non-empty, ascending positive frequencies) and its
+    /// Precomputes from a validated estimate (non-empty, positive frequencies) and its
     /// validated row weights.
     pub fn new(input: &ResponseEstimate, rows: &[[RowWeight; 3]]) -> Self {
         let omega: Vec<f64> = input
@@ -59,7 +59,7 @@ impl Prepared {
             .iter()
             .map(|f| 2.0 * std::f64::consts::PI * f)
             .collect();
-        let omega_ref = omega.last().copied().unwrap_or(1.0);
+        let omega_ref = omega.iter().copied().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
         let x = omega.iter().map(|o| o / omega_ref).collect();
         let w = rows
             .iter()

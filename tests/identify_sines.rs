@@ -62,8 +62,9 @@ fn value(sines: &[Vec<(f64, f64, f64)>], axis: usize, t: f64, derivative: usize)
         .sum()
 }
 
-/// The run's CSV text: `seconds` of the programme, gyro noise `asd` rad/s/sqrt(Hz).
-fn run_csv(seed: u64, seconds: f64, asd: f64, scale: [f64; 3]) -> String {
+/// The run's CSV text: `seconds` of the programme, gyro noise `asd` rad/s/sqrt(Hz), white angle
+/// noise `angle_sd` rad.
+fn run_csv(seed: u64, seconds: f64, asd: f64, scale: [f64; 3], angle_sd: f64) -> String {
     let sines = programme(seed, scale);
     let n = (seconds * RATE) as usize;
     let at = |shift: f64| {
@@ -89,7 +90,7 @@ fn run_csv(seed: u64, seconds: f64, asd: f64, scale: [f64; 3]) -> String {
         let w = [body[0][i], body[1][i], body[2][i]];
         let g: [f64; 3] =
             std::array::from_fn(|r| (0..3).map(|c| K[r][c] * w[c]).sum::<f64>() + sd * rng.normal());
-        let a = [measured.angle[0][i], measured.angle[1][i], measured.angle[2][i]];
+        let a: [f64; 3] = std::array::from_fn(|axis| measured.angle[axis][i] + angle_sd * rng.normal());
         writeln!(
             csv,
             "{},{:e},{:e},{:e},{:e},{:e},{:e}",
@@ -111,7 +112,7 @@ fn strong_sines_leave_the_delay_and_the_fit_right() {
     let dir = tempfile::tempdir().unwrap();
     for (seed, seconds) in [(3, 120.0), (4, 20.0)] {
         let path = dir.path().join(format!("sines{seed}.csv"));
-        std::fs::write(&path, run_csv(seed, seconds, 5e-5, [1.0; 3])).unwrap();
+        std::fs::write(&path, run_csv(seed, seconds, 5e-5, [1.0; 3], 0.0)).unwrap();
         std::fs::write(
             dir.path().join(format!("sines{seed}.json")),
             r#"{"angle_noise_rad": 1e-7}"#,
@@ -152,16 +153,21 @@ fn strong_sines_leave_the_delay_and_the_fit_right() {
 /// axes' amplitude (4e-4 of their power, below the excitation ratio 1e-3 that refused it before;
 /// an independent simulator's runs of 3.8e-4 to 9.3e-4 were refused, and identify right). Its
 /// gains come with their (wider) sigmas and are right within them. Yaw and pitch held still (roll
-/// alone moves, so two inputs are exactly zero) is refused as before: the fit cannot determine
-/// their columns. (Yaw alone held still is not: the kinematics still turn pitch's rate into the
+/// alone moves), exactly or with the angle sensor's noise (1e-5 rad) moving them, is refused as
+/// before. (Yaw alone held still is not: the kinematics still turn pitch's rate into the
 /// body's y rate through roll, and the data determine that column.)
 #[test]
 fn a_weak_axis_is_identified_and_an_axis_held_still_refused() {
     use imu_attest::ident::IdentError;
     let dir = tempfile::tempdir().unwrap();
-    for (name, scale) in [("weak", [0.15, 0.003, 0.15]), ("still", [1.0, 0.0, 0.0])] {
+    let cases = [
+        ("weak", [0.15, 0.003, 0.15], 0.0),
+        ("still", [1.0, 0.0, 0.0], 0.0),
+        ("still_noisy", [1.0, 0.0, 0.0], 1e-5),
+    ];
+    for (name, scale, angle_sd) in cases {
         let path = dir.path().join(format!("{name}.csv"));
-        std::fs::write(&path, run_csv(5, 120.0, 2e-6, scale)).unwrap();
+        std::fs::write(&path, run_csv(5, 120.0, 2e-6, scale, angle_sd)).unwrap();
         std::fs::write(
             dir.path().join(format!("{name}.json")),
             r#"{"angle_noise_rad": 1e-7}"#,
@@ -169,7 +175,7 @@ fn a_weak_axis_is_identified_and_an_axis_held_still_refused() {
         .unwrap();
         let run = load(&path, &LoadOptions::default()).unwrap();
         let result = identify_run(&run, &Settings::default());
-        if name == "still" {
+        if name.starts_with("still") {
             let err = result.expect_err("refused");
             assert!(matches!(err, IdentError::NotExcited { .. }), "{err}");
             continue;

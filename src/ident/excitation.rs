@@ -31,13 +31,18 @@ use crate::block::Block;
 /// axis held still, its angle sensor's noise (1e-5 rad) remaining, gives 3e-5 to 5e-5 (gyro).
 pub const MIN_EXCITATION: f64 = 1e-3;
 
-/// The largest standard deviation of a weak direction's gains for which its run is still
-/// identified rather than refused: a tenth, the plausibility tolerance of a calibrated block's
-/// gains ([`super::selfcheck::GAIN_TOLERANCE`]). Below [`MIN_EXCITATION`] the fit decides: an
-/// independent simulator's runs with one axis at 3.8e-4 to 9.3e-4 of the strongest's power
-/// (refused before) gave K within 0.13 % and honest sigmas (z rms 0.3-1.0); an axis held still
-/// leaves its column undetermined and is refused as before.
+/// The largest standard deviation of a weak run's gains, relative to its largest gain, for which
+/// it is still identified rather than refused: a tenth, the plausibility tolerance of a calibrated
+/// block's gains ([`super::selfcheck::GAIN_TOLERANCE`]). Between [`HELD_STILL`] and
+/// [`MIN_EXCITATION`] the fit decides: an independent simulator's runs with one axis at 3.8e-4 to
+/// 9.3e-4 of the strongest's power (refused before) gave K within 0.13 % and honest sigmas (z rms
+/// 0.3-1.0).
 pub const UNDETERMINED: f64 = 0.1;
+
+/// Below this ratio of the weakest to the strongest principal input power a direction is refused
+/// whatever the fit says: a stand axis held still, its angle sensor's noise remaining, gives
+/// 3e-5 to 5e-5 (above); the weakest run identified right gave 3.8e-4.
+pub const HELD_STILL: f64 = 1e-4;
 
 /// The band's principal input powers.
 #[derive(Clone, Debug, PartialEq, Serialize)]

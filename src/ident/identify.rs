@@ -169,16 +169,25 @@ pub fn identify_block_from(
     }
 }
 
-/// Whether `fit` determines the gains of the input axis `refusal` names: its column of `K` has
-/// no standard deviation above [`excitation::UNDETERMINED`].
+/// Whether `fit` determines the gains of the input axis `refusal` names: its direction holds at
+/// least [`excitation::HELD_STILL`] of the strongest's power, and no element of `K` has a
+/// standard deviation above [`excitation::UNDETERMINED`] times the largest gain (a NaN is
+/// undetermined).
 fn determined(fit: &StructuralFit, block: Block, refusal: &IdentError) -> bool {
-    let IdentError::NotExcited { axis, .. } = refusal else {
+    let IdentError::NotExcited {
+        axis, relative_power, ..
+    } = refusal
+    else {
         return true;
     };
-    let Some(j) = channel_names(block).0.iter().position(|a| a == axis) else {
+    if !channel_names(block).0.contains(axis) || *relative_power < super::excitation::HELD_STILL {
         return false;
-    };
-    (0..3).all(|i| fit.k_std[i][j] <= super::excitation::UNDETERMINED)
+    }
+    let scale = fit.k.iter().flatten().fold(0.0, |m: f64, v| m.max(v.abs()));
+    fit.k_std
+        .iter()
+        .flatten()
+        .all(|s| *s <= super::excitation::UNDETERMINED * scale)
 }
 
 /// [`identify_block_from`] past the first excitation check.
@@ -232,8 +241,12 @@ fn identify_excited(
             // A trimmed band the data cannot be fitted on (too few bins for the order asked, an
             // axis not excited there) keeps the first fit: the trim is an improvement, never a
             // new refusal.
-            let refit = check_excitation(&spectra, block, [found[0], top])
-                .and_then(|()| fit_over([found[0], top], previous_fit));
+            let refit = fit_over([found[0], top], previous_fit).and_then(|refit| {
+                match check_excitation(&spectra, block, [found[0], top]) {
+                    Err(refusal) if !determined(&refit.3, block, &refusal) => Err(refusal),
+                    _ => Ok(refit),
+                }
+            });
             if let Ok(mut refit) = refit {
                 // The cut was chosen from a refined, not a cold, fit: the result is provisional
                 // even when the refit reused its models exactly.

@@ -133,12 +133,13 @@ pub fn self_check(
                 }
             }
         }
-        // The least determined element, once: the others say the same.
+        // The least determined element, once: the others say the same (a NaN counts as the
+        // least determined).
         let worst = (0..9)
             .map(|e| (e / 3, e % 3))
             .max_by(|&(a, b), &(c, d)| fit.k_std[a][b].total_cmp(&fit.k_std[c][d]));
         if let Some((i, j)) = worst
-            && fit.k_std[i][j] > IMPRECISE_GAIN
+            && (fit.k_std[i][j].is_nan() || fit.k_std[i][j] > IMPRECISE_GAIN)
         {
             out.push(IdentWarning::ImpreciseGain {
                 output: outputs[i].to_owned(),

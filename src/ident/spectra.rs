@@ -67,8 +67,10 @@ impl BlockSpectra {
     #[must_use]
     pub fn fit_frequency_hz(&self, k: usize) -> f64 {
         let step = self.native_step();
+        // Native bin `m` is padded bin `m step` only on a grid a whole multiple of the segment.
+        let aligned = self.fft_len.is_multiple_of(self.segment_len.max(1));
         match self.centroid_hz.get(k / step) {
-            Some(&c) if k.is_multiple_of(step) => c,
+            Some(&c) if aligned && k.is_multiple_of(step) => c,
             _ => self.frequency_hz[k],
         }
     }

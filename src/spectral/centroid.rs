@@ -18,10 +18,11 @@
 //!
 //! summed over the segments and the channels (one centroid per bin for the three inputs). It is
 //! exact for a line (any offset inside the main lobe) and averages to `f_k` for a flat spectrum.
-//! It is held within [`MAIN_LOBE_BINS`] bins of `f_k` and at or above `f_k / 2` (a drift's image
-//! from the negative frequencies put a bin at 0.12 Hz at -0.02 Hz).
-//! `Dh` is the window's circular central difference times `fs` (for the rectangular window 0: no
-//! correction).
+//! It is held within [`MAIN_LOBE_BINS`] bins of `f_k`, at or above `f_k / 2` (a drift's image from
+//! the negative frequencies put a bin at 0.12 Hz at -0.02 Hz) and at or below Nyquist.
+//! `Dh` is the window's circular central difference times `fs`, which is its derivative only for a
+//! window closing to 0 at its ends (Hann, Blackman-Harris); for the others (rectangular, Hamming)
+//! the bin centres are kept.
 //!
 //! Grid and units: the native grid of the segment (`k = 0..=N/2`, `f_k = k fs / N`, ascending), Hz.
 //! Segments as the Welch estimate cuts them (start 0, step `N - noverlap`), detrended alike. A bin
@@ -51,6 +52,14 @@ impl WelchPlanner {
         super::welch::check_input(channels, sample_rate_hz, settings)?;
         let n = settings.segment_len;
         let window = self.window(settings.window, n);
+        let df = sample_rate_hz / n as f64;
+        let centres = || (0..=n / 2).map(|k| k as f64 * df).collect();
+        // The circular difference is the window's derivative only for a window that closes to 0
+        // at its ends (Hann, Blackman-Harris); Hamming's and the rectangle's jump there.
+        let peak = window.iter().copied().fold(0.0, f64::max);
+        if window.first().is_none_or(|w0| w0.abs() > 1e-3 * peak) {
+            return Ok(centres());
+        }
         let derivative: Vec<f64> = (0..n)
             .map(|i| 0.5 * (window[(i + 1) % n] - window[(i + n - 1) % n]) * sample_rate_hz)
             .collect();
@@ -79,13 +88,16 @@ impl WelchPlanner {
                 }
             }
         }
-        let df = sample_rate_hz / n as f64;
+        let nyquist = 0.5 * sample_rate_hz;
         Ok((0..bins)
             .map(|k| {
                 let f = k as f64 * df;
                 let c = f - num[k] / den[k] / (2.0 * std::f64::consts::PI);
                 if den[k] > 0.0 && c.is_finite() {
-                    c.clamp((f - MAIN_LOBE_BINS * df).max(0.5 * f), f + MAIN_LOBE_BINS * df)
+                    c.clamp(
+                        (f - MAIN_LOBE_BINS * df).max(0.5 * f),
+                        (f + MAIN_LOBE_BINS * df).min(nyquist).max(0.5 * f),
+                    )
                 } else {
                     f
                 }
@@ -165,15 +177,34 @@ mod tests {
         }
     }
 
-    /// The rectangular window has no derivative: the bin centres are kept.
+    /// Windows that do not close to 0 at their ends (rectangular, Hamming) have no derivative
+    /// there: the bin centres are kept (a circular difference pushed Hamming's leakage bins
+    /// away from the line, by 3 bins).
     #[test]
-    fn the_rectangular_window_keeps_the_bin_centres() {
+    fn windows_open_at_their_ends_keep_the_bin_centres() {
         let x: Vec<f64> = (0..4096_u32).map(|t| (0.3 * f64::from(t)).sin()).collect();
-        let c = WelchPlanner::new()
-            .centroid_hz(&[&x], 100.0, &settings(256, Window::Rectangular))
-            .unwrap();
-        for (k, f) in c.iter().enumerate() {
-            assert!((f - k as f64 * 100.0 / 256.0).abs() < 1e-12);
+        for window in [Window::Rectangular, Window::Hamming] {
+            let c = WelchPlanner::new()
+                .centroid_hz(&[&x], 100.0, &settings(256, window))
+                .unwrap();
+            for (k, f) in c.iter().enumerate() {
+                assert!((f - k as f64 * 100.0 / 256.0).abs() < 1e-12, "{window:?} bin {k}");
+            }
         }
+        // Blackman-Harris closes to 0: its main lobe is placed at the line.
+        let (rate, n) = (500.0, 1024);
+        let line = 10.37 * rate / n as f64;
+        let x: Vec<f64> = (0..20 * n)
+            .map(|t| (2.0 * std::f64::consts::PI * line * t as f64 / rate).sin())
+            .collect();
+        let c = WelchPlanner::new()
+            .centroid_hz(&[&x], rate, &settings(n, Window::BlackmanHarris))
+            .unwrap();
+        assert!(
+            (c[10] - line).abs() < 1e-3 && (c[11] - line).abs() < 1e-3,
+            "{} {}",
+            c[10],
+            c[11]
+        );
     }
 }

@@ -12,7 +12,7 @@
 //! 3. The measurement noise has per-axis variance `N = diag(sigma^2)` per bin. Its white floor is
 //!    the declared `angle_noise_rad`, or else estimated from the periodogram's floor between 0.70
 //!    and 0.95 of Nyquist (median / ln 2, the median of an exponential being ln 2 times its mean),
-//!    and never below [`RESOLUTION_FLOOR`] of the axis's motion (numerical resolution).
+//!    and never below [`RESOLUTION_FLOOR`] of the largest axis's motion (numerical resolution).
 //!    Given a witness of the motion (the gyro's outputs as Euler rates,
 //!    [`observe_with_witness`]), the noise is coloured: per bin, the part of each angle the
 //!    witness does not explain, never below the floor ([`super::colour`]). Without one it is the
@@ -42,7 +42,7 @@ use crate::fourier::{RecordFft, fast_len};
 /// Fewest samples the observer accepts.
 pub const MIN_SAMPLES: usize = 64;
 
-/// The white floor is never below this fraction of each axis's motion (rms, its line removed),
+/// The white floor is never below this fraction of the largest axis's motion (rms, its line removed),
 /// whatever was declared or estimated: far below any angle sensor (a good encoder's noise is
 /// 1e-7..1e-6 rad, a small stand motion 1e-2 rad), and at the level of the observer's own
 /// artefacts on exactly computed angles (the record's extension rings at 1e-7 of the motion, which
@@ -264,7 +264,10 @@ pub fn observe_with_witness(
         Some(sigma) => ([sigma * sigma; 3], NoiseSource::Declared),
         None => (estimate_noise(&spectra, effective_len), NoiseSource::Estimated),
     };
-    let noise_var = std::array::from_fn(|a| noise_var[a].max(resolution_floor(&residuals[a])));
+    // The largest axis's motion: relative to each axis's own, a nearly still axis would get no
+    // floor beside a moving one, the imbalance the floor is there to bound.
+    let floor = residuals.iter().map(|r| resolution_floor(r)).fold(0.0, f64::max);
+    let noise_var = noise_var.map(|v| v.max(floor));
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
     let (noise, noise_colour) = match witness {
         Some(w) => {

@@ -343,9 +343,10 @@ fn resonance_at_edge(poles: &[Complex64], w_ref: f64, omega_high: f64) -> Option
     })
 }
 
-/// `||N(j x_0) / d(j x_0) - K||_F / ||K||_F` at the band's lowest bin.
+/// `||N(j x_0) / d(j x_0) - K||_F / ||K||_F` at the band's lowest frequency (the bins are at
+/// their centroids, not necessarily ascending).
 fn static_in_band_difference(data: &Prepared, model: &Model) -> f64 {
-    let Some(&x) = data.x.first() else {
+    let Some(x) = data.x.iter().copied().reduce(f64::min) else {
         return f64::INFINITY;
     };
     let d = model.den_at(x);

@@ -310,7 +310,7 @@ pub enum StructuralError {
         /// Number of weight entries (variance matrices or row-weight triples).
         weights: usize,
     },
-    /// A frequency is not finite, not positive, or not above the previous one.
+    /// A frequency is not finite or not positive.
     #[error("frequency {value} Hz at bin {bin} is not finite and positive")]
     BadFrequency {
         /// The bin.

@@ -225,7 +225,8 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
         .map(|s| 0.5 * (s.span_s[0] + s.span_s[1]))
         .collect();
     let y: Vec<f64> = stretches.iter().map(|s| s.tau_s).collect();
-    let (tau_trend, tau_trend_std) = line_slope(&t, &y);
+    let own_std: Vec<f64> = stretches.iter().map(|s| s.tau_std_s).collect();
+    let (tau_trend, tau_trend_std) = line_slope(&t, &y, &own_std);
     Some(Stationarity {
         stretches,
         k_spread_std,
@@ -236,8 +237,13 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
     })
 }
 
-/// Ordinary least-squares slope of `y` on `t` and its standard deviation from the residuals.
-fn line_slope(t: &[f64], y: &[f64]) -> (f64, f64) {
+/// Ordinary least-squares slope of `y` on `t` and its standard deviation: from the residuals
+/// about the line, floored by what the points' own standard deviations `y_std` give the slope
+/// (`sqrt(sum (t - t_mean)^2 y_std^2) / sum (t - t_mean)^2`). A record gives as few as four
+/// stretches: two degrees of freedom for the residuals, whose estimate is then often far too small
+/// (four delays that happen to fall near a line), and an independent simulator's clean 120 s runs
+/// were warned of a drift of 3 us where the stretches' own errors were 0.9 us each.
+fn line_slope(t: &[f64], y: &[f64], y_std: &[f64]) -> (f64, f64) {
     let n = t.len() as f64;
     let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
     let stt: f64 = t.iter().map(|v| (v - tm).powi(2)).sum();
@@ -250,7 +256,16 @@ fn line_slope(t: &[f64], y: &[f64]) -> (f64, f64) {
         .zip(y)
         .map(|(a, b)| (b - ym - slope * (a - tm)).powi(2))
         .sum();
-    (slope, (rss / (n - 2.0) / stt).sqrt())
+    let from_residuals = (rss / (n - 2.0) / stt).sqrt();
+    let from_own: f64 = t
+        .iter()
+        .zip(y_std)
+        .map(|(a, s)| ((a - tm) * s).powi(2))
+        .sum::<f64>()
+        .sqrt()
+        / stt;
+    // A NaN own deviation leaves the residuals' figure (`f64::max` ignores NaN).
+    (slope, from_residuals.max(from_own))
 }
 
 /// The order-0 fit of one stretch over the native band bins (`native` indexes the padded grid,
@@ -333,4 +348,78 @@ pub fn cached_stationarity(
     spectra
         .stationarity_cache
         .get_or(band_hz, || stationarity(spectra, band_hz))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Four stretches of a clean 120 s run of an independent simulator (gyro, true delay
+    /// 0.71491 ms, no drift): their delays, ms, and own standard deviations, ms.
+    const CLEAN: [(f64, f64, f64, f64); 4] = [
+        (0.0, 32.8, 0.71647, 0.00086),
+        (28.7, 61.4, 0.71507, 0.00075),
+        (57.3, 90.1, 0.71491, 0.00100),
+        (86.0, 118.8, 0.71402, 0.00083),
+    ];
+
+    fn stationarity_of(stretches: &[(f64, f64, f64, f64)]) -> Stationarity {
+        let fits: Vec<StretchFit> = stretches
+            .iter()
+            .map(|&(a, b, tau_ms, std_ms)| StretchFit {
+                span_s: [a, b],
+                k: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                tau_s: tau_ms * 1e-3,
+                tau_std_s: std_ms * 1e-3,
+            })
+            .collect();
+        let t: Vec<f64> = fits.iter().map(|s| 0.5 * (s.span_s[0] + s.span_s[1])).collect();
+        let y: Vec<f64> = fits.iter().map(|s| s.tau_s).collect();
+        let own: Vec<f64> = fits.iter().map(|s| s.tau_std_s).collect();
+        let (tau_trend, tau_trend_std) = line_slope(&t, &y, &own);
+        Stationarity {
+            stretches: fits,
+            k_spread_std: [[0.0; 3]; 3],
+            tau_spread_std_s: 0.0,
+            segment_len: None,
+            tau_trend,
+            tau_trend_std,
+        }
+    }
+
+    /// The clean run's delays lie close to a line by chance: the residuals alone put its slope
+    /// at 4.7 of their standard deviations (a false drift); the stretches' own errors do not.
+    #[test]
+    fn four_stretches_near_a_line_by_chance_do_not_drift() {
+        let st = stationarity_of(&CLEAN);
+        assert!(!st.drifts(), "{st:?}");
+        let t: Vec<f64> = CLEAN.iter().map(|s| 0.5 * (s.0 + s.1)).collect();
+        let y: Vec<f64> = CLEAN.iter().map(|s| s.2 * 1e-3).collect();
+        let (slope, residual_only) = line_slope(&t, &y, &[0.0; 4]);
+        assert!(slope.abs() > 4.0 * residual_only, "{slope} {residual_only}");
+        assert!(slope.abs() < 2.5 * st.tau_trend_std, "{slope} {}", st.tau_trend_std);
+    }
+
+    /// A drift of 0.5 ppm (60 us over the run) on the same stretches is found, at its rate.
+    #[test]
+    fn a_drift_well_beyond_the_stretches_errors_is_found() {
+        let drifting: Vec<(f64, f64, f64, f64)> = CLEAN
+            .iter()
+            .map(|&(a, b, _, s)| (a, b, 0.715 + 0.5e-6 * 0.5 * (a + b) * 1e3, s))
+            .collect();
+        let st = stationarity_of(&drifting);
+        assert!(st.drifts(), "{st:?}");
+        assert!((st.tau_trend / 0.5e-6 - 1.0).abs() < 1e-9, "{}", st.tau_trend);
+    }
+
+    /// Closed form: equal own deviations `s` and exact points give the slope's deviation
+    /// `s / sqrt(sum (t - t_mean)^2)`.
+    #[test]
+    fn the_own_errors_floor_is_the_closed_form() {
+        let t = [0.0, 1.0, 2.0, 3.0, 4.0];
+        let y: Vec<f64> = t.iter().map(|v| 2.0 + 0.5 * v).collect();
+        let (slope, std) = line_slope(&t, &y, &[0.1; 5]);
+        assert!((slope - 0.5).abs() < 1e-12);
+        assert!((std - 0.1 / 10.0_f64.sqrt()).abs() < 1e-12, "{std}");
+    }
 }

@@ -173,3 +173,76 @@ fn an_imprecise_gain_is_said_and_a_precise_one_is_not() {
     );
     assert!(imprecise(&clean).is_empty());
 }
+
+/// The gyro's own noise in the angle-noise model (`ident::witness_noise`): with white noise of a
+/// third of its signal's rms added to the gyro's outputs, the observer takes part of it for angle
+/// noise and the gyro's gains read high (1.0-3.3 %, every diagonal element). The first-order
+/// estimate (near 1 %) is said (`witness_noise_bias`) and held in the standard deviations: over
+/// four seeds the diagonal's normalised errors have an rms of 1.5 with it, 3.1 without it
+/// (asserted: below 2 and above 2.5); the clean runs say nothing. The estimate is low by a
+/// factor of about 2 here, which the module docs and the warning say.
+#[test]
+fn the_gyro_s_noise_taken_for_angle_noise_is_estimated_and_said() {
+    use imu_attest::ident::warnings::IdentWarning;
+    use imu_attest::rng::Rng;
+    let (mut z2, mut raw2, mut n) = (0.0, 0.0, 0.0);
+    for seed in 0..4_u64 {
+        let dir = tempfile::tempdir().unwrap();
+        let mut config = SimConfig::new(Regime::ALL[seed as usize % Regime::ALL.len()]);
+        config.seed = 70 + seed;
+        config.duration_s = 120.0;
+        config.blocks = vec![Block::Gyro];
+        let sim = simulate(&config).unwrap();
+        let truth = sim.sidecar.truth.gyro.as_ref().unwrap().k;
+        let path = dir.path().join("run.csv");
+        write_run(&sim, &path).unwrap();
+        let clean = load(&path, &LoadOptions::default()).unwrap();
+        let mut noisy = clean.clone();
+        let mut rng = Rng::new(80 + seed);
+        for channel in noisy.gyro.as_mut().unwrap() {
+            let rms = (channel.iter().map(|v| v * v).sum::<f64>() / channel.len() as f64).sqrt();
+            for v in channel.iter_mut() {
+                *v += rms / 3.0 * rng.normal();
+            }
+        }
+        let estimates = |id: &imu_attest::ident::identify::RunIdentification| {
+            id.blocks[0].warnings.iter().find_map(|w| match w {
+                IdentWarning::WitnessNoiseBias { estimates, .. } => Some(*estimates),
+                _ => None,
+            })
+        };
+        let quiet = identify_run(&clean, &Settings::default()).unwrap();
+        assert_eq!(
+            estimates(&quiet),
+            None,
+            "seed {seed}: {:?}",
+            quiet.blocks[0].warnings
+        );
+        let id = identify_run(&noisy, &Settings::default()).unwrap();
+        let b = estimates(&id).unwrap_or_else(|| panic!("seed {seed}: not said"));
+        let fit = &id.blocks[0].structural;
+        for i in 0..3 {
+            let err = fit.k[i][i] - truth[i][i];
+            let own = (fit.k_std[i][i].powi(2) - (b[i] * fit.k[i][i]).powi(2))
+                .max(0.0)
+                .sqrt();
+            eprintln!(
+                "seed {seed} axis {i}: error {:+.3} %, estimate {:.3} %, sd {:.3} % (own {:.3} %)",
+                err * 100.0,
+                b[i] * 100.0,
+                fit.k_std[i][i] * 100.0,
+                own * 100.0
+            );
+            z2 += (err / fit.k_std[i][i]).powi(2);
+            raw2 += (err / own).powi(2);
+            n += 1.0;
+        }
+    }
+    let (z, raw) = ((z2 / n).sqrt(), (raw2 / n).sqrt());
+    eprintln!("normalised error rms {z:.2} (without the estimate {raw:.2})");
+    assert!(z < 2.0, "rms {z}");
+    assert!(
+        raw > 2.5,
+        "the case does not test the estimate: rms {raw} without it"
+    );
+}

@@ -181,10 +181,38 @@ fn poles_standing_in_for_the_delay_are_flagged() {
     let b0 = gyro(&run, &stretch(OrderSetting::Fixed(0).into()));
     assert!(b0.structural.tau_s > 3.9e-3, "tau {}", b0.structural.tau_s);
     assert!(!kinds(&b0).contains(&"delay_absorbed_by_poles".to_owned()));
-    // With the default (auto) order, the delay alone, in silence.
+    // With the default (auto) order, the delay alone, in silence about it: the only word is the
+    // taps' (in the gyro, not the reference: `witness_noise_bias`, about the gains).
     let auto = gyro(&run, &stretch(Settings::default().order));
     assert_eq!(auto.structural.order, 0, "{:?}", auto.structural.candidates);
-    assert!(auto.warnings.is_empty(), "{:?}", kinds(&auto));
+    assert!(
+        kinds(&auto).iter().all(|k| k == "witness_noise_bias"),
+        "{:?}",
+        kinds(&auto)
+    );
+}
+
+/// The gyro's noise in the angle-noise model (`ident::witness_noise`) on real data: the slow run's
+/// residual is 1000 times the gyro's floor (the reference's noise and what the model misses), so
+/// its estimate is small and unsaid (0.67 % on wx from the residual alone); the tapping run's taps
+/// are in the gyro, not in the reference, and are said, their estimate in the standard deviations.
+#[test]
+fn the_gyro_s_noise_estimate_is_said_for_the_taps_only() {
+    let estimate = |b: &BlockIdentification| {
+        b.warnings.iter().find_map(|w| match w {
+            IdentWarning::WitnessNoiseBias { estimate, .. } => Some(*estimate),
+            _ => None,
+        })
+    };
+    for name in ["broad07_fast_rotation", "broad11_slow_translation"] {
+        let b = gyro(&real(name), &Settings::default());
+        assert_eq!(estimate(&b), None, "{name}: {:?}", kinds(&b));
+    }
+    let b = gyro(&real("broad25_tapping"), &Settings::default());
+    let said = estimate(&b).expect("the taps' estimate is said");
+    assert!((1e-3..1e-2).contains(&said), "{said}");
+    let s = &b.structural;
+    assert!(s.k_std[0][0] >= said * s.k[0][0] * (1.0 - 1e-12), "{:?}", s.k_std);
 }
 
 #[test]

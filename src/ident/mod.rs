@@ -23,6 +23,7 @@ pub mod stretches;
 pub mod structural;
 pub mod warnings;
 pub mod wiener;
+pub mod witness_noise;
 
 /// Why an identification step failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -79,8 +80,8 @@ pub enum IdentError {
     /// still. Its response cannot be identified from this run.
     #[error(
         "{block} block: axis {axis} not excited between {low_hz} and {high_hz} Hz (weakest input \
-         direction has {relative_power:.1e} of the strongest's power): move that stand axis, or \
-         identify from a run that does"
+         direction has {relative_power:.1e} of the strongest's power): move that stand axis, \
+         identify from a run that does, or leave this block out (settings \"blocks\")"
     )]
     NotExcited {
         /// The block (`"gyro"` or `"accel"`).

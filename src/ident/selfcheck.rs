@@ -74,6 +74,23 @@ pub fn chi2_per_bin(
         .collect()
 }
 
+/// The imprecise-gain check of a calibrated block (module docs): the least determined element of
+/// `K`, once (the others say the same; a NaN counts as the least determined). Run again by the
+/// session after it widens the gyro's deviations ([`super::witness_noise`]).
+#[must_use]
+pub fn imprecise_gain(block: Block, fit: &StructuralFit) -> Option<IdentWarning> {
+    let (inputs, outputs) = channel_names(block);
+    let (i, j) = (0..9)
+        .map(|e| (e / 3, e % 3))
+        .max_by(|&(a, b), &(c, d)| fit.k_std[a][b].total_cmp(&fit.k_std[c][d]))?;
+    (fit.k_std[i][j].is_nan() || fit.k_std[i][j] > IMPRECISE_GAIN).then(|| IdentWarning::ImpreciseGain {
+        output: outputs[i].to_owned(),
+        input: inputs[j].to_owned(),
+        value: fit.k[i][j],
+        std: fit.k_std[i][j],
+    })
+}
+
 /// The self-check's warnings of one block (see the module docs).
 #[must_use]
 pub fn self_check(
@@ -133,21 +150,7 @@ pub fn self_check(
                 }
             }
         }
-        // The least determined element, once: the others say the same (a NaN counts as the
-        // least determined).
-        let worst = (0..9)
-            .map(|e| (e / 3, e % 3))
-            .max_by(|&(a, b), &(c, d)| fit.k_std[a][b].total_cmp(&fit.k_std[c][d]));
-        if let Some((i, j)) = worst
-            && (fit.k_std[i][j].is_nan() || fit.k_std[i][j] > IMPRECISE_GAIN)
-        {
-            out.push(IdentWarning::ImpreciseGain {
-                output: outputs[i].to_owned(),
-                input: inputs[j].to_owned(),
-                value: fit.k[i][j],
-                std: fit.k_std[i][j],
-            });
-        }
+        out.extend(imprecise_gain(block, fit));
     }
     if fit.tau_s + 3.0 * fit.tau_std_s < 0.0 {
         out.push(IdentWarning::NegativeDelay {

@@ -397,7 +397,11 @@ mod tests {
         let y: Vec<f64> = CLEAN.iter().map(|s| s.2 * 1e-3).collect();
         let (slope, residual_only) = line_slope(&t, &y, &[0.0; 4]);
         assert!(slope.abs() > 4.0 * residual_only, "{slope} {residual_only}");
-        assert!(slope.abs() < 2.5 * st.tau_trend_std, "{slope} {}", st.tau_trend_std);
+        assert!(
+            slope.abs() < 2.5 * st.tau_trend_std,
+            "{slope} {}",
+            st.tau_trend_std
+        );
     }
 
     /// A drift of 0.5 ppm (60 us over the run) on the same stretches is found, at its rate.

@@ -110,6 +110,18 @@ pub enum IdentWarning {
         /// Its standard deviation.
         std: f64,
     },
+    /// The gyro's residual noise is not small beside the motion, and the observer's coloured
+    /// angle-noise model cannot tell the gyro's own noise from the stand's: as far as it is the
+    /// gyro's, the gains read high, by about `estimate` at first order, which their standard
+    /// deviations now include ([`super::witness_noise`]).
+    WitnessNoiseBias {
+        /// The largest estimate of the bias, relative (0.01 is 1 %).
+        estimate: f64,
+        /// The input axis it is for (0, 1, 2: `wx`, `wy`, `wz`).
+        axis: usize,
+        /// Every input axis's estimate, relative.
+        estimates: [f64; 3],
+    },
     /// A delay that is negative beyond its uncertainty: the block answers before the stand moves.
     NegativeDelay {
         /// The delay, s.
@@ -266,6 +278,16 @@ impl fmt::Display for IdentWarning {
                 "K[{output}][{input}] = {value:.4} +- {std:.4} (one sigma): this run does not \
                  determine the block's gain to a percent, too little motion for the noise; move \
                  the stand more, or record longer, before certifying from it"
+            ),
+            IdentWarning::WitnessNoiseBias { estimate, axis, .. } => write!(
+                f,
+                "the gyro's residual noise is not small beside this run's motion: the angle-noise \
+                 model cannot tell the gyro's own noise from the stand's, and as far as it is the \
+                 gyro's the gains read high, by about {:.2} % at first order (column {}; simulated \
+                 runs read high by 1 to 3 times that); the standard deviations of K include it; \
+                 move the stand more before certifying the gains",
+                estimate * 100.0,
+                ["wx", "wy", "wz"].get(*axis).copied().unwrap_or("?"),
             ),
             IdentWarning::NegativeDelay { tau_s, tau_std_s } => write!(
                 f,

@@ -30,13 +30,13 @@
 //! Welch estimate refuses it.
 
 use super::welch::WelchPlanner;
+use super::{SpectralError, WelchSettings};
 
 /// Half the widest main lobe of the windows offered (Hann, Hamming: 2 bins; Blackman-Harris: 4),
 /// in bins: a centroid farther from its bin than [`MAIN_LOBE_BINS`] bins is held there. The
 /// centroid is also held at or above half its bin's frequency: near 0 Hz a bin's main lobe
 /// reaches the negative frequencies, whose image of a slow drift would put it below 0 Hz.
 const MAIN_LOBE_BINS: f64 = 4.0;
-use super::{SpectralError, WelchSettings};
 
 impl WelchPlanner {
     /// The centroid frequency of each native bin of `channels` (module docs), Hz.

@@ -29,10 +29,18 @@ fn extended(regime: Regime, seed: u64, effect: &str, accepted: (Block, Effect)) 
         sim.sidecar.truth.accel
     }
     .expect("the block's truth");
-    let mut session = Session::new(Arc::new(run));
-    let model =
-        extended_model(&mut session, &Settings::default(), &[accepted], &mut |_| {}).expect("extended");
-    (truth, model)
+    (truth, extend(run, &[accepted]))
+}
+
+/// The run's model with `accepted` effects, default settings.
+fn extend(run: imu_attest::run::Run, accepted: &[(Block, Effect)]) -> Model {
+    extended_model(
+        &mut Session::new(Arc::new(run)),
+        &Settings::default(),
+        accepted,
+        &mut |_| {},
+    )
+    .expect("extended")
 }
 
 /// Normalised errors `(estimate - truth) / std` of K's nine elements and of tau.
@@ -184,13 +192,7 @@ fn an_effect_the_record_cannot_hold_is_listed_as_not_added() {
         (Block::Accel, Effect::GSensitivity),
         (Block::Accel, Effect::SensorLag),
     ];
-    let model = extended_model(
-        &mut Session::new(Arc::new(run)),
-        &Settings::default(),
-        &accepted,
-        &mut |_| {},
-    )
-    .expect("extended");
+    let model = extend(run, &accepted);
     let e = model.blocks["accel"].effects.as_ref().expect("effects");
     assert_eq!(e.accepted.len(), 1);
     assert_eq!(e.accepted[0].effect, Effect::SensorLag);
@@ -229,4 +231,44 @@ fn a_tones_frequency_deviation_is_honest() {
     eprintln!("tone frequency: rms {:.2}, {:?}", rms(&z), z);
     assert!((0.6..=1.5).contains(&rms(&z)), "{z:?}");
     assert!(beyond_two(&z) <= 0.2, "{z:?}");
+}
+
+/// An accepted effect refits the gyro's gains; where the gyro's own noise biases them
+/// (`witness_noise_bias`), the refitted deviations keep that estimate, as the warning says.
+#[test]
+fn an_extended_gyro_keeps_the_witness_noise_estimate_in_its_deviations() {
+    use imu_attest::ident::warnings::IdentWarning;
+    use imu_attest::rng::Rng;
+    let (_, mut run) = simulated_run_of(120.0, Regime::Cruise, 91, &["sensor_lag:gyro"]);
+    let mut rng = Rng::new(92);
+    for channel in run.gyro.as_mut().expect("gyro") {
+        let rms = (channel.iter().map(|v| v * v).sum::<f64>() / channel.len() as f64).sqrt();
+        for v in channel.iter_mut() {
+            *v += rms / 3.0 * rng.normal();
+        }
+    }
+    let accepted = [(Block::Gyro, Effect::SensorLag)];
+    let model = extend(run, &accepted);
+    let gyro = &model.blocks["gyro"];
+    assert!(gyro.effects.is_some());
+    let estimates = gyro
+        .fit
+        .warnings
+        .iter()
+        .find_map(|w| match w {
+            IdentWarning::WitnessNoiseBias { estimates, .. } => Some(*estimates),
+            _ => None,
+        })
+        .expect("the noisy gyro's estimate is said");
+    for i in 0..3 {
+        for j in 0..3 {
+            let sd = gyro.fit.k_std[i][j].expect("a deviation");
+            assert!(
+                sd >= estimates[j] * gyro.k[i][j].abs() * (1.0 - 1e-12),
+                "K[{i}][{j}] = {} +- {sd}, estimate {}",
+                gyro.k[i][j],
+                estimates[j]
+            );
+        }
+    }
 }

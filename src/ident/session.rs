@@ -351,10 +351,21 @@ impl Session {
                 let mut widened = (*b.structural).clone();
                 b.warnings.extend(widen_for_witness_noise(&mut widened, estimate));
                 if settings.calibrated {
-                    // The self-check's precision verdict, on the widened deviations.
-                    b.warnings
-                        .retain(|w| !matches!(w, IdentWarning::ImpreciseGain { .. }));
-                    b.warnings.extend(imprecise_gain(b.block, &widened));
+                    // The self-check's precision verdict again, on the widened deviations, in its
+                    // place among the warnings (the excitation gate judged the fit's own).
+                    let verdict = imprecise_gain(b.block, &widened);
+                    let at = b
+                        .warnings
+                        .iter()
+                        .position(|w| matches!(w, IdentWarning::ImpreciseGain { .. }));
+                    match (at, verdict) {
+                        (Some(i), Some(v)) => b.warnings[i] = v,
+                        (Some(i), None) => {
+                            b.warnings.remove(i);
+                        }
+                        (None, Some(v)) => b.warnings.push(v),
+                        (None, None) => {}
+                    }
                 }
                 b.structural = Arc::new(widened);
             }

@@ -150,7 +150,8 @@ pub struct Stationarity {
     /// Least-squares slope of the stretches' delays against time, s per s (the delay grows by
     /// this much each second; 1e-6 is 1 ppm of clock rate).
     pub tau_trend: f64,
-    /// Its standard deviation (from the residuals about the line).
+    /// Its standard deviation: from the residuals about the line, never below what the stretches'
+    /// own delay deviations give the slope (`line_slope`).
     pub tau_trend_std: f64,
 }
 
@@ -257,14 +258,16 @@ fn line_slope(t: &[f64], y: &[f64], y_std: &[f64]) -> (f64, f64) {
         .map(|(a, b)| (b - ym - slope * (a - tm)).powi(2))
         .sum();
     let from_residuals = (rss / (n - 2.0) / stt).sqrt();
+    // A point whose own deviation is not finite adds nothing to the floor (the residuals still
+    // count it).
     let from_own: f64 = t
         .iter()
         .zip(y_std)
+        .filter(|(_, s)| s.is_finite())
         .map(|(a, s)| ((a - tm) * s).powi(2))
         .sum::<f64>()
         .sqrt()
         / stt;
-    // A NaN own deviation leaves the residuals' figure (`f64::max` ignores NaN).
     (slope, from_residuals.max(from_own))
 }
 

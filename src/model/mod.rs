@@ -28,6 +28,7 @@ use crate::ident::settings::{Estimate, Settings};
 use crate::ident::signals::channel_names;
 use crate::ident::structural::OrderCandidate;
 use crate::ident::warnings::IdentWarning;
+use crate::ident::witness_noise::widened_std;
 use crate::output::{OutputError, write_atomic};
 use crate::run::Run;
 
@@ -322,6 +323,18 @@ impl BlockModel {
         tau_s: f64,
         tau_std_s: Option<f64>,
     ) {
+        // The gyro's own noise in the angle-noise model biases the extended model's gains as it
+        // did the structural fit's: its estimate stays in their deviations, as the warning says.
+        let witness = self.fit.warnings.iter().find_map(|w| match w {
+            IdentWarning::WitnessNoiseBias { estimates, .. } => Some(*estimates),
+            _ => None,
+        });
+        let k_std = match witness {
+            Some(e) => std::array::from_fn(|i| {
+                std::array::from_fn(|j| k_std[i][j].map(|s| widened_std(s, e[j], k[i][j])))
+            }),
+            None => k_std,
+        };
         self.k = k;
         self.tau_s = tau_s;
         self.order = 0;

@@ -32,6 +32,7 @@ use super::structural::{
 };
 use super::warnings::{IdentWarning, block_warnings};
 use super::wiener::{WienerEstimate, regularised_wiener};
+use super::witness_noise::{bias_estimate, widen_for_witness_noise};
 use crate::block::Block;
 use crate::run::Run;
 use crate::stand::observer::ObserverEstimate;
@@ -282,6 +283,16 @@ fn identify_excited(
             Arc::new(widened)
         }
         None => structural,
+    };
+    let structural = if spectra.gyro_witnessed {
+        // The gyro's own noise in the angle-noise model: its gains' deviations carry the bias that
+        // leaves, before the self-check judges their precision.
+        let estimate = bias_estimate(&spectra, &factorisation.coherence, &band);
+        let mut widened = (*structural).clone();
+        warnings.extend(widen_for_witness_noise(&mut widened, estimate));
+        Arc::new(widened)
+    } else {
+        structural
     };
     if let Some(st) = stationarity.as_deref().filter(|st| st.drifts()) {
         let duration = st.stretches.last().map_or(0.0, |l| l.span_s[1]) - st.stretches[0].span_s[0];

@@ -75,8 +75,7 @@ pub fn chi2_per_bin(
 }
 
 /// The imprecise-gain check of a calibrated block (module docs): the least determined element of
-/// `K`, once (the others say the same; a NaN counts as the least determined). Run again by the
-/// session after it widens the gyro's deviations ([`super::witness_noise`]).
+/// `K`, once (the others say the same; a NaN counts as the least determined).
 #[must_use]
 pub fn imprecise_gain(block: Block, fit: &StructuralFit) -> Option<IdentWarning> {
     let (inputs, outputs) = channel_names(block);

@@ -31,12 +31,10 @@ use super::IdentError;
 use super::causal_stage::causal_stage;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
 use super::identify::{BlockIdentification, FitStart, IdentStep, RunIdentification, identify_block_from};
-use super::selfcheck::imprecise_gain;
 use super::settings::{Estimate, Settings};
 use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
 use super::warnings::IdentWarning;
-use super::witness_noise::{bias_estimate, widen_for_witness_noise};
 use crate::block::Block;
 use crate::run::Run;
 use crate::spectral::{WelchPlanner, WelchSettings};
@@ -191,12 +189,10 @@ impl Session {
                 s
             } else {
                 let signals = self.span_signals(block, &span)?;
-                let s = Arc::new(block_spectra(
-                    &mut self.planner,
-                    &signals,
-                    self.run.sample_rate_hz,
-                    &welch,
-                )?);
+                let mut s = block_spectra(&mut self.planner, &signals, self.run.sample_rate_hz, &welch)?;
+                s.gyro_witnessed =
+                    block == Block::Gyro && self.motion()?.noise_colour == NoiseColour::FromGyro;
+                let s = Arc::new(s);
                 self.spectra.push((block, s.clone()));
                 s
             };
@@ -343,33 +339,6 @@ impl Session {
             .collect();
         // The first block's error in the settings' order, whichever thread failed first.
         let mut identified: Vec<BlockIdentification> = identified.into_iter().collect::<Result<_, _>>()?;
-        if motion.noise_colour == NoiseColour::FromGyro {
-            // The gyro witnessed the motion: its own noise is in the angle-noise model, and the
-            // gyro's gains carry an estimate of the bias that leaves (`ident::witness_noise`).
-            for b in identified.iter_mut().filter(|b| b.block == Block::Gyro) {
-                let estimate = bias_estimate(&b.spectra, &b.factorisation.coherence, &b.band);
-                let mut widened = (*b.structural).clone();
-                b.warnings.extend(widen_for_witness_noise(&mut widened, estimate));
-                if settings.calibrated {
-                    // The self-check's precision verdict again, on the widened deviations, in its
-                    // place among the warnings (the excitation gate judged the fit's own).
-                    let verdict = imprecise_gain(b.block, &widened);
-                    let at = b
-                        .warnings
-                        .iter()
-                        .position(|w| matches!(w, IdentWarning::ImpreciseGain { .. }));
-                    match (at, verdict) {
-                        (Some(i), Some(v)) => b.warnings[i] = v,
-                        (Some(i), None) => {
-                            b.warnings.remove(i);
-                        }
-                        (None, Some(v)) => b.warnings.push(v),
-                        (None, None) => {}
-                    }
-                }
-                b.structural = Arc::new(widened);
-            }
-        }
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
             for b in &mut identified {

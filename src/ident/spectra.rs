@@ -44,6 +44,11 @@ pub struct BlockSpectra {
     /// frequency at which the structural model is evaluated there ([`Self::fit_frequency_hz`]).
     /// Empty: the bin centres.
     pub centroid_hz: Vec<f64>,
+    /// Whether these are the gyro's spectra and its outputs coloured the observer's angle-noise
+    /// model (`stand::colour`): then its own noise is in that model, and the identification
+    /// widens its gains' deviations by the bias that leaves ([`super::witness_noise`]). Set by
+    /// the session; `false` from [`block_spectra`].
+    pub gyro_witnessed: bool,
     /// Sample rate, Hz.
     pub sample_rate_hz: f64,
     /// FFT length (the two-sided grid length), samples.
@@ -151,6 +156,7 @@ pub fn block_spectra(
     let centroid_hz = planner.centroid_hz(&channels[..3], sample_rate_hz, settings)?;
     Ok(BlockSpectra {
         centroid_hz,
+        gyro_witnessed: false,
         stretches,
         finer_stretches,
         stationarity_cache: StationarityCache::default(),

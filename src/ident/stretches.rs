@@ -326,13 +326,7 @@ pub(super) fn h1_estimate(s: &StretchSpectra, native: &[usize], step: usize) -> 
 pub fn widen(fit: &mut super::structural::StructuralFit, st: &Stationarity) {
     for i in 0..3 {
         for j in 0..3 {
-            let s = fit.k_std[i][j].max(st.k_spread_std[i][j]);
-            fit.k_std[i][j] = s;
-            if i == j {
-                fit.scale_factor_error_std_ppm[i] = s * 1e6;
-            } else {
-                fit.misalignment_std_mrad[i][j] = s * 1e3;
-            }
+            fit.set_k_std(i, j, fit.k_std[i][j].max(st.k_spread_std[i][j]));
         }
     }
     fit.tau_std_s = fit.tau_std_s.max(st.tau_spread_std_s);

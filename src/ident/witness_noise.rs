@@ -33,9 +33,12 @@
 //! reference). A gyro whose own filter cuts its noise below 0.7 of Nyquist gets too small a
 //! floor, and so too small an estimate.
 //!
-//! What is done: each element `K_ij` gets `b_j |K_ij|` added in quadrature to its standard
-//! deviation (column `j`: the input axis whose estimate was shrunk; for a calibrated block output
-//! `j` measures it), and an estimate above [`WITNESS_BIAS_SAID`] is said
+//! What is done, in the identification of a gyro block whose spectra say so
+//! ([`super::spectra::BlockSpectra::gyro_witnessed`]), after the stretches' widening and before
+//! the self-check (whose `imprecise_gain` so judges the widened deviations): each element `K_ij`
+//! gets `b_j |K_ij|` added in quadrature to its standard deviation (column `j`: the input axis
+//! whose estimate was shrunk; for a calibrated block output `j` measures it), and an estimate
+//! above [`WITNESS_BIAS_SAID`] is said
 //! ([`IdentWarning::WitnessNoiseBias`]). The delay is untouched: the observer's gain is
 //! zero-phase. The accelerometer's inputs come from the same observer, but its gains are set by
 //! the angles' tilt of gravity and the lever arm, not one axis each; it is not widened here. An
@@ -98,13 +101,7 @@ pub fn widened_std(std: f64, estimate: f64, k: f64) -> f64 {
 pub fn widen_for_witness_noise(fit: &mut StructuralFit, estimate: [f64; 3]) -> Option<IdentWarning> {
     for i in 0..3 {
         for j in 0..3 {
-            let s = widened_std(fit.k_std[i][j], estimate[j], fit.k[i][j]);
-            fit.k_std[i][j] = s;
-            if i == j {
-                fit.scale_factor_error_std_ppm[i] = s * 1e6;
-            } else {
-                fit.misalignment_std_mrad[i][j] = s * 1e3;
-            }
+            fit.set_k_std(i, j, widened_std(fit.k_std[i][j], estimate[j], fit.k[i][j]));
         }
     }
     let (axis, &largest) = estimate.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
@@ -144,6 +141,7 @@ mod tests {
             held_out_cache: super::super::holdout::HeldOutCache::default(),
             bin_correlation: 1.0,
             centroid_hz: Vec::new(),
+            gyro_witnessed: true,
             sample_rate_hz: 200.0,
             fft_len: 200,
             segment_len: 200,

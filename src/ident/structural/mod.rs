@@ -286,6 +286,18 @@ pub struct StructuralFit {
 }
 
 impl StructuralFit {
+    /// Sets the standard deviation of `K[i][j]` to `std`, and its static figure's with it (the
+    /// scale factor's, ppm, on the diagonal; the misalignment's, mrad, off it): the widenings'
+    /// one way to change them.
+    pub fn set_k_std(&mut self, i: usize, j: usize, std: f64) {
+        self.k_std[i][j] = std;
+        if i == j {
+            self.scale_factor_error_std_ppm[i] = std * 1e6;
+        } else {
+            self.misalignment_std_mrad[i][j] = std * 1e3;
+        }
+    }
+
     /// The fitted model's response at `f_hz` (Hz): `N(s) / d(s) e^(-tau s)`, `s = j 2 pi f`.
     /// Non-finite only at a pole on the imaginary axis or for a non-finite `f_hz`.
     #[must_use]

@@ -226,6 +226,34 @@ fn bad_arguments_exit_2_with_one_line() {
             ],
             "cannot write",
         ),
+        (
+            vec![
+                "simulate",
+                "--regime",
+                "cruise",
+                "--sine",
+                "heave:2:1",
+                "--out",
+                out,
+            ],
+            "--sine heave:2:1: unknown axis 'heave'",
+        ),
+        (
+            vec!["simulate", "--regime", "cruise", "--sine", "roll:2", "--out", out],
+            "is not AXIS:HZ:DEG",
+        ),
+        (
+            vec![
+                "simulate",
+                "--regime",
+                "cruise",
+                "--sine",
+                "roll:300:1",
+                "--out",
+                out,
+            ],
+            "not below the Nyquist frequency 250 Hz",
+        ),
         (vec!["frobnicate"], "unknown command"),
     ];
     for (args, needle) in cases {

@@ -54,6 +54,7 @@ usage:
                       [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
                       [--sensor-noise default|white] [--random-walk K]
                       [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]
+                      [--sine roll|yaw|pitch:HZ:DEG]...
                       [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv
   imu-attest identify RUN [--settings S.json] [--effects E.json] --out MODEL.json
                                                   E.json: accepted effects ({\"effects\": [{block,

@@ -2,7 +2,7 @@
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
 //! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
 //! [--sensor-noise default|white] [--random-walk K] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
-//! [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]
+//! [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF] [--sine roll|yaw|pitch:HZ:DEG]...
 //! --out RUN.csv`
 
 use std::path::Path;
@@ -30,6 +30,12 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         config.effects.push(
             spec.parse::<EffectSpec>()
                 .map_err(|e| CliError::Input(format!("--effect {spec}: {e}")))?,
+        );
+    }
+    for spec in args.all("sine") {
+        config.sines.push(
+            spec.parse()
+                .map_err(|e| CliError::Input(format!("--sine {spec}: {e}")))?,
         );
     }
     for spec in args.all("fault") {

@@ -19,6 +19,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
     let one = Matrix3::<Complex64>::identity();
     BlockSpectra {
         centroid_hz: Vec::new(),
+        centroid_offset_hz: Vec::new(),
         gyro_witnessed: false,
         s_uu: vec![one; BINS],
         s_xu: vec![one; BINS],

@@ -26,6 +26,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
     let s_uu: Vec<Matrix3<Complex64>> = (0..BINS).map(s_uu).collect();
     BlockSpectra {
         centroid_hz: Vec::new(),
+        centroid_offset_hz: Vec::new(),
         gyro_witnessed: false,
         frequency_hz: (0..BINS).map(|k| k as f64 * RATE / fft_len as f64).collect(),
         s_xu: s_uu.iter().map(|s| h * s).collect(),

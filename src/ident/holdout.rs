@@ -22,6 +22,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::band::native_bins;
+use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::stretches::{StretchSpectra, h1_estimate};
 use super::structural::{MAX_ORDER, ResponseEstimate, StructuralSettings, Weights, held_out_chi2};
@@ -63,10 +64,12 @@ pub fn held_out(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<HeldOut> {
         h1_estimate(&halves[0], &native, step)?,
         h1_estimate(&halves[1], &native, step)?,
     ];
+    let offsets = spectra.fit_offsets_hz(&native, Estimate::H1);
     let estimate = |response, weights| ResponseEstimate {
         frequency_hz: &frequency_hz,
         response,
         weights: Weights::RowWeight(weights),
+        offset_hz: offsets.as_deref(),
     };
     let chi2 = held_out_chi2(
         &estimate(&w1, &o1),

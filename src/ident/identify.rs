@@ -403,10 +403,12 @@ pub fn structural_fit(
         OrderSetting::Fixed(n) => OrderChoice::Fixed(n),
         OrderSetting::Auto => OrderChoice::Auto,
     };
+    let offsets = spectra.fit_offsets_hz(band, wiener.estimate);
     let input = ResponseEstimate {
         frequency_hz: &frequency_hz,
         response: &response,
         weights: Weights::RowWeight(&row_weight),
+        offset_hz: offsets.as_deref(),
     };
     let settings = StructuralSettings {
         bin_correlation: spectra.bin_correlation,

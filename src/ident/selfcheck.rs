@@ -61,7 +61,8 @@ pub fn chi2_per_bin(
     let dof = (spectra.equivalent_averages - 3.0).max(1.0);
     band.iter()
         .map(|&k| {
-            let model = fit.response(spectra.model_frequency_hz(k, wiener.estimate));
+            let f_hz = spectra.model_frequency_hz(k, wiener.estimate);
+            let model = fit.response_seen(f_hz, spectra.fit_offset_hz(k, wiener.estimate).as_ref());
             let r = wiener.w_u[k] - model;
             let omega = row_weights(&spectra.s_uu[k], &noise[k], dof);
             (0..3)

@@ -44,6 +44,9 @@ pub struct BlockSpectra {
     /// frequency at which the structural model is evaluated there ([`Self::fit_frequency_hz`]).
     /// Empty: the bin centres.
     pub centroid_hz: Vec<f64>,
+    /// Per native bin, where the `H1` estimate's columns lie about [`Self::centroid_hz`]
+    /// (`spectral::centroid`, "Offset matrix"): `H1 = W(f_c) + W'(f_c) G`, Hz. Empty: none.
+    pub centroid_offset_hz: Vec<Matrix3<Complex64>>,
     /// Whether these are the gyro's spectra and its outputs coloured the observer's angle-noise
     /// model (`stand::colour`): then its own noise is in that model, and the identification
     /// widens its gains' deviations by the bias that leaves ([`super::witness_noise`]). Set by
@@ -78,6 +81,35 @@ impl BlockSpectra {
             Some(&c) if aligned && k.is_multiple_of(step) => c,
             _ => self.frequency_hz[k],
         }
+    }
+
+    /// The offset matrix `G` of bin `k` ([`Self::centroid_offset_hz`]) where the model is
+    /// compared at a native bin's centroid; `None` elsewhere and for a zero `G`.
+    #[must_use]
+    pub fn fit_offset_hz(&self, k: usize, estimate: super::settings::Estimate) -> Option<Matrix3<Complex64>> {
+        let step = self.native_step();
+        let aligned = self.fft_len.is_multiple_of(self.segment_len.max(1));
+        let on_native = aligned && k.is_multiple_of(step) && estimate == super::settings::Estimate::H1;
+        on_native
+            .then(|| self.centroid_offset_hz.get(k / step).copied())
+            .flatten()
+            .filter(|g| g.iter().any(|z| *z != Complex64::new(0.0, 0.0)))
+    }
+
+    /// [`Self::fit_offset_hz`] over `bins` (a zero matrix where there is none); `None` when no
+    /// bin has one.
+    #[must_use]
+    pub fn fit_offsets_hz(
+        &self,
+        bins: &[usize],
+        estimate: super::settings::Estimate,
+    ) -> Option<Vec<Matrix3<Complex64>>> {
+        let offsets: Vec<Option<Matrix3<Complex64>>> =
+            bins.iter().map(|&k| self.fit_offset_hz(k, estimate)).collect();
+        offsets
+            .iter()
+            .any(Option::is_some)
+            .then(|| offsets.into_iter().map(Option::unwrap_or_default).collect())
     }
 
     /// Where the model is compared with `estimate` at bin `k`: [`Self::fit_frequency_hz`] for
@@ -153,9 +185,11 @@ pub fn block_spectra(
         }
         None => None,
     };
-    let centroid_hz = planner.centroid_hz(&channels[..3], sample_rate_hz, settings)?;
+    let centroids =
+        planner.input_centroids([channels[0], channels[1], channels[2]], sample_rate_hz, settings)?;
     Ok(BlockSpectra {
-        centroid_hz,
+        centroid_hz: centroids.hz,
+        centroid_offset_hz: centroids.offset_hz,
         gyro_witnessed: false,
         stretches,
         finer_stretches,

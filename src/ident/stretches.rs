@@ -25,6 +25,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::band::native_bins;
+use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::structural::{OrderChoice, ResponseEstimate, StructuralSettings, Weights, fit_structure};
 use nalgebra::Matrix3;
@@ -184,17 +185,22 @@ const STRETCH_DELAY_REACH_S: f64 = 0.3;
 /// or with fewer than [`MIN_STRETCHES`] fitted.
 #[must_use]
 pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Stationarity> {
-    let fitted = |stretches: &[StretchSpectra], native: &[usize], step: usize, frequency_hz: &[f64]| {
+    let fitted = |stretches: &[StretchSpectra], native: &[usize], step: usize, at: At| {
         stretches
             .iter()
-            .filter_map(|s| fit_stretch(s, native, step, frequency_hz))
+            .filter_map(|s| fit_stretch(s, native, step, at))
             .collect::<Vec<StretchFit>>()
     };
     let (stretches, segment_len) = if spectra.stretches.len() >= MIN_STRETCHES {
         let native = native_bins(spectra, band_hz);
         let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.fit_frequency_hz(k)).collect();
+        let offsets = spectra.fit_offsets_hz(&native, Estimate::H1);
+        let at = At {
+            frequency_hz: &frequency_hz,
+            offset_hz: offsets.as_deref(),
+        };
         (
-            fitted(&spectra.stretches, &native, spectra.native_step(), &frequency_hz),
+            fitted(&spectra.stretches, &native, spectra.native_step(), at),
             None,
         )
     } else {
@@ -205,10 +211,11 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
             .filter(|&k| (band_hz[0]..=band_hz[1]).contains(&bin_hz(k)))
             .collect();
         let frequency_hz: Vec<f64> = native.iter().map(|&k| bin_hz(k)).collect();
-        (
-            fitted(&finer.stretches, &native, 1, &frequency_hz),
-            Some(finer.segment_len),
-        )
+        let at = At {
+            frequency_hz: &frequency_hz,
+            offset_hz: None,
+        };
+        (fitted(&finer.stretches, &native, 1, at), Some(finer.segment_len))
     };
     let m = stretches.len();
     if m < MIN_STRETCHES {
@@ -271,19 +278,23 @@ fn line_slope(t: &[f64], y: &[f64], y_std: &[f64]) -> (f64, f64) {
     (slope, from_residuals.max(from_own))
 }
 
+/// Where a stretch's bins are compared with the model: their frequencies and offset matrices
+/// (`ResponseEstimate`'s).
+#[derive(Clone, Copy)]
+struct At<'a> {
+    frequency_hz: &'a [f64],
+    offset_hz: Option<&'a [Matrix3<Complex64>]>,
+}
+
 /// The order-0 fit of one stretch over the native band bins (`native` indexes the padded grid,
 /// `step` apart; the stretch holds every native bin).
-fn fit_stretch(
-    s: &StretchSpectra,
-    native: &[usize],
-    step: usize,
-    frequency_hz: &[f64],
-) -> Option<StretchFit> {
+fn fit_stretch(s: &StretchSpectra, native: &[usize], step: usize, at: At) -> Option<StretchFit> {
     let (response, weights) = h1_estimate(s, native, step)?;
     let input = ResponseEstimate {
-        frequency_hz,
+        frequency_hz: at.frequency_hz,
         response: &response,
         weights: Weights::RowWeight(&weights),
+        offset_hz: at.offset_hz,
     };
     let settings = StructuralSettings {
         tau_min_s: -STRETCH_DELAY_REACH_S,

@@ -141,6 +141,7 @@ mod tests {
             held_out_cache: super::super::holdout::HeldOutCache::default(),
             bin_correlation: 1.0,
             centroid_hz: Vec::new(),
+            centroid_offset_hz: Vec::new(),
             gyro_witnessed: true,
             sample_rate_hz: 200.0,
             fft_len: 200,

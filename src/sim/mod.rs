@@ -13,6 +13,7 @@ pub mod effect;
 pub mod fault;
 pub use crate::interp;
 pub mod regime;
+pub mod sines;
 pub mod stand;
 pub mod synth;
 pub mod truth;
@@ -64,6 +65,8 @@ pub struct SimConfig {
     pub sensor_noise: SensorNoiseOptions,
     /// A vibration tone's frequency and when it is on, instead of the drawn defaults.
     pub tone: ToneOptions,
+    /// Sines added to the programme (none by default).
+    pub sines: Vec<sines::ProgramSine>,
 }
 
 /// How a hidden `vibration_tone` is made (`simulate --tone-hz`, `--tone-gate`).
@@ -101,6 +104,7 @@ impl SimConfig {
             faults: Vec::new(),
             sensor_noise: SensorNoiseOptions::default(),
             tone: ToneOptions::default(),
+            sines: Vec::new(),
         }
     }
 }
@@ -133,6 +137,14 @@ pub enum SimError {
     /// A tone frequency outside (0, Nyquist) or a gate time that is not a positive number.
     #[error("vibration tone: {0}")]
     BadTone(String),
+    /// A programme sine at or above the Nyquist frequency.
+    #[error("programme sine {frequency_hz} Hz is not below the Nyquist frequency {nyquist_hz} Hz")]
+    SineAboveNyquist {
+        /// The sine's frequency, Hz.
+        frequency_hz: f64,
+        /// Half the sample rate, Hz.
+        nyquist_hz: f64,
+    },
     /// An effect asks for a block that is not mounted.
     #[error("effect '{effect}' needs the {block} block, which is not simulated")]
     EffectWithoutBlock {
@@ -227,6 +239,16 @@ fn validate(config: &SimConfig) -> Result<usize, SimError> {
             0.5 * config.rate_hz
         )));
     }
+    if let Some(sine) = config
+        .sines
+        .iter()
+        .find(|s| s.frequency_hz >= 0.5 * config.rate_hz)
+    {
+        return Err(SimError::SineAboveNyquist {
+            frequency_hz: sine.frequency_hz,
+            nyquist_hz: 0.5 * config.rate_hz,
+        });
+    }
     let positive = |v: f64| v.is_finite() && v > 0.0;
     match config.tone.gate {
         truth::ToneGate::From { start_s } if !(start_s.is_finite() && start_s >= 0.0) => {
@@ -266,7 +288,7 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
     let pad = (PAD_S * fs).round() as usize;
     let mut grid = Grid::new(fast_len(n + 2 * pad), fs);
     let root = Rng::new(config.seed);
-    let motion = platform_motion(&mut grid, config.regime, &mut root.fork(1));
+    let motion = platform_motion(&mut grid, config.regime, &config.sines, &mut root.fork(1));
 
     let mut accel_lever_arm = DECLARED_ACCEL_LEVER_ARM_M;
     let mut blocks_truth = Vec::new();
@@ -414,8 +436,14 @@ fn notes(config: &SimConfig) -> String {
             config.faults.len()
         )
     };
+    let sines = if config.sines.is_empty() {
+        String::new()
+    } else {
+        let list: Vec<String> = config.sines.iter().map(ToString::to_string).collect();
+        format!(", programme sines [{}] (axis:Hz:deg)", list.join(", "))
+    };
     format!(
-        "simulated by imu-attest {}: regime {}, {} s at {} Hz, seed {}, effects [{}]{faults}",
+        "simulated by imu-attest {}: regime {}, {} s at {} Hz, seed {}, effects [{}]{faults}{sines}",
         env!("CARGO_PKG_VERSION"),
         config.regime.name(),
         config.duration_s,
@@ -427,7 +455,12 @@ fn notes(config: &SimConfig) -> String {
 
 /// The platform's true Euler motion on the whole grid: program modes through the servo, plus
 /// tracking jitter.
-fn platform_motion(grid: &mut Grid, regime: Regime, rng: &mut Rng) -> EulerSeries {
+fn platform_motion(
+    grid: &mut Grid,
+    regime: Regime,
+    sines: &[sines::ProgramSine],
+    rng: &mut Rng,
+) -> EulerSeries {
     let bins = grid.omega.len();
     let mut program: [Vec<Complex64>; 3] = std::array::from_fn(|_| vec![Complex64::default(); bins]);
     for mode in regime.modes() {
@@ -437,6 +470,9 @@ fn platform_motion(grid: &mut Grid, regime: Regime, rng: &mut Rng) -> EulerSerie
             let g = mode.axis_gain(axis) * scale;
             p.iter_mut().zip(&shaped).for_each(|(pv, s)| *pv += s * g);
         }
+    }
+    for sine in sines {
+        sines::add(grid, &mut program, sine);
     }
     let mut motion = EulerSeries::default();
     for axis in 0..3 {

@@ -24,10 +24,28 @@
 //! window closing to 0 at its ends (Hann, Blackman-Harris); for the others (rectangular, Hamming)
 //! the bin centres are kept.
 //!
+//! # Offset matrix
+//! One centroid per bin serves all three inputs. When the inputs' lines lie at different places
+//! in a bin (a stand's sines on each axis), each column of `H1 = S_xu S^-1` is the response where
+//! its own input's power lies, not at the common centroid. With `S = sum X_h X_h^H` and
+//! `E = sum (j X_Dh) X_h^H` over the segments (rad/s: `j X_Dh = (w - w_k) X_h` for a line at `w`),
+//! a system `x = H u` smooth over the main lobe gives, to first order,
+//! `S_xu = H(f_c) S + H'(f_c) (E / 2 pi - (f_c - f_k) S)`, so
+//!
+//! `H1 = H(f_c) + H'(f_c) G`,  `G = E S^-1 / 2 pi - (f_c - f_k) I`  (Hz, `H' = dH/df`),
+//!
+//! exact for lines at any offset inside the main lobe, `G = 0` when every input's power shares
+//! the centroid, and `diag(f_j - f_c)` for uncorrelated lines at `f_j`
+//! ([`WelchPlanner::input_centroids`]). `G` is set to zero where `S` is singular, where `f_c` was
+//! held and where an element reaches past the main lobe: the model is then compared at `f_c`.
+//!
 //! Grid and units: the native grid of the segment (`k = 0..=N/2`, `f_k = k fs / N`, ascending), Hz.
 //! Segments as the Welch estimate cuts them (start 0, step `N - noverlap`), detrended alike. A bin
 //! with no power, or a non-finite centroid, keeps `f_k`. Empty or NaN input is refused as the
 //! Welch estimate refuses it.
+
+use nalgebra::Matrix3;
+use num_complex::Complex64;
 
 use super::welch::WelchPlanner;
 use super::{SpectralError, WelchSettings};
@@ -37,6 +55,10 @@ use super::{SpectralError, WelchSettings};
 /// centroid is also held at or above half its bin's frequency: near 0 Hz a bin's main lobe
 /// reaches the negative frequencies, whose image of a slow drift would put it below 0 Hz.
 const MAIN_LOBE_BINS: f64 = 4.0;
+
+/// The largest `||S|| ||S^-1||` (Frobenius) of the inputs' bin power for which an offset matrix
+/// is formed: beyond, the inputs are collinear there and `S^-1` amplifies rounding.
+const MAX_CONDITION: f64 = 1e10;
 
 impl WelchPlanner {
     /// The centroid frequency of each native bin of `channels` (module docs), Hz.
@@ -49,60 +71,172 @@ impl WelchPlanner {
         sample_rate_hz: f64,
         settings: &WelchSettings,
     ) -> Result<Vec<f64>, SpectralError> {
+        let moments = self.moments(channels, sample_rate_hz, settings)?;
+        Ok(centroids(
+            moments.as_ref(),
+            channels.len(),
+            sample_rate_hz,
+            settings.segment_len,
+        ))
+    }
+
+    /// The three inputs' centroids and offset matrices (module docs, "Offset matrix"), Hz.
+    ///
+    /// # Errors
+    /// As [`WelchPlanner::welch_matrix`] on the same input.
+    pub fn input_centroids(
+        &mut self,
+        inputs: [&[f64]; 3],
+        sample_rate_hz: f64,
+        settings: &WelchSettings,
+    ) -> Result<InputCentroids, SpectralError> {
+        let moments = self.moments(&inputs, sample_rate_hz, settings)?;
+        let n = settings.segment_len;
+        let hz = centroids(moments.as_ref(), 3, sample_rate_hz, n);
+        let Some(m) = moments else {
+            return Ok(InputCentroids {
+                offset_hz: vec![Matrix3::zeros(); hz.len()],
+                hz,
+            });
+        };
+        let df = sample_rate_hz / n as f64;
+        let offset_hz = hz
+            .iter()
+            .enumerate()
+            .map(|(k, &fc)| {
+                let at = |v: &[Complex64]| Matrix3::from_fn(|a, b| v[9 * k + 3 * a + b]);
+                offset(&at(&m.power), &at(&m.shifted), fc, k as f64 * df, df)
+            })
+            .collect();
+        Ok(InputCentroids { hz, offset_hz })
+    }
+
+    /// Per native bin, the sums over segments of `X_h X_h^H` and `(j X_Dh) X_h^H` (channel by
+    /// channel, row-major); `None` for a window open at its ends.
+    fn moments(
+        &mut self,
+        channels: &[&[f64]],
+        sample_rate_hz: f64,
+        settings: &WelchSettings,
+    ) -> Result<Option<Moments>, SpectralError> {
         super::welch::check_input(channels, sample_rate_hz, settings)?;
         let n = settings.segment_len;
         let window = self.window(settings.window, n);
-        let df = sample_rate_hz / n as f64;
-        let centres = || (0..=n / 2).map(|k| k as f64 * df).collect();
         // The circular difference is the window's derivative only for a window that closes to 0
         // at its ends (Hann, Blackman-Harris); Hamming's and the rectangle's jump there.
         let peak = window.iter().copied().fold(0.0, f64::max);
         if window.first().is_none_or(|w0| w0.abs() > 1e-3 * peak) {
-            return Ok(centres());
+            return Ok(None);
         }
         let derivative: Vec<f64> = (0..n)
             .map(|i| 0.5 * (window[(i + 1) % n] - window[(i + n - 1) % n]) * sample_rate_hz)
             .collect();
         let fft = self.real_fft(n);
-        let bins = n / 2 + 1;
+        let (bins, c) = (n / 2 + 1, channels.len());
         let (mut plain, mut weighted) = (fft.make_input_vec(), fft.make_input_vec());
-        let (mut x_h, mut x_dh) = (fft.make_output_vec(), fft.make_output_vec());
+        let mut x_h = vec![fft.make_output_vec(); c];
+        let mut x_dh = vec![fft.make_output_vec(); c];
         let mut scratch = fft.make_scratch_vec();
-        let (mut num, mut den) = (vec![0.0; bins], vec![0.0; bins]);
+        let zero = Complex64::new(0.0, 0.0);
+        let (mut power, mut shifted) = (vec![zero; bins * c * c], vec![zero; bins * c * c]);
         let mut segment = vec![0.0; n];
         for s in 0..settings.n_segments(channels[0].len()) {
             let start = s * settings.step();
-            for channel in channels {
+            for (a, channel) in channels.iter().enumerate() {
                 segment.copy_from_slice(&channel[start..start + n]);
                 settings.detrend.apply(&mut segment);
                 for i in 0..n {
                     plain[i] = segment[i] * window[i];
                     weighted[i] = segment[i] * derivative[i];
                 }
-                fft.process_with_scratch(&mut plain, &mut x_h, &mut scratch)
-                    .and_then(|()| fft.process_with_scratch(&mut weighted, &mut x_dh, &mut scratch))
+                fft.process_with_scratch(&mut plain, &mut x_h[a], &mut scratch)
+                    .and_then(|()| fft.process_with_scratch(&mut weighted, &mut x_dh[a], &mut scratch))
                     .map_err(|e| SpectralError::Fft(e.to_string()))?;
-                for k in 0..bins {
-                    num[k] += (x_dh[k] * x_h[k].conj()).im;
-                    den[k] += x_h[k].norm_sqr();
+            }
+            for k in 0..bins {
+                for a in 0..c {
+                    let shift = Complex64::i() * x_dh[a][k];
+                    for b in 0..c {
+                        let conj = x_h[b][k].conj();
+                        power[(k * c + a) * c + b] += x_h[a][k] * conj;
+                        shifted[(k * c + a) * c + b] += shift * conj;
+                    }
                 }
             }
         }
-        let nyquist = 0.5 * sample_rate_hz;
-        Ok((0..bins)
-            .map(|k| {
-                let f = k as f64 * df;
-                let c = f - num[k] / den[k] / (2.0 * std::f64::consts::PI);
-                if den[k] > 0.0 && c.is_finite() {
-                    c.clamp(
-                        (f - MAIN_LOBE_BINS * df).max(0.5 * f),
-                        (f + MAIN_LOBE_BINS * df).min(nyquist).max(0.5 * f),
-                    )
-                } else {
-                    f
-                }
-            })
-            .collect())
+        Ok(Some(Moments { power, shifted }))
+    }
+}
+
+/// The three inputs' power centroids ([`WelchPlanner::centroid_hz`]) and offset matrices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputCentroids {
+    /// Per native bin, the inputs' power centroid `f_c`, Hz.
+    pub hz: Vec<f64>,
+    /// Per native bin, `G = E S^-1 / 2 pi - (f_c - f_k) I`, Hz (module docs): zero where the
+    /// first-order relation is not trusted.
+    pub offset_hz: Vec<Matrix3<Complex64>>,
+}
+
+/// Sums over segments per native bin, `c x c` row-major per bin.
+struct Moments {
+    /// `sum X_h X_h^H`.
+    power: Vec<Complex64>,
+    /// `sum (j X_Dh) X_h^H`, rad/s times `power`'s units.
+    shifted: Vec<Complex64>,
+}
+
+/// The power centroid of each bin from the moments' traces (the bin centres without moments).
+fn centroids(moments: Option<&Moments>, c: usize, sample_rate_hz: f64, n: usize) -> Vec<f64> {
+    let df = sample_rate_hz / n as f64;
+    let bins = n / 2 + 1;
+    let nyquist = 0.5 * sample_rate_hz;
+    (0..bins)
+        .map(|k| {
+            let f = k as f64 * df;
+            let Some(m) = moments else { return f };
+            let trace = |v: &[Complex64]| (0..c).map(|a| v[(k * c + a) * c + a].re).sum::<f64>();
+            let den = trace(&m.power);
+            let c_hz = f + trace(&m.shifted) / den / (2.0 * std::f64::consts::PI);
+            if den > 0.0 && c_hz.is_finite() {
+                c_hz.clamp(
+                    (f - MAIN_LOBE_BINS * df).max(0.5 * f),
+                    (f + MAIN_LOBE_BINS * df).min(nyquist).max(0.5 * f),
+                )
+            } else {
+                f
+            }
+        })
+        .collect()
+}
+
+/// `E S^-1 / 2 pi - (f_c - f_k) I` of one bin; zero where `S` is singular (condition above
+/// [`MAX_CONDITION`]), where `f_c` was held (the bins near 0 Hz, whose image from the negative
+/// frequencies is no first-order shift) or where an element reaches past the main lobe.
+fn offset(
+    power: &Matrix3<Complex64>,
+    shifted: &Matrix3<Complex64>,
+    fc: f64,
+    fk: f64,
+    df: f64,
+) -> Matrix3<Complex64> {
+    let zero = Matrix3::zeros();
+    let Some(inverse) = power.try_inverse() else {
+        return zero;
+    };
+    if power.norm() * inverse.norm() >= MAX_CONDITION || !inverse.norm().is_finite() {
+        return zero;
+    }
+    let raw = fk + shifted.trace().re / power.trace().re / (2.0 * std::f64::consts::PI);
+    if (raw - fc).abs() > 1e-9 * df {
+        return zero;
+    }
+    let g = shifted * inverse / Complex64::from(2.0 * std::f64::consts::PI)
+        - Matrix3::identity() * Complex64::from(fc - fk);
+    if g.iter().all(|z| z.is_finite() && z.norm() <= MAIN_LOBE_BINS * df) {
+        g
+    } else {
+        zero
     }
 }
 
@@ -132,6 +266,94 @@ mod tests {
             .unwrap();
         for k in 9..=12 {
             assert!((c[k] - line).abs() < 1e-4, "bin {k}: {} against {line}", c[k]);
+        }
+    }
+
+    /// Three inputs with lines at different places in one bin, through a delay and a gain: the
+    /// `H1` estimate is `H(f_c) + H'(f_c) G` (module docs, "Offset matrix") to its second order,
+    /// while `H(f_c)` alone misses by the first; uncorrelated lines give `G = diag(f_j - f_c)`.
+    #[test]
+    fn the_offset_matrix_places_each_column_of_h1_where_its_input_lies() {
+        let (rate, n) = (500.0, 1024);
+        let df = rate / n as f64;
+        let lines = [10.1 * df, 10.45 * df, 10.8 * df];
+        let (tau, k) = (
+            0.004,
+            [[1.0, 0.02, -0.01], [0.015, 0.98, 0.03], [-0.02, 0.01, 1.03]],
+        );
+        let len = 64 * n;
+        let t = |i: usize| i as f64 / rate;
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let phase = [0.3, 1.9, 4.1];
+        let u: Vec<Vec<f64>> = (0..3)
+            .map(|j| {
+                (0..len)
+                    .map(|i| (two_pi * lines[j] * t(i) + phase[j]).sin())
+                    .collect()
+            })
+            .collect();
+        let x: Vec<Vec<f64>> = (0..3)
+            .map(|r| {
+                (0..len)
+                    .map(|i| {
+                        (0..3)
+                            .map(|j| k[r][j] * (two_pi * lines[j] * (t(i) - tau) + phase[j]).sin())
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect();
+        let settings = settings(n, Window::Hann);
+        let mut planner = WelchPlanner::new();
+        let c = planner
+            .input_centroids([&u[0], &u[1], &u[2]], rate, &settings)
+            .unwrap();
+        let channels: Vec<&[f64]> = u.iter().chain(&x).map(Vec::as_slice).collect();
+        let s = planner.welch_matrix(&channels, rate, &settings).unwrap();
+        let model = |f: f64| Matrix3::from_fn(|r, j| Complex64::from_polar(k[r][j], -two_pi * f * tau));
+        let slope = |f: f64| model(f) * Complex64::new(0.0, -two_pi * tau);
+        for bin in 9..=12 {
+            let at = |r: usize, c: usize| s.get(bin, r, c).unwrap();
+            let s_uu = Matrix3::from_fn(&at);
+            let s_xu = Matrix3::from_fn(|a, b| at(a + 3, b));
+            let h1 = s_xu * s_uu.try_inverse().unwrap();
+            let (fc, g) = (c.hz[bin], c.offset_hz[bin]);
+            let seen = model(fc) + slope(fc) * g;
+            // Left: the second order, `(2 pi d tau)^2 / 2` for offsets `d` up to a bin.
+            let (left, first) = ((h1 - seen).norm(), (h1 - model(fc)).norm());
+            assert!(
+                left < 1e-4 && left < 0.01 * first,
+                "bin {bin}: {left:e} of {first:e}"
+            );
+            assert!(first > 1e-3, "bin {bin}: the columns do lie apart");
+            for a in 0..3 {
+                for b in 0..3 {
+                    let want = if a == b { lines[a] - fc } else { 0.0 };
+                    assert!(
+                        (g[(a, b)] - want).norm() < 1e-3 * df,
+                        "bin {bin} G[{a}][{b}] = {}",
+                        g[(a, b)]
+                    );
+                }
+            }
+        }
+    }
+
+    /// Collinear inputs (one signal on all three axes): `S` is singular, no offset matrix is
+    /// formed and the model is compared at the centroid, which is the line's.
+    #[test]
+    fn collinear_inputs_get_no_offset_matrix() {
+        let (rate, n) = (500.0, 1024);
+        let line = 10.37 * rate / n as f64;
+        let u: Vec<f64> = (0..16 * n)
+            .map(|i| (2.0 * std::f64::consts::PI * line * i as f64 / rate).sin())
+            .collect();
+        let c = WelchPlanner::new()
+            .input_centroids([&u, &u, &u], rate, &settings(n, Window::Hann))
+            .unwrap();
+        for k in 9..=12 {
+            assert!((c.hz[k] - line).abs() < 1e-4, "bin {k}: {}", c.hz[k]);
+            assert_eq!(c.offset_hz[k], Matrix3::zeros(), "bin {k}");
         }
     }
 

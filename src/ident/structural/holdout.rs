@@ -13,6 +13,9 @@
 //! ([`super::fit_structure`]'s errors), need not share bins (each model is renormalised to the
 //! other half's reference frequency), and an order not fitted to both halves has no figure.
 
+use nalgebra::Matrix3;
+use num_complex::Complex64;
+
 use super::order::{Starts, fit_orders};
 use super::{MAX_ORDER, OrderChoice, ResponseEstimate, StructuralError, StructuralSettings, prepare};
 
@@ -31,8 +34,22 @@ pub fn held_out_chi2(
         held_out_chi2: None,
         ..*settings
     };
-    let (a, highest_a) = prepare(first, OrderChoice::Auto, &settings)?;
-    let (b, highest_b) = prepare(second, OrderChoice::Auto, &settings)?;
+    // Halves whose columns lie off their bins are moved there by their own order-0 fit
+    // (`super::align`; the higher orders' own slopes differ from it at second order only).
+    let moved = |half: &ResponseEstimate| -> Result<Option<Vec<_>>, StructuralError> {
+        let Some(offsets) = half.offset_hz else {
+            return Ok(None);
+        };
+        let fit = super::fit_structure(half, OrderChoice::Fixed(0), &settings)?;
+        Ok(Some(super::align::moved(half, offsets, &fit)))
+    };
+    let (moved_first, moved_second) = (moved(first)?, moved(second)?);
+    let (first, second) = (
+        at_bins(first, moved_first.as_deref()),
+        at_bins(second, moved_second.as_deref()),
+    );
+    let (a, highest_a) = prepare(&first, OrderChoice::Auto, &settings)?;
+    let (b, highest_b) = prepare(&second, OrderChoice::Auto, &settings)?;
     let highest = highest_a.min(highest_b);
     let fa = fit_orders(&a, highest, OrderChoice::Auto, &settings, Starts::Cold)?;
     let fb = fit_orders(&b, highest, OrderChoice::Auto, &settings, Starts::Cold)?;
@@ -47,4 +64,19 @@ pub fn held_out_chi2(
         *slot = total.is_finite().then_some(total);
     }
     Ok(out)
+}
+
+/// `half` with `response` in place of its estimate (moved to its bins), or as it is.
+fn at_bins<'b>(
+    half: &ResponseEstimate<'b>,
+    response: Option<&'b [Matrix3<Complex64>]>,
+) -> ResponseEstimate<'b> {
+    match response {
+        Some(response) => ResponseEstimate {
+            response,
+            offset_hz: None,
+            ..*half
+        },
+        None => *half,
+    }
 }

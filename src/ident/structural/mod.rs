@@ -57,6 +57,7 @@
 //! holds NaN (an undetermined standard deviation is `+inf`).
 
 pub mod admissible;
+mod align;
 mod gain_delay;
 mod holdout;
 mod model;
@@ -79,6 +80,7 @@ mod tests_warm;
 mod warm;
 mod weights;
 
+pub use align::rational_slope;
 pub use holdout::held_out_chi2;
 pub use warm::{FittedOrders, refit_structure};
 
@@ -99,6 +101,9 @@ pub struct ResponseEstimate<'a> {
     pub response: &'a [Matrix3<Complex64>],
     /// The inverse covariance of the estimate, one entry per bin (see the module docs).
     pub weights: Weights<'a>,
+    /// Where the estimate's columns lie about `frequency_hz`, one offset matrix `G` per bin, Hz:
+    /// the estimate is `W(f) + W'(f) G` ([`align`]). `None`: at `frequency_hz`.
+    pub offset_hz: Option<&'a [Matrix3<Complex64>]>,
 }
 
 /// The weights of a [`ResponseEstimate`], one entry per bin.
@@ -450,7 +455,8 @@ pub fn fit_structure(
     settings: &StructuralSettings,
 ) -> Result<StructuralFit, StructuralError> {
     let (data, highest) = prepare(input, order, settings)?;
-    finish(&data, highest, order, settings, order::Starts::Cold, true)
+    let fit = finish(&data, highest, order, settings, order::Starts::Cold, true)?;
+    align::realigned(input, order, settings, fit)
 }
 
 /// The validated, precomputed input and the highest order to fit.

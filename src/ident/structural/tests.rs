@@ -88,6 +88,7 @@ pub(super) fn fit(
         frequency_hz: &data.0,
         response: &data.1,
         weights: Weights::Variance(&data.2),
+        offset_hz: None,
     };
     fit_structure(&input, order, &StructuralSettings::default())
 }
@@ -239,6 +240,7 @@ fn bad_inputs_are_refused_with_their_bin() {
             frequency_hz: f,
             response: w,
             weights: Weights::Variance(v),
+            offset_hz: None,
         };
         fit_structure(&input, order, &StructuralSettings::default())
     };
@@ -325,6 +327,7 @@ fn bad_inputs_are_refused_with_their_bin() {
         frequency_hz: f,
         response: w,
         weights: Weights::Variance(v),
+        offset_hz: None,
     };
     let settings = StructuralSettings {
         tau_min_s: 0.01,
@@ -350,6 +353,7 @@ fn degenerate_data_gives_no_nan() {
         frequency_hz: &f,
         response: &w,
         weights: Weights::Variance(&v),
+        offset_hz: None,
     };
     let result = fit_structure(&input, OrderChoice::Auto, &StructuralSettings::default());
     let fit = result.expect("order 0 is defined on zero data");

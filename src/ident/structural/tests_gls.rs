@@ -80,6 +80,7 @@ fn fit_rows(r: &Record, order: OrderChoice) -> Result<StructuralFit, StructuralE
         frequency_hz: &r.f,
         response: &r.w,
         weights: Weights::RowWeight(&r.row_weight),
+        offset_hz: None,
     };
     fit_structure(&input, order, &StructuralSettings::default())
 }
@@ -89,6 +90,7 @@ fn fit_diagonal(r: &Record, order: OrderChoice) -> StructuralFit {
         frequency_hz: &r.f,
         response: &r.w,
         weights: Weights::Variance(&r.variance),
+        offset_hz: None,
     };
     fit_structure(&input, order, &StructuralSettings::default()).expect("fit")
 }
@@ -151,6 +153,7 @@ fn diagonal_row_weights_equal_the_variance_path() {
         frequency_hz: &data.0,
         response: &data.1,
         weights: Weights::RowWeight(&rows),
+        offset_hz: None,
     };
     let by_rows = fit_structure(&input, OrderChoice::Fixed(1), &StructuralSettings::default()).expect("fit");
     assert!((by_rows.chi2 - by_variance.chi2).abs() < 1e-9 * by_variance.chi2);
@@ -275,6 +278,7 @@ fn bad_row_weights_are_refused_with_bin_and_row() {
             frequency_hz: &r.f,
             response: &r.w,
             weights: Weights::RowWeight(rows),
+            offset_hz: None,
         };
         fit_structure(&input, OrderChoice::Fixed(0), &StructuralSettings::default())
     };

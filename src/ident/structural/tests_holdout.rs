@@ -16,6 +16,7 @@ fn estimate(data: &Estimate) -> ResponseEstimate<'_> {
         frequency_hz: &data.0,
         response: &data.1,
         weights: Weights::Variance(&data.2),
+        offset_hz: None,
     }
 }
 

@@ -102,6 +102,7 @@ fn auto_fit(truth: &Truth, seed: u64, criterion: InformationCriterion) -> Struct
         frequency_hz: &data.0,
         response: &data.1,
         weights: Weights::Variance(&data.2),
+        offset_hz: None,
     };
     let settings = StructuralSettings {
         criterion,

@@ -15,6 +15,7 @@ fn input(data: &Data) -> ResponseEstimate<'_> {
         frequency_hz: &data.0,
         response: &data.1,
         weights: Weights::Variance(&data.2),
+        offset_hz: None,
     }
 }
 

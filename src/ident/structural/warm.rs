@@ -69,6 +69,12 @@ impl FittedOrders {
         self.from_scratch = false;
     }
 
+    /// Sets whether these models are what a fit from scratch gives (the alignment's passes,
+    /// `super::align`, keep the first fit's word).
+    pub(super) fn set_from_scratch(&mut self, from_scratch: bool) {
+        self.from_scratch = from_scratch;
+    }
+
     /// Number of orders kept (orders `0..len`).
     #[must_use]
     pub fn len(&self) -> usize {
@@ -104,18 +110,19 @@ pub fn refit_structure(
 ) -> Result<StructuralFit, StructuralError> {
     let (data, highest) = super::prepare(input, order, settings)?;
     let kept = &previous.fitted;
-    if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
-        return super::finish(&data, highest, order, settings, Starts::Cold, true);
-    }
-    let same = kept.settings == Some(*settings)
+    let fit = if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
+        super::finish(&data, highest, order, settings, Starts::Cold, true)
+    } else if kept.settings == Some(*settings)
         && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
-        && kept.fingerprint == data.fingerprint;
-    if same {
+        && kept.fingerprint == data.fingerprint
+    {
         let starts = Starts::Same(&kept.models);
-        return super::finish(&data, highest, order, settings, starts, kept.from_scratch);
-    }
-    let near = kept.rescaled(data.omega_ref);
-    super::finish(&data, highest, order, settings, Starts::Near(&near), false)
+        super::finish(&data, highest, order, settings, starts, kept.from_scratch)
+    } else {
+        let near = kept.rescaled(data.omega_ref);
+        super::finish(&data, highest, order, settings, Starts::Near(&near), false)
+    }?;
+    super::align::realigned(input, order, settings, fit)
 }
 
 #[cfg(test)]

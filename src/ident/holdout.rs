@@ -22,10 +22,10 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 
 use super::band::native_bins;
-use super::settings::Estimate;
 use super::spectra::BlockSpectra;
-use super::stretches::{StretchSpectra, h1_estimate};
+use super::stretches::{StretchSpectra, compared_at, h1_estimate};
 use super::structural::{MAX_ORDER, ResponseEstimate, StructuralSettings, Weights, held_out_chi2};
+use crate::spectral::centroid::InputMoments;
 
 /// The held-out figures of a block over one band.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,21 +59,25 @@ pub fn held_out(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<HeldOut> {
     let halves = [merged(first)?, merged(second)?];
     let native = native_bins(spectra, band_hz);
     let step = spectra.native_step();
-    let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.fit_frequency_hz(k)).collect();
+    let centres: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
     let [(w1, o1), (w2, o2)] = [
         h1_estimate(&halves[0], &native, step)?,
         h1_estimate(&halves[1], &native, step)?,
     ];
-    let offsets = spectra.fit_offsets_hz(&native, Estimate::H1);
-    let estimate = |response, weights| ResponseEstimate {
-        frequency_hz: &frequency_hz,
+    // Each half compared where its own inputs' power lies.
+    let [(f1, g1), (f2, g2)] = [
+        compared_at(spectra, &halves[0], &native, &centres),
+        compared_at(spectra, &halves[1], &native, &centres),
+    ];
+    let estimate = |frequency_hz, response, weights, offset_hz| ResponseEstimate {
+        frequency_hz,
         response,
         weights: Weights::RowWeight(weights),
-        offset_hz: offsets.as_deref(),
+        offset_hz,
     };
     let chi2 = held_out_chi2(
-        &estimate(&w1, &o1),
-        &estimate(&w2, &o2),
+        &estimate(&f1, &w1, &o1, g1.as_deref()),
+        &estimate(&f2, &w2, &o2, g2.as_deref()),
         &StructuralSettings::default(),
     )
     .ok()?;
@@ -107,5 +111,10 @@ fn merged(parts: &[StretchSpectra]) -> Option<StretchSpectra> {
         s_xu: average(|p| &p.s_xu),
         s_xx: average(|p| &p.s_xx),
         equivalent_averages: total,
+        moments: parts
+            .iter()
+            .map(|p| p.moments.as_ref())
+            .collect::<Option<Vec<_>>>()
+            .and_then(|m| InputMoments::sum(&m)),
     })
 }

@@ -8,6 +8,7 @@ use num_complex::Complex64;
 
 use super::signals::BlockSignals;
 use super::stretches::{FinerStretches, StationarityCache, StretchSpectra, finer_segment_len, stretch_count};
+use crate::spectral::centroid::{InputCentroids, InputMoments};
 use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
 
 /// One block's spectral matrices on the one-sided Welch grid.
@@ -41,7 +42,8 @@ pub struct BlockSpectra {
     /// Variance inflation from the correlation of neighbouring native bins ([`bin_correlation`]).
     pub bin_correlation: f64,
     /// Per native bin, the inputs' power centroid ([`crate::spectral::centroid`]), Hz: the
-    /// frequency at which the structural model is evaluated there ([`Self::fit_frequency_hz`]).
+    /// frequency at which the structural model is evaluated there ([`Self::fit_frequency_hz`]),
+    /// each column moved there by its offset ([`Self::centroid_offset_hz`]).
     /// Empty: the bin centres.
     pub centroid_hz: Vec<f64>,
     /// Per native bin, where the `H1` estimate's columns lie about [`Self::centroid_hz`]
@@ -163,10 +165,30 @@ pub fn block_spectra(
     let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
     let bins = m.n_bins();
     let window = planner.window(settings.window, settings.segment_len);
-    let stretches = match parts {
+    let mut stretches = match parts {
         Some(parts) => stretches_of(&parts, n_segments, settings, sample_rate_hz, &window),
         None => stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?,
     };
+    // The inputs' moments per stretch (the same groups of segments), summed for the record.
+    let inputs = [channels[0], channels[1], channels[2]];
+    let moments = planner.input_moments(inputs, sample_rate_hz, settings, n_stretches.max(1))?;
+    let centroids = match &moments {
+        Some(parts) => {
+            let all: Vec<&InputMoments> = parts.iter().collect();
+            InputMoments::sum(&all).map_or_else(
+                || InputCentroids::centres(sample_rate_hz, settings.segment_len),
+                |m| m.centroids(),
+            )
+        }
+        None => InputCentroids::centres(sample_rate_hz, settings.segment_len),
+    };
+    if let Some(parts) = moments
+        && parts.len() == stretches.len()
+    {
+        for (stretch, m) in stretches.iter_mut().zip(parts) {
+            stretch.moments = Some(m);
+        }
+    }
     let n_samples = channels.first().map_or(0, |c| c.len());
     // Only where the settings' segment gives too few stretches (`finer_segment_len` says None
     // otherwise).
@@ -185,8 +207,6 @@ pub fn block_spectra(
         }
         None => None,
     };
-    let centroids =
-        planner.input_centroids([channels[0], channels[1], channels[2]], sample_rate_hz, settings)?;
     Ok(BlockSpectra {
         centroid_hz: centroids.hz,
         centroid_offset_hz: centroids.offset_hz,
@@ -246,6 +266,7 @@ fn stretch(
         s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
         s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
         equivalent_averages: equivalent_averages(window, step, sm.n_averages),
+        moments: None,
     }
 }
 

@@ -4,7 +4,9 @@
 //! [`MIN_SEGMENTS`] segments each, at most [`MAX_STRETCHES`] stretches, none when fewer than
 //! [`MIN_STRETCHES`] fit). Each stretch gets its own spectral matrices on the segment's native grid
 //! (no zero-padding: they only feed an order-0 fit) and its own `K e^(-tau s)`, fitted to the H1
-//! estimate `S_xu S_uu^-1` over the block's band with the stretch's own residual weights.
+//! estimate `S_xu S_uu^-1` over the block's band with the stretch's own residual weights, each
+//! bin compared where the stretch's own inputs' power lies (its moments' centroids and offset
+//! matrices, [`compared_at`]: a stepped sine programme's lines differ from stretch to stretch).
 //!
 //! What they are for:
 //! - **Honest uncertainty**: the spread of the stretches' `K` and `tau` is a measurement of the
@@ -25,9 +27,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::band::native_bins;
-use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::structural::{OrderChoice, ResponseEstimate, StructuralSettings, Weights, fit_structure};
+use crate::spectral::centroid::InputMoments;
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
@@ -51,6 +53,10 @@ pub struct StretchSpectra {
     pub s_xx: Vec<Matrix3<Complex64>>,
     /// Equivalent number of averages.
     pub equivalent_averages: f64,
+    /// The inputs' moments over the stretch's segments (`spectral::centroid`): where its own
+    /// `H1` columns lie. `None`: compared at the bin centres (a window open at its ends, the
+    /// finer stretches).
+    pub moments: Option<InputMoments>,
 }
 
 /// How many stretches a record of `n_segments` Welch segments (`step` apart) is cut into: up to
@@ -193,16 +199,20 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
     };
     let (stretches, segment_len) = if spectra.stretches.len() >= MIN_STRETCHES {
         let native = native_bins(spectra, band_hz);
-        let frequency_hz: Vec<f64> = native.iter().map(|&k| spectra.fit_frequency_hz(k)).collect();
-        let offsets = spectra.fit_offsets_hz(&native, Estimate::H1);
-        let at = At {
-            frequency_hz: &frequency_hz,
-            offset_hz: offsets.as_deref(),
-        };
-        (
-            fitted(&spectra.stretches, &native, spectra.native_step(), at),
-            None,
-        )
+        let centres: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
+        let fits = spectra
+            .stretches
+            .iter()
+            .filter_map(|s| {
+                let (frequency_hz, offsets) = compared_at(spectra, s, &native, &centres);
+                let at = At {
+                    frequency_hz: &frequency_hz,
+                    offset_hz: offsets.as_deref(),
+                };
+                fit_stretch(s, &native, spectra.native_step(), at)
+            })
+            .collect();
+        (fits, None)
     } else {
         // The finer stretches' own native grid: bin `k` at `k fs / segment_len`.
         let finer = spectra.finer_stretches.as_ref()?;
@@ -276,6 +286,42 @@ fn line_slope(t: &[f64], y: &[f64], y_std: &[f64]) -> (f64, f64) {
         .sqrt()
         / stt;
     (slope, from_residuals.max(from_own))
+}
+
+/// Where stretch `s`'s `H1` at the native band bins `native` (indices into `spectra`'s padded
+/// grid) is compared with the model: its own inputs' centroids and offset matrices
+/// ([`StretchSpectra::moments`]; a stretch's lines are its own, a stepped sine programme's differ
+/// from stretch to stretch) on a grid a whole multiple of the segment, else `centres` without
+/// offsets; `None` for the offsets when every one is zero.
+#[must_use]
+pub fn compared_at(
+    spectra: &BlockSpectra,
+    s: &StretchSpectra,
+    native: &[usize],
+    centres: &[f64],
+) -> (Vec<f64>, Option<Vec<Matrix3<Complex64>>>) {
+    let step = spectra.native_step();
+    let aligned = spectra.fft_len.is_multiple_of(spectra.segment_len.max(1));
+    let Some(moments) = s.moments.as_ref().filter(|_| aligned) else {
+        return (centres.to_vec(), None);
+    };
+    let c = moments.centroids();
+    let at = |k: usize| {
+        k.is_multiple_of(step)
+            .then_some(k / step)
+            .filter(|&b| b < c.hz.len())
+    };
+    let frequency_hz = native
+        .iter()
+        .zip(centres)
+        .map(|(&k, &f)| at(k).map_or(f, |b| c.hz[b]))
+        .collect();
+    let offsets: Vec<Matrix3<Complex64>> = native
+        .iter()
+        .map(|&k| at(k).map_or_else(Matrix3::zeros, |b| c.offset_hz[b]))
+        .collect();
+    let any = offsets.iter().any(|g| g.iter().any(|z| z.norm() > 0.0));
+    (frequency_hz, any.then_some(offsets))
 }
 
 /// Where a stretch's bins are compared with the model: their frequencies and offset matrices

@@ -8,24 +8,33 @@
 //! then misses by `W'(f) G`: for a delay `tau`, a phase of `2 pi (f_line - f) tau`, hundreds of
 //! standard deviations at a strong line, read as a poor fit.
 //!
-//! [`realigned`] removes it: the estimate is moved to `f` with the model fitted so far,
-//! `H - W'(f) G`, and fitted again from that model, until the delay settles (within
-//! [`SETTLED`] of its standard deviation, at most [`PASSES`] times). The move is the fitted
-//! model's slope times the offset, so an error `dW` in the model leaves `dW' G`: second order.
-//! Without offsets (`ResponseEstimate::offset_hz` `None`) nothing changes.
+//! [`moved_estimate`] removes it before the fit: the estimate is moved to `f` with the order-0
+//! fit's slope, `H - W'(f) G`, and the order-0 fit is made again on the moved estimate until its
+//! delay settles (a change within [`SETTLED`] of its standard deviation or below [`SETTLED_S`],
+//! at most [`PASSES`] times; a failed pass keeps the last move). The orders are then fitted to the
+//! moved estimate as to any other. The move depends on the data and the delay range alone, not on
+//! the order asked: a refit for another order finds the same moved data (`super::warm`'s "same
+//! data"), and a cold fit is what [`super::fit_structure`] gives on them. What is left is the
+//! chosen model's slope less the order-0 slope, times `G`: the poles' own phase slope over a
+//! fraction of a bin, second order. Without offsets (`ResponseEstimate::offset_hz` `None`)
+//! nothing changes.
 //!
 //! Units: Hz for `f` and `G`, `W'` per Hz.
 
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
-use super::{OrderChoice, ResponseEstimate, StructuralError, StructuralFit, StructuralSettings};
+use super::{OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings};
 
-/// The most refits on a moved estimate.
+/// The most order-0 refits on a moved estimate.
 const PASSES: usize = 3;
 
 /// A pass that moves the delay by less than this share of its standard deviation ends the passes.
 const SETTLED: f64 = 0.01;
+
+/// A pass that moves the delay by less than this ends the passes, s (a delay known to a
+/// picosecond has settled).
+const SETTLED_S: f64 = 1e-12;
 
 /// `dW/df` of `N(s) / d(s) e^(-tau s)` at `f_hz`, per Hz (`s = j 2 pi f`).
 #[must_use]
@@ -89,38 +98,60 @@ pub(super) fn moved(
         .collect()
 }
 
-/// `fit` (made on `input` as given) refitted on `input` moved to its bins' frequencies (module
-/// docs); `fit` itself when `input` has no offsets.
-///
-/// # Errors
-/// Those of [`super::refit_structure`] on the moved estimate.
-pub(super) fn realigned(
+/// `input`'s estimate moved to its bins' frequencies by the settled order-0 fit (module docs);
+/// `None` without offsets, or when no order-0 fit can be made (the orders' own fits then say why).
+pub(super) fn moved_estimate(
     input: &ResponseEstimate,
-    order: OrderChoice,
     settings: &StructuralSettings,
-    mut fit: StructuralFit,
-) -> Result<StructuralFit, StructuralError> {
-    let Some(offsets) = input.offset_hz else {
-        return Ok(fit);
-    };
-    // The passes are part of the fit: a cold fit with them is what `fit_structure` gives.
-    let from_scratch = fit.fitted.from_scratch();
-    for _ in 0..PASSES {
-        let response = moved(input, offsets, &fit);
-        let at_bins = ResponseEstimate {
-            response: &response,
+) -> Option<Vec<Matrix3<Complex64>>> {
+    let offsets = input.offset_hz?;
+    let order0 = |response: &[Matrix3<Complex64>]| {
+        let at = ResponseEstimate {
+            response,
             offset_hz: None,
             ..*input
         };
-        let next = super::refit_structure(&at_bins, order, settings, &fit)?;
-        let settled = (next.tau_s - fit.tau_s).abs() <= SETTLED * next.tau_std_s;
+        let (data, _) = super::prepare(&at, OrderChoice::Fixed(0), settings).ok()?;
+        super::finish(
+            &data,
+            0,
+            OrderChoice::Fixed(0),
+            settings,
+            super::order::Starts::Cold,
+            true,
+        )
+        .ok()
+    };
+    let mut fit = order0(input.response)?;
+    let mut response = moved(input, offsets, &fit);
+    for _ in 0..PASSES {
+        let Some(next) = order0(&response) else {
+            break;
+        };
+        let change = (next.tau_s - fit.tau_s).abs();
+        let settled = change <= SETTLED * next.tau_std_s || change <= SETTLED_S;
+        response = moved(input, offsets, &next);
         fit = next;
         if settled {
             break;
         }
     }
-    fit.fitted.set_from_scratch(from_scratch);
-    Ok(fit)
+    Some(response)
+}
+
+/// `input` with `response` in place of its estimate (moved to its bins), or as it is.
+pub(super) fn at_bins<'b>(
+    input: &ResponseEstimate<'b>,
+    response: Option<&'b [Matrix3<Complex64>]>,
+) -> ResponseEstimate<'b> {
+    match response {
+        Some(response) => ResponseEstimate {
+            response,
+            offset_hz: None,
+            ..*input
+        },
+        None => *input,
+    }
 }
 
 #[cfg(test)]
@@ -130,7 +161,8 @@ mod tests {
 
     use super::rational_slope;
     use crate::ident::structural::{
-        OrderChoice, ResponseEstimate, StructuralSettings, Weights, fit_structure, rational_response,
+        OrderChoice, ResponseEstimate, StructuralError, StructuralSettings, Weights, fit_structure,
+        rational_response, refit_structure,
     };
     use crate::rng::Rng;
 
@@ -197,12 +229,53 @@ mod tests {
             .map(|e| (aligned.k[e / 3][e % 3] - k[e / 3][e % 3]).abs())
             .fold(0.0, f64::max);
         assert!(dk < 1e-5, "{dk:e}");
-        assert!(
-            aligned.fitted.from_scratch(),
-            "a cold fit with its passes is a fit from scratch"
-        );
+        assert!(aligned.fitted.from_scratch(), "a cold fit on the moved estimate");
         // `Auto` on the same data chooses order 0: the offsets leave no misfit for poles to take.
         let auto = fit_structure(&input(Some(&offsets)), OrderChoice::Auto, &settings).unwrap();
         assert_eq!(auto.order, 0);
+        // The move does not depend on the order asked: a refit for another order is `warm`'s
+        // "same data", bit for bit the cold fit of that order, and from scratch.
+        for order in [OrderChoice::Fixed(0), OrderChoice::Fixed(1)] {
+            let refit = refit_structure(&input(Some(&offsets)), order, &settings, &auto).unwrap();
+            let cold = fit_structure(&input(Some(&offsets)), order, &settings).unwrap();
+            assert!(refit.fitted.from_scratch(), "{order:?}");
+            assert_eq!(refit.tau_s.to_bits(), cold.tau_s.to_bits(), "{order:?}");
+            assert_eq!(refit.k, cold.k, "{order:?}");
+            assert_eq!(refit.chi2.to_bits(), cold.chi2.to_bits(), "{order:?}");
+        }
+    }
+
+    /// Offsets that are not one per bin, or not finite, are refused naming the bin.
+    #[test]
+    fn bad_offsets_are_refused() {
+        let f = [1.0, 2.0];
+        let response = [Matrix3::identity(); 2];
+        let variance = [Matrix3::from_element(1e-6); 2];
+        let settings = StructuralSettings::default();
+        let fit = |offsets: &[Matrix3<Complex64>]| {
+            fit_structure(
+                &ResponseEstimate {
+                    frequency_hz: &f,
+                    response: &response,
+                    weights: Weights::Variance(&variance),
+                    offset_hz: Some(offsets),
+                },
+                OrderChoice::Fixed(0),
+                &settings,
+            )
+        };
+        assert_eq!(
+            fit(&[Matrix3::zeros()]).unwrap_err(),
+            StructuralError::OffsetMismatch {
+                offsets: 1,
+                frequencies: 2
+            }
+        );
+        let mut nan = [Matrix3::zeros(); 2];
+        nan[1][(2, 0)] = Complex64::new(f64::NAN, 0.0);
+        assert_eq!(
+            fit(&nan).unwrap_err(),
+            StructuralError::NonFiniteOffset { bin: 1 }
+        );
     }
 }

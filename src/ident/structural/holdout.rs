@@ -9,13 +9,14 @@
 //! chi2(model_2[n] on half 1)`. Admissibility rule 7 ([`super::admissible`]) keeps an order
 //! above 0 only when that figure is below every lower order's.
 //!
+//! Halves with offsets are moved to their bins first, each by its own order-0 fit
+//! ([`super::align`]).
+//!
 //! Units and contracts are those of the module: the halves are validated as any input
 //! ([`super::fit_structure`]'s errors), need not share bins (each model is renormalised to the
 //! other half's reference frequency), and an order not fitted to both halves has no figure.
 
-use nalgebra::Matrix3;
-use num_complex::Complex64;
-
+use super::align::{at_bins, moved_estimate};
 use super::order::{Starts, fit_orders};
 use super::{MAX_ORDER, OrderChoice, ResponseEstimate, StructuralError, StructuralSettings, prepare};
 
@@ -34,20 +35,14 @@ pub fn held_out_chi2(
         held_out_chi2: None,
         ..*settings
     };
-    // Halves whose columns lie off their bins are moved there by their own order-0 fit
-    // (`super::align`; the higher orders' own slopes differ from it at second order only).
-    let moved = |half: &ResponseEstimate| -> Result<Option<Vec<_>>, StructuralError> {
-        let Some(offsets) = half.offset_hz else {
-            return Ok(None);
-        };
-        let fit = super::fit_structure(half, OrderChoice::Fixed(0), &settings)?;
-        Ok(Some(super::align::moved(half, offsets, &fit)))
-    };
-    let (moved_first, moved_second) = (moved(first)?, moved(second)?);
-    let (first, second) = (
-        at_bins(first, moved_first.as_deref()),
-        at_bins(second, moved_second.as_deref()),
+    // Halves whose columns lie off their bins are moved there, each by its own order-0 fit
+    // (`super::align`).
+    let (moved_first, moved_second) = (
+        moved_estimate(first, &settings),
+        moved_estimate(second, &settings),
     );
+    let first = at_bins(first, moved_first.as_deref());
+    let second = at_bins(second, moved_second.as_deref());
     let (a, highest_a) = prepare(&first, OrderChoice::Auto, &settings)?;
     let (b, highest_b) = prepare(&second, OrderChoice::Auto, &settings)?;
     let highest = highest_a.min(highest_b);
@@ -64,19 +59,4 @@ pub fn held_out_chi2(
         *slot = total.is_finite().then_some(total);
     }
     Ok(out)
-}
-
-/// `half` with `response` in place of its estimate (moved to its bins), or as it is.
-fn at_bins<'b>(
-    half: &ResponseEstimate<'b>,
-    response: Option<&'b [Matrix3<Complex64>]>,
-) -> ResponseEstimate<'b> {
-    match response {
-        Some(response) => ResponseEstimate {
-            response,
-            offset_hz: None,
-            ..*half
-        },
-        None => *half,
-    }
 }

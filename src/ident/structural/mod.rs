@@ -17,7 +17,8 @@
 //! The estimate of output row `i`, `W_i(f)` (a complex 1x3 row), has the covariance
 //! `C_i = E[dW_i^H dW_i]` (circular complex noise; proportional to `S_psi,ii S_uu^-1 / n_eq` for
 //! an `H1` estimate). The fit minimises the generalised least-squares objective
-//! `chi2 = sum_k sum_i 2 r_i Omega_i r_i^H`, `r_i = W_i - model_i`, with the row weight
+//! `chi2 = sum_k sum_i 2 r_i Omega_i r_i^H`, `r_i = W_i - model_i` (`W` moved to its bins first
+//! when its columns lie elsewhere, [`ResponseEstimate::offset_hz`], `align`), with the row weight
 //! `Omega_i = C_i^-1 = n_eq S_uu / S_psi,ii` ([`Weights::RowWeight`]): Hermitian positive
 //! semi-definite, possibly singular where the inputs are collinear (a direction the data say
 //! nothing about gets no weight). Per-element variances ([`Weights::Variance`],
@@ -51,7 +52,8 @@
 //! either. The tests (`tests_noise.rs`) measure both criteria over seeded records.
 //!
 //! # Contracts
-//! Empty input, mismatched lengths, non-finite or non-positive values, row weights that are not
+//! Empty input, mismatched lengths (offsets included), non-finite or non-positive values (offsets
+//! included), row weights that are not
 //! Hermitian or not positive semi-definite are refused with a [`StructuralError`] naming the bin
 //! (and row); nothing reachable from the input panics, and no output
 //! holds NaN (an undetermined standard deviation is `+inf`).
@@ -102,7 +104,7 @@ pub struct ResponseEstimate<'a> {
     /// The inverse covariance of the estimate, one entry per bin (see the module docs).
     pub weights: Weights<'a>,
     /// Where the estimate's columns lie about `frequency_hz`, one offset matrix `G` per bin, Hz:
-    /// the estimate is `W(f) + W'(f) G` ([`align`]). `None`: at `frequency_hz`.
+    /// the estimate is `W(f) + W'(f) G` (`align`). `None`: at `frequency_hz`.
     pub offset_hz: Option<&'a [Matrix3<Complex64>]>,
 }
 
@@ -327,6 +329,20 @@ pub enum StructuralError {
         /// Number of weight entries (variance matrices or row-weight triples).
         weights: usize,
     },
+    /// The offsets (`ResponseEstimate::offset_hz`) are not one per bin.
+    #[error("{offsets} offset matrices for {frequencies} frequencies")]
+    OffsetMismatch {
+        /// Number of offset matrices.
+        offsets: usize,
+        /// Number of frequencies.
+        frequencies: usize,
+    },
+    /// An offset matrix holds a value that is not finite.
+    #[error("the offset matrix at bin {bin} is not finite")]
+    NonFiniteOffset {
+        /// The bin.
+        bin: usize,
+    },
     /// A frequency is not finite or not positive.
     #[error("frequency {value} Hz at bin {bin} is not finite and positive")]
     BadFrequency {
@@ -436,7 +452,8 @@ pub enum StructuralError {
     },
 }
 
-/// Fits the structural model of `order` to `input`.
+/// Fits the structural model of `order` to `input` (moved to its bins first when it has offsets,
+/// `align`).
 ///
 /// # Errors
 /// [`StructuralError::EmptyBand`], [`StructuralError::LengthMismatch`],
@@ -454,9 +471,11 @@ pub fn fit_structure(
     order: OrderChoice,
     settings: &StructuralSettings,
 ) -> Result<StructuralFit, StructuralError> {
-    let (data, highest) = prepare(input, order, settings)?;
-    let fit = finish(&data, highest, order, settings, order::Starts::Cold, true)?;
-    align::realigned(input, order, settings, fit)
+    validate(input)?;
+    let moved = align::moved_estimate(input, settings);
+    let input = align::at_bins(input, moved.as_deref());
+    let (data, highest) = prepare(&input, order, settings)?;
+    finish(&data, highest, order, settings, order::Starts::Cold, true)
 }
 
 /// The validated, precomputed input and the highest order to fit.
@@ -544,6 +563,17 @@ fn validate(input: &ResponseEstimate) -> Result<(), StructuralError> {
     }
     if nf == 0 {
         return Err(StructuralError::EmptyBand);
+    }
+    if let Some(offsets) = input.offset_hz {
+        if offsets.len() != nf {
+            return Err(StructuralError::OffsetMismatch {
+                offsets: offsets.len(),
+                frequencies: nf,
+            });
+        }
+        if let Some(bin) = offsets.iter().position(|g| !g.iter().all(|z| z.is_finite())) {
+            return Err(StructuralError::NonFiniteOffset { bin });
+        }
     }
     // Not necessarily ascending: the model is compared with each bin at its inputs' power
     // centroid (`spectral::centroid`), and two bins beside one line share the line's frequency.

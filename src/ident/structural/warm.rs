@@ -16,6 +16,10 @@
 //!   in a flat valley, can stop elsewhere in the valley, or in another valley. Callers who need
 //!   the cold answer refit cold afterwards (the app does).
 //!
+//! An estimate with offsets is moved to its bins first, as [`fit_structure`](super::fit_structure)
+//! moves it ([`super::align`]: by the order-0 fit, whatever the order asked), so "same data" is the
+//! same moved estimate, and an order change on it reuses the models exactly.
+//!
 //! Units and contracts are those of the module: the same errors as `fit_structure`, for the same
 //! inputs, and no NaN in any output.
 
@@ -69,12 +73,6 @@ impl FittedOrders {
         self.from_scratch = false;
     }
 
-    /// Sets whether these models are what a fit from scratch gives (the alignment's passes,
-    /// `super::align`, keep the first fit's word).
-    pub(super) fn set_from_scratch(&mut self, from_scratch: bool) {
-        self.from_scratch = from_scratch;
-    }
-
     /// Number of orders kept (orders `0..len`).
     #[must_use]
     pub fn len(&self) -> usize {
@@ -108,21 +106,23 @@ pub fn refit_structure(
     settings: &StructuralSettings,
     previous: &StructuralFit,
 ) -> Result<StructuralFit, StructuralError> {
-    let (data, highest) = super::prepare(input, order, settings)?;
+    super::validate(input)?;
+    let moved = super::align::moved_estimate(input, settings);
+    let input = super::align::at_bins(input, moved.as_deref());
+    let (data, highest) = super::prepare(&input, order, settings)?;
     let kept = &previous.fitted;
-    let fit = if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
-        super::finish(&data, highest, order, settings, Starts::Cold, true)
-    } else if kept.settings == Some(*settings)
+    if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
+        return super::finish(&data, highest, order, settings, Starts::Cold, true);
+    }
+    let same = kept.settings == Some(*settings)
         && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
-        && kept.fingerprint == data.fingerprint
-    {
+        && kept.fingerprint == data.fingerprint;
+    if same {
         let starts = Starts::Same(&kept.models);
-        super::finish(&data, highest, order, settings, starts, kept.from_scratch)
-    } else {
-        let near = kept.rescaled(data.omega_ref);
-        super::finish(&data, highest, order, settings, Starts::Near(&near), false)
-    }?;
-    super::align::realigned(input, order, settings, fit)
+        return super::finish(&data, highest, order, settings, starts, kept.from_scratch);
+    }
+    let near = kept.rescaled(data.omega_ref);
+    super::finish(&data, highest, order, settings, Starts::Near(&near), false)
 }
 
 #[cfg(test)]

@@ -9,9 +9,10 @@
 //! standard deviations at a strong line, read as a poor fit.
 //!
 //! [`moved_estimate`] removes it before the fit: the estimate is moved to `f` with the order-0
-//! fit's slope, `H - W'(f) G`, and the order-0 fit is made again on the moved estimate until its
-//! delay settles (a change within [`SETTLED`] of its standard deviation or below [`SETTLED_S`],
-//! at most [`PASSES`] times; a failed pass keeps the last move). The orders are then fitted to the
+//! fit's slope, `H - W'(f) G`, and the order-0 model (gain and delay, `gain_delay`) is fitted
+//! again on the moved estimate until its delay settles (a change that turns the phase at the
+//! band's top by less than [`SETTLED_RAD`], at most [`PASSES`] times; a failed pass keeps the last
+//! move). The orders are then fitted to the
 //! moved estimate as to any other. The move depends on the data and the delay range alone, not on
 //! the order asked: a refit for another order finds the same moved data (`super::warm`'s "same
 //! data"), and a cold fit is what [`super::fit_structure`] gives on them. What is left is the
@@ -24,17 +25,14 @@
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
-use super::{OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings};
+use super::{ResponseEstimate, StructuralFit, StructuralSettings};
 
 /// The most order-0 refits on a moved estimate.
 const PASSES: usize = 3;
 
-/// A pass that moves the delay by less than this share of its standard deviation ends the passes.
-const SETTLED: f64 = 0.01;
-
-/// A pass that moves the delay by less than this ends the passes, s (a delay known to a
-/// picosecond has settled).
-const SETTLED_S: f64 = 1e-12;
+/// A pass whose delay change turns the phase at the band's top by less than this ends the
+/// passes, rad.
+const SETTLED_RAD: f64 = 1e-6;
 
 /// `dW/df` of `N(s) / d(s) e^(-tau s)` at `f_hz`, per Hz (`s = j 2 pi f`).
 #[must_use]
@@ -83,55 +81,69 @@ impl StructuralFit {
     }
 }
 
-/// `input`'s estimate moved to its bins' frequencies by `fit`: `H - W'(f) G` per bin.
-pub(super) fn moved(
+/// `input`'s estimate moved to its bins' frequencies by the order-0 model `K e^(-tau s)`:
+/// `H - W'(f) G` per bin, `W'(f) = -j 2 pi tau K e^(-j 2 pi f tau)`.
+fn moved(
     input: &ResponseEstimate,
     offsets: &[Matrix3<Complex64>],
-    fit: &StructuralFit,
+    k: &[f64; 9],
+    tau: f64,
 ) -> Vec<Matrix3<Complex64>> {
+    let gain = Matrix3::from_fn(|i, j| Complex64::from(k[3 * i + j]));
     input
         .response
         .iter()
         .zip(input.frequency_hz)
         .zip(offsets)
-        .map(|((h, &f), g)| h - rational_slope(&fit.numerator, &fit.denominator, fit.tau_s, f) * g)
+        .map(|((h, &f), g)| {
+            let phase = -2.0 * std::f64::consts::PI * f * tau;
+            let slope =
+                Complex64::new(0.0, -2.0 * std::f64::consts::PI * tau) * Complex64::from_polar(1.0, phase);
+            h - gain * slope * g
+        })
         .collect()
 }
 
 /// `input`'s estimate moved to its bins' frequencies by the settled order-0 fit (module docs);
-/// `None` without offsets, or when no order-0 fit can be made (the orders' own fits then say why).
+/// `None` without offsets, or when no finite order-0 fit can be made (the orders' own fits then
+/// say why).
 pub(super) fn moved_estimate(
     input: &ResponseEstimate,
     settings: &StructuralSettings,
 ) -> Option<Vec<Matrix3<Complex64>>> {
     let offsets = input.offset_hz?;
-    let order0 = |response: &[Matrix3<Complex64>]| {
+    // The model alone (gain and delay, no deviations) is what the move needs; the weights are
+    // the input's throughout, and each pass starts from the last delay.
+    let (lo, hi) = (settings.tau_min_s, settings.tau_max_s);
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return None;
+    }
+    let rows = super::weights::row_weights(&input.weights).ok()?;
+    let order0 = |response: &[Matrix3<Complex64>], near: Option<f64>| {
         let at = ResponseEstimate {
             response,
             offset_hz: None,
             ..*input
         };
-        let (data, _) = super::prepare(&at, OrderChoice::Fixed(0), settings).ok()?;
-        super::finish(
-            &data,
-            0,
-            OrderChoice::Fixed(0),
-            settings,
-            super::order::Starts::Cold,
-            true,
-        )
-        .ok()
+        let data = super::model::Prepared::new(&at, &rows);
+        let model = match near {
+            Some(near) => super::gain_delay::fit_near(&data, near, lo, hi),
+            None => super::gain_delay::fit(&data, lo, hi),
+        };
+        let finite = model.tau.is_finite() && model.num.first()?.iter().all(|v| v.is_finite());
+        finite.then(|| (model.num[0], model.tau, data.omega_ref))
     };
-    let mut fit = order0(input.response)?;
-    let mut response = moved(input, offsets, &fit);
+    let (mut k, mut tau, omega_top) = order0(input.response, None)?;
+    let mut response = moved(input, offsets, &k, tau);
     for _ in 0..PASSES {
-        let Some(next) = order0(&response) else {
+        let Some((next_k, next_tau, _)) = order0(&response, Some(tau)) else {
             break;
         };
-        let change = (next.tau_s - fit.tau_s).abs();
-        let settled = change <= SETTLED * next.tau_std_s || change <= SETTLED_S;
-        response = moved(input, offsets, &next);
-        fit = next;
+        // Settled when the delay's change turns the band's top by less than `SETTLED_RAD`: the
+        // move changes by less than that fraction of itself.
+        let settled = (next_tau - tau).abs() * omega_top <= SETTLED_RAD;
+        (k, tau) = (next_k, next_tau);
+        response = moved(input, offsets, &k, tau);
         if settled {
             break;
         }

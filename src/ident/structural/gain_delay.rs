@@ -103,6 +103,38 @@ fn pseudo_inverse(a: Matrix3<f64>) -> Matrix3<f64> {
 
 /// The order-0 fit on the delay range `[tau_min, tau_max]` (finite, non-empty).
 pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
+    let sums = sums(data);
+    let tau = best_delay(&sums, tau_min, tau_max);
+    Model {
+        num: vec![sums.gain(tau)],
+        den: Vec::new(),
+        tau,
+    }
+}
+
+/// The order-0 fit whose delay is known to lie within a scan step (`1 / (16 f_max)`) of `near`
+/// (data changed a little since a fit gave `near`): refined inside that cell alone, or by the
+/// whole scan over `[tau_min, tau_max]` when the cell does not hold a maximum.
+pub(super) fn fit_near(data: &Prepared, near: f64, tau_min: f64, tau_max: f64) -> Model {
+    let sums = sums(data);
+    let step = 2.0 * std::f64::consts::PI / data.omega_ref / 16.0;
+    let (lo, hi) = ((near - step).max(tau_min), (near + step).min(tau_max));
+    let (_, g_lo, _) = sums.objective(lo, true);
+    let (_, g_hi, _) = sums.objective(hi, true);
+    let tau = if lo < hi && g_lo > 0.0 && g_hi < 0.0 {
+        refine(&sums, lo, hi, near.clamp(lo, hi))
+    } else {
+        best_delay(&sums, tau_min, tau_max)
+    };
+    Model {
+        num: vec![sums.gain(tau)],
+        den: Vec::new(),
+        tau,
+    }
+}
+
+/// The sums of the order-0 objective for `data`.
+fn sums(data: &Prepared) -> Sums<'_> {
     let v = data
         .h
         .iter()
@@ -120,16 +152,10 @@ pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
             a[i] += rows[i].omega.map(|z| z.re);
         }
     }
-    let sums = Sums {
+    Sums {
         data,
         v,
         p: a.map(pseudo_inverse),
-    };
-    let tau = best_delay(&sums, tau_min, tau_max);
-    Model {
-        num: vec![sums.gain(tau)],
-        den: Vec::new(),
-        tau,
     }
 }
 

@@ -99,6 +99,43 @@ fn max_k_error(fit: &StructuralFit, k: &Matrix3<f64>) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// `gain_delay::fit_near` from a delay within a scan step of the optimum gives the full scan's
+/// fit; from a delay far from it (no maximum in its cell) it falls back to the scan.
+#[test]
+fn order0_refined_near_a_known_delay_is_the_scanned_fit() {
+    let mut rng = Rng::new(5);
+    let k = random_gain(&mut rng);
+    let tau = 0.004_321;
+    let data = synthesise(&Truth::gain_delay(k, tau), &mut rng, 0.3);
+    let input = ResponseEstimate {
+        frequency_hz: &data.0,
+        response: &data.1,
+        weights: Weights::Variance(&data.2),
+        offset_hz: None,
+    };
+    let rows = weights::row_weights(&input.weights).unwrap();
+    let prepared = model::Prepared::new(&input, &rows);
+    let (lo, hi) = (-0.02, 0.05);
+    let scanned = gain_delay::fit(&prepared, lo, hi);
+    let step = 2.0 * PI / prepared.omega_ref / 16.0;
+    for near in [
+        scanned.tau - 0.6 * step,
+        scanned.tau + 0.3 * step,
+        scanned.tau + 20.0 * step,
+    ] {
+        let refined = gain_delay::fit_near(&prepared, near, lo, hi);
+        assert!(
+            (refined.tau - scanned.tau).abs() < 1e-12,
+            "from {near}: {} vs {}",
+            refined.tau,
+            scanned.tau
+        );
+        for (a, b) in refined.num[0].iter().zip(&scanned.num[0]) {
+            assert!((a - b).abs() < 1e-9, "from {near}: {a} vs {b}");
+        }
+    }
+}
+
 #[test]
 fn order0_noise_free_recovers_gain_and_fractional_delay() {
     let mut rng = Rng::new(1);

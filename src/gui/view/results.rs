@@ -12,9 +12,19 @@ use crate::ident::band::BandSetting;
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::model::BlockModel;
 
+/// `v ± std` with `decimals`, or with more where the deviation would round to zero (its first
+/// significant digit shown, at most 9 decimals): a deviation of 7e-5 ms reads `± 0.00007`, not
+/// `± 0.000`, which would read as exact.
 fn pm(v: f64, std: Option<f64>, decimals: usize) -> String {
     match std {
-        Some(s) => format!("{v:.decimals$} ± {s:.decimals$}"),
+        Some(s) => {
+            let shown = if s > 0.0 && s < 0.5 * 10f64.powi(-(decimals as i32)) {
+                ((-s.log10()).floor() as usize + 1).clamp(decimals, 9)
+            } else {
+                decimals
+            };
+            format!("{v:.shown$} ± {s:.shown$}")
+        }
         None => format!("{v:.decimals$}"),
     }
 }
@@ -306,4 +316,19 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
         "the input's spectral factor must be causal for the causal Wiener estimate; a steep input \
          spectrum (slow manoeuvres) needs a finer grid for that (identifier, fourth numerical choice)",
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pm;
+
+    #[test]
+    fn a_deviation_too_small_for_the_decimals_gets_its_first_digit() {
+        assert_eq!(pm(4.420_112, Some(7.1e-5), 3), "4.42011 ± 0.00007");
+        assert_eq!(pm(4.417, Some(0.002), 3), "4.417 ± 0.002");
+        assert_eq!(pm(443.8, Some(4.3), 1), "443.8 ± 4.3");
+        assert_eq!(pm(1.0, Some(0.0), 3), "1.000 ± 0.000");
+        assert_eq!(pm(1.0, Some(1e-15), 3), "1.000000000 ± 0.000000000");
+        assert_eq!(pm(2.5, None, 2), "2.50");
+    }
 }

@@ -76,25 +76,27 @@ impl BlockSpectra {
     /// bin's centre.
     #[must_use]
     pub fn fit_frequency_hz(&self, k: usize) -> f64 {
+        self.native_index(k)
+            .and_then(|m| self.centroid_hz.get(m).copied())
+            .unwrap_or(self.frequency_hz[k])
+    }
+
+    /// The native bin that padded bin `k` is, if it is one: native bin `m` is padded bin
+    /// `m native_step()` only on a grid a whole multiple of the segment.
+    #[must_use]
+    pub fn native_index(&self, k: usize) -> Option<usize> {
         let step = self.native_step();
-        // Native bin `m` is padded bin `m step` only on a grid a whole multiple of the segment.
         let aligned = self.fft_len.is_multiple_of(self.segment_len.max(1));
-        match self.centroid_hz.get(k / step) {
-            Some(&c) if aligned && k.is_multiple_of(step) => c,
-            _ => self.frequency_hz[k],
-        }
+        (aligned && k.is_multiple_of(step)).then_some(k / step)
     }
 
     /// The offset matrix `G` of bin `k` ([`Self::centroid_offset_hz`]) where the model is
     /// compared at a native bin's centroid; `None` elsewhere and for a zero `G`.
     #[must_use]
     pub fn fit_offset_hz(&self, k: usize, estimate: super::settings::Estimate) -> Option<Matrix3<Complex64>> {
-        let step = self.native_step();
-        let aligned = self.fft_len.is_multiple_of(self.segment_len.max(1));
-        let on_native = aligned && k.is_multiple_of(step) && estimate == super::settings::Estimate::H1;
-        on_native
-            .then(|| self.centroid_offset_hz.get(k / step).copied())
-            .flatten()
+        self.native_index(k)
+            .filter(|_| estimate == super::settings::Estimate::H1)
+            .and_then(|m| self.centroid_offset_hz.get(m).copied())
             .filter(|g| g.iter().any(|z| *z != Complex64::new(0.0, 0.0)))
     }
 
@@ -172,16 +174,13 @@ pub fn block_spectra(
     // The inputs' moments per stretch (the same groups of segments), summed for the record.
     let inputs = [channels[0], channels[1], channels[2]];
     let moments = planner.input_moments(inputs, sample_rate_hz, settings, n_stretches.max(1))?;
-    let centroids = match &moments {
-        Some(parts) => {
-            let all: Vec<&InputMoments> = parts.iter().collect();
-            InputMoments::sum(&all).map_or_else(
-                || InputCentroids::centres(sample_rate_hz, settings.segment_len),
-                |m| m.centroids(),
-            )
-        }
-        None => InputCentroids::centres(sample_rate_hz, settings.segment_len),
-    };
+    let centroids = moments
+        .as_ref()
+        .and_then(|parts| InputMoments::sum(&parts.iter().collect::<Vec<_>>()))
+        .map_or_else(
+            || InputCentroids::centres(sample_rate_hz, settings.segment_len),
+            |m| m.centroids(),
+        );
     if let Some(parts) = moments
         && parts.len() == stretches.len()
     {

@@ -191,16 +191,10 @@ const STRETCH_DELAY_REACH_S: f64 = 0.3;
 /// or with fewer than [`MIN_STRETCHES`] fitted.
 #[must_use]
 pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Stationarity> {
-    let fitted = |stretches: &[StretchSpectra], native: &[usize], step: usize, at: At| {
-        stretches
-            .iter()
-            .filter_map(|s| fit_stretch(s, native, step, at))
-            .collect::<Vec<StretchFit>>()
-    };
     let (stretches, segment_len) = if spectra.stretches.len() >= MIN_STRETCHES {
         let native = native_bins(spectra, band_hz);
         let centres: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
-        let fits = spectra
+        let fits: Vec<StretchFit> = spectra
             .stretches
             .iter()
             .filter_map(|s| {
@@ -225,7 +219,12 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
             frequency_hz: &frequency_hz,
             offset_hz: None,
         };
-        (fitted(&finer.stretches, &native, 1, at), Some(finer.segment_len))
+        let fits = finer
+            .stretches
+            .iter()
+            .filter_map(|s| fit_stretch(s, &native, 1, at))
+            .collect();
+        (fits, Some(finer.segment_len))
     };
     let m = stretches.len();
     if m < MIN_STRETCHES {
@@ -300,17 +299,11 @@ pub fn compared_at(
     native: &[usize],
     centres: &[f64],
 ) -> (Vec<f64>, Option<Vec<Matrix3<Complex64>>>) {
-    let step = spectra.native_step();
-    let aligned = spectra.fft_len.is_multiple_of(spectra.segment_len.max(1));
-    let Some(moments) = s.moments.as_ref().filter(|_| aligned) else {
+    let Some(moments) = s.moments.as_ref() else {
         return (centres.to_vec(), None);
     };
     let c = moments.centroids();
-    let at = |k: usize| {
-        k.is_multiple_of(step)
-            .then_some(k / step)
-            .filter(|&b| b < c.hz.len())
-    };
+    let at = |k: usize| spectra.native_index(k).filter(|&b| b < c.hz.len());
     let frequency_hz = native
         .iter()
         .zip(centres)

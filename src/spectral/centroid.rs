@@ -64,25 +64,6 @@ const MAIN_LOBE_BINS: f64 = 4.0;
 const MAX_CONDITION: f64 = 1e10;
 
 impl WelchPlanner {
-    /// The centroid frequency of each native bin of `channels` (module docs), Hz.
-    ///
-    /// # Errors
-    /// As [`WelchPlanner::welch_matrix`] on the same input.
-    pub fn centroid_hz(
-        &mut self,
-        channels: &[&[f64]],
-        sample_rate_hz: f64,
-        settings: &WelchSettings,
-    ) -> Result<Vec<f64>, SpectralError> {
-        let moments = self.moments(channels, sample_rate_hz, settings, 1)?;
-        Ok(centroids(
-            moments.as_ref().map(|m| &m[0]),
-            channels.len(),
-            sample_rate_hz,
-            settings.segment_len,
-        ))
-    }
-
     /// The three inputs' centroids and offset matrices (module docs, "Offset matrix"), Hz.
     ///
     /// # Errors
@@ -114,38 +95,8 @@ impl WelchPlanner {
         settings: &WelchSettings,
         parts: usize,
     ) -> Result<Option<Vec<InputMoments>>, SpectralError> {
-        let Some(groups) = self.moments(&inputs, sample_rate_hz, settings, parts)? else {
-            return Ok(None);
-        };
-        let matrices = |v: &[Complex64]| -> Vec<Matrix3<Complex64>> {
-            v.chunks_exact(9)
-                .map(|c| Matrix3::from_fn(|a, b| c[3 * a + b]))
-                .collect()
-        };
-        Ok(Some(
-            groups
-                .iter()
-                .map(|g| InputMoments {
-                    power: matrices(&g.power),
-                    shifted: matrices(&g.shifted),
-                    sample_rate_hz,
-                    segment_len: settings.segment_len,
-                })
-                .collect(),
-        ))
-    }
-
-    /// Per native bin and group of segments (as [`Self::input_moments`] groups them), the sums
-    /// of `X_h X_h^H` and `(j X_Dh) X_h^H` (channel by channel, row-major); `None` for a window
-    /// open at its ends.
-    fn moments(
-        &mut self,
-        channels: &[&[f64]],
-        sample_rate_hz: f64,
-        settings: &WelchSettings,
-        parts: usize,
-    ) -> Result<Option<Vec<Moments>>, SpectralError> {
-        super::welch::check_input(channels, sample_rate_hz, settings)?;
+        let channels = inputs;
+        super::welch::check_input(&channels, sample_rate_hz, settings)?;
         let n_segments = settings.n_segments(channels[0].len());
         if parts == 0 || parts > n_segments.max(1) {
             return Err(SpectralError::BadParts { parts, n_segments });
@@ -162,16 +113,21 @@ impl WelchPlanner {
             .map(|i| 0.5 * (window[(i + 1) % n] - window[(i + n - 1) % n]) * sample_rate_hz)
             .collect();
         let fft = self.real_fft(n);
-        let (bins, c) = (n / 2 + 1, channels.len());
+        let bins = n / 2 + 1;
         let (mut plain, mut weighted) = (fft.make_input_vec(), fft.make_input_vec());
-        let mut x_h = vec![fft.make_output_vec(); c];
-        let mut x_dh = vec![fft.make_output_vec(); c];
+        let mut x_h = [
+            fft.make_output_vec(),
+            fft.make_output_vec(),
+            fft.make_output_vec(),
+        ];
+        let mut x_dh = x_h.clone();
         let mut scratch = fft.make_scratch_vec();
-        let zero = Complex64::new(0.0, 0.0);
-        let mut groups: Vec<Moments> = (0..parts)
-            .map(|_| Moments {
-                power: vec![zero; bins * c * c],
-                shifted: vec![zero; bins * c * c],
+        let mut groups: Vec<InputMoments> = (0..parts)
+            .map(|_| InputMoments {
+                power: vec![Matrix3::zeros(); bins],
+                shifted: vec![Matrix3::zeros(); bins],
+                sample_rate_hz,
+                segment_len: n,
             })
             .collect();
         let mut segment = vec![0.0; n];
@@ -191,12 +147,12 @@ impl WelchPlanner {
             // Segment `s` is in group `p` when `p n / parts <= s < (p + 1) n / parts`.
             let group = &mut groups[((s + 1) * parts - 1) / n_segments];
             for k in 0..bins {
-                for a in 0..c {
+                for a in 0..3 {
                     let shift = Complex64::i() * x_dh[a][k];
-                    for b in 0..c {
+                    for b in 0..3 {
                         let conj = x_h[b][k].conj();
-                        group.power[(k * c + a) * c + b] += x_h[a][k] * conj;
-                        group.shifted[(k * c + a) * c + b] += shift * conj;
+                        group.power[k][(a, b)] += x_h[a][k] * conj;
+                        group.shifted[k][(a, b)] += shift * conj;
                     }
                 }
             }
@@ -205,7 +161,7 @@ impl WelchPlanner {
     }
 }
 
-/// The three inputs' power centroids ([`WelchPlanner::centroid_hz`]) and offset matrices.
+/// The three inputs' power centroids and offset matrices ([`WelchPlanner::input_centroids`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct InputCentroids {
     /// Per native bin, the inputs' power centroid `f_c`, Hz.
@@ -219,7 +175,7 @@ impl InputCentroids {
     /// The bin centres with no offsets (a window without a derivative).
     #[must_use]
     pub fn centres(sample_rate_hz: f64, segment_len: usize) -> Self {
-        let hz = centroids(None, 3, sample_rate_hz, segment_len);
+        let hz = centroids(None, sample_rate_hz, segment_len);
         Self {
             offset_hz: vec![Matrix3::zeros(); hz.len()],
             hz,
@@ -257,17 +213,8 @@ impl InputMoments {
     /// The centroids and offset matrices these moments give (module docs).
     #[must_use]
     pub fn centroids(&self) -> InputCentroids {
-        let flat = |v: &[Matrix3<Complex64>]| -> Vec<Complex64> {
-            v.iter()
-                .flat_map(|m| (0..9).map(move |e| m[(e / 3, e % 3)]))
-                .collect()
-        };
-        let moments = Moments {
-            power: flat(&self.power),
-            shifted: flat(&self.shifted),
-        };
         let n = self.segment_len;
-        let hz = centroids(Some(&moments), 3, self.sample_rate_hz, n);
+        let hz = centroids(Some(self), self.sample_rate_hz, n);
         let df = self.sample_rate_hz / n as f64;
         let offset_hz = hz
             .iter()
@@ -289,16 +236,8 @@ impl InputMoments {
     }
 }
 
-/// Sums over segments per native bin, `c x c` row-major per bin.
-struct Moments {
-    /// `sum X_h X_h^H`.
-    power: Vec<Complex64>,
-    /// `sum (j X_Dh) X_h^H`, rad/s times `power`'s units.
-    shifted: Vec<Complex64>,
-}
-
 /// The power centroid of each bin from the moments' traces (the bin centres without moments).
-fn centroids(moments: Option<&Moments>, c: usize, sample_rate_hz: f64, n: usize) -> Vec<f64> {
+fn centroids(moments: Option<&InputMoments>, sample_rate_hz: f64, n: usize) -> Vec<f64> {
     let df = sample_rate_hz / n as f64;
     let bins = n / 2 + 1;
     let nyquist = 0.5 * sample_rate_hz;
@@ -306,9 +245,8 @@ fn centroids(moments: Option<&Moments>, c: usize, sample_rate_hz: f64, n: usize)
         .map(|k| {
             let f = k as f64 * df;
             let Some(m) = moments else { return f };
-            let trace = |v: &[Complex64]| (0..c).map(|a| v[(k * c + a) * c + a].re).sum::<f64>();
-            let den = trace(&m.power);
-            let c_hz = f + trace(&m.shifted) / den / (2.0 * std::f64::consts::PI);
+            let den = m.power[k].trace().re;
+            let c_hz = f + m.shifted[k].trace().re / den / (2.0 * std::f64::consts::PI);
             if den > 0.0 && c_hz.is_finite() {
                 c_hz.clamp(
                     (f - MAIN_LOBE_BINS * df).max(0.5 * f),
@@ -374,8 +312,9 @@ mod tests {
             .map(|t| (2.0 * std::f64::consts::PI * line * t as f64 / rate + 0.4).sin())
             .collect();
         let c = WelchPlanner::new()
-            .centroid_hz(&[&x], rate, &settings(n, Window::Hann))
-            .unwrap();
+            .input_centroids([&x, &x, &x], rate, &settings(n, Window::Hann))
+            .unwrap()
+            .hz;
         for k in 9..=12 {
             assert!((c[k] - line).abs() < 1e-4, "bin {k}: {} against {line}", c[k]);
         }
@@ -525,8 +464,9 @@ mod tests {
         let mut rng = crate::rng::Rng::new(9);
         let x: Vec<f64> = (0..400 * n).map(|_| rng.normal()).collect();
         let c = WelchPlanner::new()
-            .centroid_hz(&[&x], rate, &settings(n, Window::Hann))
-            .unwrap();
+            .input_centroids([&x, &x, &x], rate, &settings(n, Window::Hann))
+            .unwrap()
+            .hz;
         let df = rate / n as f64;
         let offsets: Vec<f64> = (5..n / 2 - 5).map(|k| (c[k] - k as f64 * df) / df).collect();
         let mean = offsets.iter().sum::<f64>() / offsets.len() as f64;
@@ -550,8 +490,9 @@ mod tests {
             })
             .collect();
         let c = WelchPlanner::new()
-            .centroid_hz(&[&x], rate, &settings(n, Window::Hann))
-            .unwrap();
+            .input_centroids([&x, &x, &x], rate, &settings(n, Window::Hann))
+            .unwrap()
+            .hz;
         let df = rate / n as f64;
         for (k, f) in c.iter().enumerate().skip(1).take(8) {
             let centre = k as f64 * df;
@@ -567,8 +508,9 @@ mod tests {
         let x: Vec<f64> = (0..4096_u32).map(|t| (0.3 * f64::from(t)).sin()).collect();
         for window in [Window::Rectangular, Window::Hamming] {
             let c = WelchPlanner::new()
-                .centroid_hz(&[&x], 100.0, &settings(256, window))
-                .unwrap();
+                .input_centroids([&x, &x, &x], 100.0, &settings(256, window))
+                .unwrap()
+                .hz;
             for (k, f) in c.iter().enumerate() {
                 assert!((f - k as f64 * 100.0 / 256.0).abs() < 1e-12, "{window:?} bin {k}");
             }
@@ -580,8 +522,9 @@ mod tests {
             .map(|t| (2.0 * std::f64::consts::PI * line * t as f64 / rate).sin())
             .collect();
         let c = WelchPlanner::new()
-            .centroid_hz(&[&x], rate, &settings(n, Window::BlackmanHarris))
-            .unwrap();
+            .input_centroids([&x, &x, &x], rate, &settings(n, Window::BlackmanHarris))
+            .unwrap()
+            .hz;
         assert!(
             (c[10] - line).abs() < 1e-3 && (c[11] - line).abs() < 1e-3,
             "{} {}",

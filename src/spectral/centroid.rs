@@ -38,9 +38,10 @@
 //!
 //! exact for lines at any offset inside the main lobe, `G = 0` when every input's power shares
 //! the centroid, and `diag(f_j - f_c)` for uncorrelated lines at `f_j`
-//! ([`WelchPlanner::input_centroids`]). `G` is set to zero where `S` is singular, where `f_c` was
-//! held (a drift's image from the negative frequencies), at DC and Nyquist and where an element
-//! reaches past the main lobe: the model is then compared at `f_c`.
+//! ([`WelchPlanner::input_centroids`]). `G` is formed direction by direction of `S`'s eigenvectors:
+//! a direction where `S` is near singular, or whose offset reaches past the main lobe, is left
+//! out (compared at `f_c`) and the others kept. `G` is zero where `f_c` was held (a drift's image
+//! from the negative frequencies) and at DC and Nyquist.
 //!
 //! Grid and units: the native grid of the segment (`k = 0..=N/2`, `f_k = k fs / N`, ascending), Hz.
 //! Segments as the Welch estimate cuts them (start 0, step `N - noverlap`), detrended alike. A bin
@@ -59,8 +60,8 @@ use super::{SpectralError, WelchSettings};
 /// reaches the negative frequencies, whose image of a slow drift would put it below 0 Hz.
 const MAIN_LOBE_BINS: f64 = 4.0;
 
-/// The largest `||S|| ||S^-1||` (Frobenius) of the inputs' bin power for which an offset matrix
-/// is formed: beyond, the inputs are collinear there and `S^-1` amplifies rounding.
+/// The largest ratio of the inputs' bin power's largest eigenvalue to another for which that
+/// direction gets an offset: beyond, the inputs are collinear there and `S^-1` amplifies rounding.
 const MAX_CONDITION: f64 = 1e10;
 
 impl WelchPlanner {
@@ -259,9 +260,16 @@ fn centroids(moments: Option<&InputMoments>, sample_rate_hz: f64, n: usize) -> V
         .collect()
 }
 
-/// `E S^-1 / 2 pi - (f_c - f_k) I` of one bin; zero where `S` is singular (condition above
-/// [`MAX_CONDITION`]), where `f_c` was held (the bins near 0 Hz, whose image from the negative
-/// frequencies is no first-order shift) or where an element reaches past the main lobe.
+/// `E S^-1 / 2 pi - (f_c - f_k) I` of one bin, direction by direction of `S`'s eigenvectors `v`:
+/// each column `(E v / 2 pi lambda - (f_c - f_k) v)` is kept where `lambda` is at least
+/// `1 / MAX_CONDITION` of the largest (else `S^-1` there is rounding) and every element of the
+/// column lies inside the main lobe (else that direction's power is leakage from afar, which no
+/// first-order shift describes); a direction left out is compared at `f_c`. An accelerometer's
+/// specific forces at high frequency lie near the plane normal to the lever arm, so its `S` has
+/// one weak direction: it alone is left out, the other two still moved (zeroing the whole matrix
+/// there left chi2 per bin of 5-30 times its expectation on delays of 5-10 ms, growing as
+/// `tau^2`). Zero where `f_c` was held (the bins near 0 Hz, whose image from the negative
+/// frequencies is no first-order shift).
 fn offset(
     power: &Matrix3<Complex64>,
     shifted: &Matrix3<Complex64>,
@@ -269,25 +277,29 @@ fn offset(
     fk: f64,
     df: f64,
 ) -> Matrix3<Complex64> {
-    let zero = Matrix3::zeros();
-    let Some(inverse) = power.try_inverse() else {
-        return zero;
-    };
-    if power.norm() * inverse.norm() >= MAX_CONDITION || !inverse.norm().is_finite() {
-        return zero;
-    }
+    let mut g = Matrix3::zeros();
     let raw = fk + shifted.trace().re / power.trace().re / (2.0 * std::f64::consts::PI);
     let held = (raw - fc).abs();
-    if held.is_nan() || held > 1e-9 * df {
-        return zero;
+    if held.is_nan() || held > 1e-9 * df || !power.iter().all(|z| z.is_finite()) {
+        return g;
     }
-    let g = shifted * inverse / Complex64::from(2.0 * std::f64::consts::PI)
-        - Matrix3::identity() * Complex64::from(fc - fk);
-    if g.iter().all(|z| z.is_finite() && z.norm() <= MAIN_LOBE_BINS * df) {
-        g
-    } else {
-        zero
+    let eigen = nalgebra::SymmetricEigen::new(*power);
+    let largest = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
+    for (m, &lambda) in eigen.eigenvalues.iter().enumerate() {
+        if !(lambda > 0.0 && lambda * MAX_CONDITION >= largest) {
+            continue;
+        }
+        let v = eigen.eigenvectors.column(m).into_owned();
+        let column =
+            shifted * v / Complex64::from(2.0 * std::f64::consts::PI * lambda) - v * Complex64::from(fc - fk);
+        if column
+            .iter()
+            .all(|z| z.is_finite() && z.norm() <= MAIN_LOBE_BINS * df)
+        {
+            g += column * v.adjoint();
+        }
     }
+    g
 }
 
 #[cfg(test)]
@@ -438,12 +450,13 @@ mod tests {
         }
     }
 
-    /// Collinear inputs (one signal on all three axes): `S` is singular, no offset matrix is
-    /// formed and the model is compared at the centroid, which is the line's.
+    /// Collinear inputs (one signal on all three axes): `S` has one direction, whose offset from
+    /// the centroid (the line's) is none; the model is compared at the line.
     #[test]
     fn collinear_inputs_get_no_offset_matrix() {
         let (rate, n) = (500.0, 1024);
-        let line = 10.37 * rate / n as f64;
+        let df = rate / n as f64;
+        let line = 10.37 * df;
         let u: Vec<f64> = (0..16 * n)
             .map(|i| (2.0 * std::f64::consts::PI * line * i as f64 / rate).sin())
             .collect();
@@ -452,7 +465,45 @@ mod tests {
             .unwrap();
         for k in 9..=12 {
             assert!((c.hz[k] - line).abs() < 1e-4, "bin {k}: {}", c.hz[k]);
-            assert_eq!(c.offset_hz[k], Matrix3::zeros(), "bin {k}");
+            // The real sine's image at the negative frequency alone (2e-5 df).
+            assert!(c.offset_hz[k].norm() < 1e-4 * df, "bin {k}: {}", c.offset_hz[k]);
+        }
+    }
+
+    /// Two lines at different places in a bin on two inputs and their sum on the third (an
+    /// accelerometer's specific forces near a plane): `S` is singular in one direction, and the
+    /// other two keep their offsets, so `G S = E / 2 pi - (f_c - f_k) S` still holds (the whole
+    /// matrix was zeroed before, leaving a misfit growing with the delay).
+    #[test]
+    fn a_singular_direction_leaves_the_others_their_offsets() {
+        let (rate, n) = (500.0, 1024);
+        let df = rate / n as f64;
+        let lines = [10.15 * df, 10.7 * df];
+        let wave = |f: f64, phase: f64| -> Vec<f64> {
+            (0..16 * n)
+                .map(|i| (2.0 * std::f64::consts::PI * f * i as f64 / rate + phase).sin())
+                .collect()
+        };
+        let (a, b) = (wave(lines[0], 0.3), wave(lines[1], 1.1));
+        let sum: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + y).collect();
+        let settings = settings(n, Window::Hann);
+        let moments = WelchPlanner::new()
+            .input_moments([&a, &b, &sum], rate, &settings, 1)
+            .unwrap()
+            .unwrap();
+        let c = moments[0].centroids();
+        for k in 9..=12 {
+            let (s, e) = (moments[0].power[k], moments[0].shifted[k]);
+            let want = e / Complex64::from(2.0 * std::f64::consts::PI)
+                - s * Complex64::from(c.hz[k] - k as f64 * df);
+            let got = c.offset_hz[k] * s;
+            assert!(want.norm() > 1e-3 * df * s.norm(), "bin {k}: no offset to keep");
+            assert!(
+                (got - want).norm() < 1e-6 * want.norm(),
+                "bin {k}: {:e} of {:e}",
+                (got - want).norm(),
+                want.norm()
+            );
         }
     }
 

@@ -17,8 +17,9 @@
 //! the order asked: a refit for another order finds the same moved data (`super::warm`'s "same
 //! data"), and a cold fit is what [`super::fit_structure`] gives on them. What is left is the
 //! chosen model's slope less the order-0 slope, times `G`: the poles' own phase slope over a
-//! fraction of a bin, second order. Without offsets (`ResponseEstimate::offset_hz` `None`)
-//! nothing changes.
+//! fraction of a bin, second order. The settled order-0 model's residual also tells where the
+//! weights overstate the estimate's scatter: there they are narrowed to it (`super::scatter`).
+//! Without offsets (`ResponseEstimate::offset_hz` `None`) nothing changes.
 //!
 //! Units: Hz for `f` and `G`, `W'` per Hz.
 
@@ -86,7 +87,7 @@ impl StructuralFit {
 fn moved(
     input: &ResponseEstimate,
     offsets: &[Matrix3<Complex64>],
-    k: &[f64; 9],
+    k: &[f64; super::model::ELEMENTS],
     tau: f64,
 ) -> Vec<Matrix3<Complex64>> {
     let gain = Matrix3::from_fn(|i, j| Complex64::from(k[3 * i + j]));
@@ -104,13 +105,18 @@ fn moved(
         .collect()
 }
 
-/// `input`'s estimate moved to its bins' frequencies by the settled order-0 fit (module docs);
-/// `None` without offsets, or when no finite order-0 fit can be made (the orders' own fits then
-/// say why).
-pub(super) fn moved_estimate(
-    input: &ResponseEstimate,
-    settings: &StructuralSettings,
-) -> Option<Vec<Matrix3<Complex64>>> {
+/// An estimate moved to its bins (module docs) and its weights narrowed to the settled order-0
+/// model's scatter (`super::scatter`; `None`: as given).
+pub(super) struct Aligned {
+    response: Vec<Matrix3<Complex64>>,
+    weights: Option<Vec<[Matrix3<Complex64>; 3]>>,
+}
+
+/// `input`'s estimate moved to its bins' frequencies by the settled order-0 fit (module docs),
+/// with its row weights narrowed where that fit's residual scatters less than they say
+/// (`super::scatter`); `None` without offsets, or when no finite order-0 fit can be made (the
+/// orders' own fits then say why).
+pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSettings) -> Option<Aligned> {
     let offsets = input.offset_hz?;
     // The model alone (gain and delay, no deviations) is what the move needs; the weights are
     // the input's throughout, and each pass starts from the last delay.
@@ -131,35 +137,44 @@ pub(super) fn moved_estimate(
             None => super::gain_delay::fit(&data, lo, hi),
         };
         let finite = model.tau.is_finite() && model.num.first()?.iter().all(|v| v.is_finite());
-        finite.then(|| (model.num[0], model.tau, data.omega_ref))
+        finite.then_some((model, data))
     };
-    let (mut k, mut tau, omega_top) = order0(input.response, None)?;
-    let mut response = moved(input, offsets, &k, tau);
+    let (mut model, mut data) = order0(input.response, None)?;
+    let mut response = moved(input, offsets, &model.num[0], model.tau);
     for _ in 0..PASSES {
-        let Some((next_k, next_tau, _)) = order0(&response, Some(tau)) else {
+        let Some((next, next_data)) = order0(&response, Some(model.tau)) else {
             break;
         };
         // Settled when the delay's change turns the band's top by less than `SETTLED_RAD`: the
         // move changes by less than that fraction of itself.
-        let settled = (next_tau - tau).abs() * omega_top <= SETTLED_RAD;
-        (k, tau) = (next_k, next_tau);
-        response = moved(input, offsets, &k, tau);
+        let settled = (next.tau - model.tau).abs() * next_data.omega_ref <= SETTLED_RAD;
+        (model, data) = (next, next_data);
+        response = moved(input, offsets, &model.num[0], model.tau);
         if settled {
             break;
         }
     }
-    Some(response)
+    // The settled model's scatter on the response it was fitted to (the last pass's).
+    let weights = match input.weights {
+        super::Weights::RowWeight(_) => super::scatter::narrowed(&rows, &model.chi2_rows(&data)),
+        super::Weights::Variance(_) => None,
+    };
+    Some(Aligned { response, weights })
 }
 
-/// `input` with `response` in place of its estimate (moved to its bins), or as it is.
+/// `input` with an aligned estimate and weights in place of its own, or as it is.
 pub(super) fn at_bins<'b>(
     input: &ResponseEstimate<'b>,
-    response: Option<&'b [Matrix3<Complex64>]>,
+    aligned: Option<&'b Aligned>,
 ) -> ResponseEstimate<'b> {
-    match response {
-        Some(response) => ResponseEstimate {
-            response,
+    match aligned {
+        Some(aligned) => ResponseEstimate {
+            response: &aligned.response,
             offset_hz: None,
+            weights: aligned
+                .weights
+                .as_deref()
+                .map_or(input.weights, super::Weights::RowWeight),
             ..*input
         },
         None => *input,

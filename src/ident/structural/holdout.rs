@@ -41,8 +41,8 @@ pub fn held_out_chi2(
         moved_estimate(first, &settings),
         moved_estimate(second, &settings),
     );
-    let first = at_bins(first, moved_first.as_deref());
-    let second = at_bins(second, moved_second.as_deref());
+    let first = at_bins(first, moved_first.as_ref());
+    let second = at_bins(second, moved_second.as_ref());
     let (a, highest_a) = prepare(&first, OrderChoice::Auto, &settings)?;
     let (b, highest_b) = prepare(&second, OrderChoice::Auto, &settings)?;
     let highest = highest_a.min(highest_b);

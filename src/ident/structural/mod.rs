@@ -69,6 +69,7 @@ mod project;
 mod rational;
 mod report;
 pub(crate) mod sandwich;
+mod scatter;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
@@ -77,6 +78,8 @@ mod tests_gls;
 mod tests_holdout;
 #[cfg(test)]
 mod tests_noise;
+#[cfg(test)]
+mod tests_scatter;
 #[cfg(test)]
 mod tests_warm;
 mod warm;
@@ -473,7 +476,7 @@ pub fn fit_structure(
 ) -> Result<StructuralFit, StructuralError> {
     validate(input)?;
     let moved = align::moved_estimate(input, settings);
-    let input = align::at_bins(input, moved.as_deref());
+    let input = align::at_bins(input, moved.as_ref());
     let (data, highest) = prepare(&input, order, settings)?;
     finish(&data, highest, order, settings, order::Starts::Cold, true)
 }

@@ -205,15 +205,23 @@ impl Model {
 
     /// The generalised least-squares residual `chi2 = sum 2 r_i Omega_i r_i^H`.
     pub fn chi2(&self, data: &Prepared) -> f64 {
-        let mut chi2 = 0.0;
-        for k in 0..data.bins() {
-            let m = self.at(data, k);
-            for (i, weight) in data.rows[k].iter().enumerate() {
-                let r = std::array::from_fn(|j| data.h[k][3 * i + j] - m[3 * i + j]);
-                chi2 += 2.0 * weight.quadratic(&r);
-            }
-        }
-        chi2
+        (0..data.bins())
+            .map(|k| self.bin_chi2(data, k).iter().sum::<f64>())
+            .sum()
+    }
+
+    /// [`Self::chi2`]'s terms, per bin and output row (six real degrees of freedom each).
+    pub fn chi2_rows(&self, data: &Prepared) -> Vec<[f64; 3]> {
+        (0..data.bins()).map(|k| self.bin_chi2(data, k)).collect()
+    }
+
+    /// The three rows' `2 r_i Omega_i r_i^H` at bin `k`.
+    fn bin_chi2(&self, data: &Prepared, k: usize) -> [f64; 3] {
+        let m = self.at(data, k);
+        std::array::from_fn(|i| {
+            let r = std::array::from_fn(|j| data.h[k][3 * i + j] - m[3 * i + j]);
+            2.0 * data.rows[k][i].quadratic(&r)
+        })
     }
 
     /// Standard deviations of every parameter, in the order `num` (coefficient-major, then

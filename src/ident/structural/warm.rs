@@ -108,7 +108,7 @@ pub fn refit_structure(
 ) -> Result<StructuralFit, StructuralError> {
     super::validate(input)?;
     let moved = super::align::moved_estimate(input, settings);
-    let input = super::align::at_bins(input, moved.as_deref());
+    let input = super::align::at_bins(input, moved.as_ref());
     let (data, highest) = super::prepare(&input, order, settings)?;
     let kept = &previous.fitted;
     if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {

@@ -357,8 +357,9 @@ pub fn resolve_band(spectra: &BlockSpectra, block: Block, band: BandSetting) -> 
 
 /// The generalised least-squares weights of the three output rows of an `H1`-type estimate at one
 /// bin: `Omega_i = dof S_uu / S_psi,ii` (`S_uu` made Hermitian; `noise` is `S_psi`), the inverse
-/// covariance of row `i`. The structural fit, the self-check's per-bin chi2 and the stretches'
-/// fits all weigh with this.
+/// covariance of row `i`. The structural fit (which narrows them where the estimate scatters
+/// less, `structural::scatter`), the self-check's per-bin chi2 and the stretches' fits all start
+/// from this.
 #[must_use]
 pub fn row_weights(
     s_uu: &Matrix3<Complex64>,
@@ -372,7 +373,9 @@ pub fn row_weights(
 /// Fits the structural model to `W_u` over the band by generalised least squares: the estimate of
 /// output row `i` has covariance `S_psi,ii S_uu^-1 / (n_eq - 3)`, so its weight is
 /// `Omega_i = (n_eq - 3) S_uu / S_psi,ii`, which weighs collinear inputs correctly (the
-/// accelerometer's x and y specific forces are nearly collinear at high frequency).
+/// accelerometer's x and y specific forces are nearly collinear at high frequency). The fit
+/// raises these weights where the estimate scatters less than they say (`structural::scatter`:
+/// part of `S_psi` is the system's slope across the bin, which does not scatter `H1`).
 ///
 /// With `held_out` (the halves' figures, [`cached_held_out`]), `auto` admits an order above 0 only
 /// when it predicts held-out data better than every lower order (admissibility rule 7). With

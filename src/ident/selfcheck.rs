@@ -49,7 +49,9 @@ pub const GAIN_TOLERANCE: f64 = 0.1;
 pub const IMPRECISE_GAIN: f64 = 0.01;
 
 /// Per-bin chi2 of `fit` against the Wiener estimate over the native `band` bins, with the
-/// structural fit's weights `Omega_i = (n_eq - 3) S_uu / S_psi,ii`; `noise` is `S_psi` per bin.
+/// weights `Omega_i = (n_eq - 3) S_uu / S_psi,ii` as given to the structural fit (before its
+/// narrowing to the local scatter, `structural::scatter`, which only raises them where they
+/// overstate the noise: a misfit here is one there); `noise` is `S_psi` per bin.
 #[must_use]
 pub fn chi2_per_bin(
     spectra: &BlockSpectra,

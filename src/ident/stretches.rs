@@ -4,7 +4,8 @@
 //! [`MIN_SEGMENTS`] segments each, at most [`MAX_STRETCHES`] stretches, none when fewer than
 //! [`MIN_STRETCHES`] fit). Each stretch gets its own spectral matrices on the segment's native grid
 //! (no zero-padding: they only feed an order-0 fit) and its own `K e^(-tau s)`, fitted to the H1
-//! estimate `S_xu S_uu^-1` over the block's band with the stretch's own residual weights, each
+//! estimate `S_xu S_uu^-1` over the block's band with the stretch's own residual weights (as given:
+//! not narrowed to the stretch's scatter, `structural::scatter`, since they are floors), each
 //! bin compared where the stretch's own inputs' power lies (its moments' centroids and offset
 //! matrices, [`compared_at`]: a stepped sine programme's lines differ from stretch to stretch).
 //!
@@ -335,9 +336,12 @@ fn fit_stretch(s: &StretchSpectra, native: &[usize], step: usize, at: At) -> Opt
         weights: Weights::RowWeight(&weights),
         offset_hz: at.offset_hz,
     };
+    // The stretches' deviations floor the record's and judge its drift: their weights stay as
+    // given (`structural::scatter` would narrow them to each stretch's own scatter).
     let settings = StructuralSettings {
         tau_min_s: -STRETCH_DELAY_REACH_S,
         tau_max_s: STRETCH_DELAY_REACH_S,
+        narrow_to_scatter: false,
         ..StructuralSettings::default()
     };
     let fit = fit_structure(&input, OrderChoice::Fixed(0), &settings).ok()?;

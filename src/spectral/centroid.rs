@@ -167,8 +167,9 @@ impl WelchPlanner {
 pub struct InputCentroids {
     /// Per native bin, the inputs' power centroid `f_c`, Hz.
     pub hz: Vec<f64>,
-    /// Per native bin, `G = E S^-1 / 2 pi - (f_c - f_k) I`, Hz (module docs): zero where the
-    /// first-order relation is not trusted.
+    /// Per native bin, `G = E S^-1 / 2 pi - (f_c - f_k) I`, Hz (module docs): zero in the
+    /// directions where the first-order relation is not trusted, and at the bins where it is not
+    /// at all.
     pub offset_hz: Vec<Matrix3<Complex64>>,
 }
 
@@ -261,10 +262,12 @@ fn centroids(moments: Option<&InputMoments>, sample_rate_hz: f64, n: usize) -> V
 }
 
 /// `E S^-1 / 2 pi - (f_c - f_k) I` of one bin, direction by direction of `S`'s eigenvectors `v`:
-/// each column `(E v / 2 pi lambda - (f_c - f_k) v)` is kept where `lambda` is at least
-/// `1 / MAX_CONDITION` of the largest (else `S^-1` there is rounding) and every element of the
-/// column lies inside the main lobe (else that direction's power is leakage from afar, which no
-/// first-order shift describes); a direction left out is compared at `f_c`. An accelerometer's
+/// each column `(E v / 2 pi lambda - (f_c - f_k) v)` (`lambda = v^H S v`) is kept where `lambda` is
+/// at least `1 / MAX_CONDITION` of the largest (else `S^-1` there is rounding) and the column's
+/// norm lies inside the main lobe (else that direction's power is leakage from afar, which no
+/// first-order shift describes); a direction left out is compared at `f_c` (`G v = 0`). With every
+/// direction kept this is the formula itself; which directions of a repeated eigenvalue are kept
+/// depends on the basis the decomposition picks. An accelerometer's
 /// specific forces at high frequency lie near the plane normal to the lever arm, so its `S` has
 /// one weak direction: it alone is left out, the other two still moved (zeroing the whole matrix
 /// there left chi2 per bin of 5-30 times its expectation on delays of 5-10 ms, growing as
@@ -285,17 +288,16 @@ fn offset(
     }
     let eigen = nalgebra::SymmetricEigen::new(*power);
     let largest = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
-    for (m, &lambda) in eigen.eigenvalues.iter().enumerate() {
+    for m in 0..3 {
+        let v = eigen.eigenvectors.column(m).into_owned();
+        // The direction's own power (its Rayleigh quotient), not the eigenvalue as paired.
+        let lambda = (v.adjoint() * power * v)[(0, 0)].re;
         if !(lambda > 0.0 && lambda * MAX_CONDITION >= largest) {
             continue;
         }
-        let v = eigen.eigenvectors.column(m).into_owned();
         let column =
             shifted * v / Complex64::from(2.0 * std::f64::consts::PI * lambda) - v * Complex64::from(fc - fk);
-        if column
-            .iter()
-            .all(|z| z.is_finite() && z.norm() <= MAIN_LOBE_BINS * df)
-        {
+        if column.iter().all(|z| z.is_finite()) && column.norm() <= MAIN_LOBE_BINS * df {
             g += column * v.adjoint();
         }
     }
@@ -453,7 +455,7 @@ mod tests {
     /// Collinear inputs (one signal on all three axes): `S` has one direction, whose offset from
     /// the centroid (the line's) is none; the model is compared at the line.
     #[test]
-    fn collinear_inputs_get_no_offset_matrix() {
+    fn collinear_inputs_are_compared_at_their_line() {
         let (rate, n) = (500.0, 1024);
         let df = rate / n as f64;
         let line = 10.37 * df;
@@ -498,6 +500,10 @@ mod tests {
                 - s * Complex64::from(c.hz[k] - k as f64 * df);
             let got = c.offset_hz[k] * s;
             assert!(want.norm() > 1e-3 * df * s.norm(), "bin {k}: no offset to keep");
+            // The singular direction (the third input less the other two) is left out.
+            let null = nalgebra::Vector3::new(1.0, 1.0, -1.0).map(Complex64::from);
+            let along = c.offset_hz[k] * null;
+            assert!(along.norm() < 1e-6 * df, "bin {k}: {along}");
             assert!(
                 (got - want).norm() < 1e-6 * want.norm(),
                 "bin {k}: {:e} of {:e}",

@@ -156,8 +156,13 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
     }
     // The settled model's scatter on the response it was fitted to (the last pass's).
     let weights = match input.weights {
-        super::Weights::RowWeight(_) => super::scatter::narrowed(&rows, &model.chi2_rows(&data)),
-        super::Weights::Variance(_) => None,
+        super::Weights::RowWeight(_) if settings.narrow_to_scatter => super::scatter::narrowed(
+            &rows,
+            &model.chi2_rows(&data),
+            super::model::parameter_count(0),
+            settings.bin_correlation,
+        ),
+        _ => None,
     };
     Some(Aligned { response, weights })
 }

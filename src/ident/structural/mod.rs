@@ -26,12 +26,15 @@
 //! mapped onto the same code path. The factor 2 counts the real and imaginary parts: with
 //! `Omega_i = L_i L_i^H` the whitened real residuals are `sqrt(2) (Re, Im)(r_i L_i)`, of unit
 //! variance, and chi2 is chi-square with `dof = 18 n_bins - p` degrees of freedom when the model
-//! is right and the weights are the true inverse covariances.
+//! is right and the weights are the true inverse covariances. Row weights of an estimate with
+//! offsets are raised where the moved estimate's order-0 residual scatters less than they say
+//! (`scatter`: by at most 100 times; never lowered), as the fit then uses them.
 //!
 //! # Uncertainty
 //! The standard deviations are the square roots of the diagonal of the Gauss–Newton covariance
 //! `(J^T J)^-1` at the optimum (J the Jacobian of the whitened real residuals), multiplied by `max(1, chi2 / dof)`: a fit worse than the stated noise
-//! allows widens its error bars, a fit better than it never narrows them. Per parameter, the
+//! allows widens its error bars, a fit better than it does not narrow them here (the weights'
+//! own narrowing to the local scatter, `scatter`, comes before). Per parameter, the
 //! sandwich `(J^T J)^-1 M (J^T J)^-1` of the bins' own scores replaces it where it is wider
 //! ([`sandwich`]): a misfit that piles up in some bins (on `--stand real` runs, the
 //! accelerometer's frequency-dependent errors in variables) is seen there, not in the one
@@ -182,6 +185,10 @@ pub struct StructuralSettings {
     /// both halves). With it, [`OrderChoice::Auto`] applies admissibility rule 7 (an order must
     /// predict the other half of the record better than every lower order); `None` skips it.
     pub held_out_chi2: Option<[Option<f64>; MAX_ORDER + 1]>,
+    /// Whether an aligned estimate's row weights are raised where its order-0 residual scatters
+    /// less than they say (`scatter`). Off for fits whose deviations serve as floors (the
+    /// stationarity stretches).
+    pub narrow_to_scatter: bool,
 }
 
 impl Default for StructuralSettings {
@@ -193,6 +200,7 @@ impl Default for StructuralSettings {
             criterion: InformationCriterion::Bic,
             bin_correlation: 1.0,
             held_out_chi2: None,
+            narrow_to_scatter: true,
         }
     }
 }

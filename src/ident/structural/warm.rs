@@ -17,8 +17,9 @@
 //!   the cold answer refit cold afterwards (the app does).
 //!
 //! An estimate with offsets is moved to its bins first, as [`fit_structure`](super::fit_structure)
-//! moves it ([`super::align`]: by the order-0 fit, whatever the order asked), so "same data" is the
-//! same moved estimate, and an order change on it reuses the models exactly.
+//! moves it ([`super::align`]: by the order-0 fit, whatever the order asked), with the weights
+//! that fit's residual narrows (`super::scatter`), so "same data" is the same moved estimate and
+//! weights, and an order change on it reuses the models exactly.
 //!
 //! Units and contracts are those of the module: the same errors as `fit_structure`, for the same
 //! inputs, and no NaN in any output.

@@ -18,6 +18,9 @@ pub(super) struct RowWeight {
     /// `L_i` with `L_i L_i^H = Omega_i` (eigen square root; negative rounding eigenvalues
     /// clamped to zero).
     pub white: Matrix3<Complex64>,
+    /// The rank of `Omega_i` (eigenvalues above [`TOLERANCE`] of the largest): the row's complex
+    /// degrees of freedom, `2 rank` real ones in its chi2.
+    pub rank: u8,
 }
 
 /// Validates `weights` and returns, per bin, the three rows' weights.
@@ -62,6 +65,7 @@ fn from_variance(bin: usize, v: &Matrix3<f64>) -> Result<[RowWeight; 3], Structu
         RowWeight {
             omega: diag(|x| 1.0 / x),
             white: diag(|x| 1.0 / x.sqrt()),
+            rank: 3,
         }
     }))
 }
@@ -89,7 +93,17 @@ fn from_matrix(bin: usize, row: usize, m: &Matrix3<Complex64>) -> Result<RowWeig
     }
     let roots = eigen.eigenvalues.map(|l| l.max(0.0).sqrt());
     let white = Matrix3::from_fn(|j, l| eigen.eigenvectors[(j, l)] * roots[l]);
-    Ok(RowWeight { omega, white })
+    let largest = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let rank = eigen
+        .eigenvalues
+        .iter()
+        .filter(|&&l| l > TOLERANCE * largest && l > 0.0)
+        .count();
+    Ok(RowWeight {
+        omega,
+        white,
+        rank: u8::try_from(rank).unwrap_or(3),
+    })
 }
 
 impl RowWeight {

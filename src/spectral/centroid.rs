@@ -286,6 +286,17 @@ fn offset(
     if held.is_nan() || held > 1e-9 * df || !power.iter().all(|z| z.is_finite()) {
         return g;
     }
+    // Every direction kept (the common case): the formula itself, without the eigenvectors. The
+    // Frobenius condition bounds the eigenvalues' ratio and `||G||_F` every column's norm.
+    if let Some(inverse) = power.try_inverse()
+        && power.norm() * inverse.norm() < MAX_CONDITION
+    {
+        let full = shifted * inverse / Complex64::from(2.0 * std::f64::consts::PI)
+            - Matrix3::identity() * Complex64::from(fc - fk);
+        if full.iter().all(|z| z.is_finite()) && full.norm() <= MAIN_LOBE_BINS * df {
+            return full;
+        }
+    }
     let eigen = nalgebra::SymmetricEigen::new(*power);
     let largest = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
     for m in 0..3 {
@@ -511,6 +522,43 @@ mod tests {
                 want.norm()
             );
         }
+    }
+
+    /// Every direction kept gives the formula itself, on the shortcut (a well-conditioned bin) and
+    /// through the eigenvectors (a `G` whose norm exceeds the main lobe though no column does).
+    #[test]
+    fn every_direction_kept_is_the_formula() {
+        let df = 0.5;
+        let two_pi = Complex64::from(2.0 * std::f64::consts::PI);
+        let formula = |s: &Matrix3<Complex64>, e: &Matrix3<Complex64>, fc: f64, fk: f64| {
+            e * s.try_inverse().unwrap() / two_pi - Matrix3::identity() * Complex64::from(fc - fk)
+        };
+        let centroid = |s: &Matrix3<Complex64>, e: &Matrix3<Complex64>, fk: f64| {
+            fk + e.trace().re / s.trace().re / (2.0 * std::f64::consts::PI)
+        };
+        let mut rng = crate::rng::Rng::new(3);
+        let b = Matrix3::from_fn(|_, _| Complex64::new(rng.normal(), rng.normal()));
+        let s = b * b.adjoint() + Matrix3::identity();
+        let e = Matrix3::from_fn(|_, _| Complex64::new(rng.normal(), rng.normal()) * 0.1) * s;
+        let fk = 10.0;
+        let fc = centroid(&s, &e, fk);
+        let want = formula(&s, &e, fc, fk);
+        assert!(want.norm() <= MAIN_LOBE_BINS * df, "{}", want.norm());
+        assert!((offset(&s, &e, fc, fk, df) - want).norm() < 1e-12 * want.norm());
+        // S = diag(1, 2, 3), E S^-1 / 2 pi = diag(3, -3, 3) df: G = diag(2, -4, 2) df, of norm
+        // 4.9 df, its columns 2, 4 and 2 df.
+        let s = Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 2.0, 3.0).map(Complex64::from));
+        let d =
+            Matrix3::from_diagonal(&nalgebra::Vector3::new(3.0, -3.0, 3.0).map(|v| Complex64::from(v * df)));
+        let e = s * d * two_pi;
+        let fc = centroid(&s, &e, fk);
+        let want = formula(&s, &e, fc, fk);
+        assert!(want.norm() > MAIN_LOBE_BINS * df);
+        assert!(
+            (offset(&s, &e, fc, fk, df) - want).norm() < 1e-9 * want.norm(),
+            "{}",
+            offset(&s, &e, fc, fk, df)
+        );
     }
 
     /// White noise: the centroids scatter about the bin centres, unbiased (the mean offset over

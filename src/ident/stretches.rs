@@ -303,17 +303,17 @@ pub fn compared_at(
     let Some(moments) = s.moments.as_ref() else {
         return (centres.to_vec(), None);
     };
-    let c = moments.centroids();
-    let at = |k: usize| spectra.native_index(k).filter(|&b| b < c.hz.len());
-    let frequency_hz = native
+    // The band's bins alone: each bin's centroid and offsets are its own moments'.
+    let (frequency_hz, offsets): (Vec<f64>, Vec<Matrix3<Complex64>>) = native
         .iter()
         .zip(centres)
-        .map(|(&k, &f)| at(k).map_or(f, |b| c.hz[b]))
-        .collect();
-    let offsets: Vec<Matrix3<Complex64>> = native
-        .iter()
-        .map(|&k| at(k).map_or_else(Matrix3::zeros, |b| c.offset_hz[b]))
-        .collect();
+        .map(|(&k, &f)| {
+            spectra
+                .native_index(k)
+                .and_then(|b| moments.centroid_at(b))
+                .unwrap_or((f, Matrix3::zeros()))
+        })
+        .unzip();
     let any = offsets.iter().any(|g| g.iter().any(|z| z.norm() > 0.0));
     (frequency_hz, any.then_some(offsets))
 }

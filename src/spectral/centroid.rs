@@ -215,50 +215,60 @@ impl InputMoments {
     /// The centroids and offset matrices these moments give (module docs).
     #[must_use]
     pub fn centroids(&self) -> InputCentroids {
-        let n = self.segment_len;
-        let hz = centroids(Some(self), self.sample_rate_hz, n);
-        let df = self.sample_rate_hz / n as f64;
-        let offset_hz = hz
-            .iter()
-            .enumerate()
-            .map(|(k, &fc)| {
-                // DC and Nyquist are their own images (`E S^-1` is not a shift there). Near 0 Hz
-                // the main lobe also holds the negative frequencies' image of a line, which a
-                // rational model with real coefficients continues analytically (`W(-f) =
-                // conj W(f)`), so the first order holds there too: measured, zeroing the first
-                // four bins left misfits of 27-286 times the noise at 0.24-0.73 Hz on an
-                // independent simulator's sines.
-                if k == 0 || k == n / 2 {
-                    return Matrix3::zeros();
-                }
-                offset(&self.power[k], &self.shifted[k], fc, k as f64 * df, df)
-            })
-            .collect();
+        let (hz, offset_hz) = (0..=self.segment_len / 2)
+            .filter_map(|k| self.centroid_at(k))
+            .unzip();
         InputCentroids { hz, offset_hz }
+    }
+
+    /// [`Self::centroids`]' entry for native bin `k` alone (a band's bins need no other); `None`
+    /// past Nyquist.
+    #[must_use]
+    pub fn centroid_at(&self, k: usize) -> Option<(f64, Matrix3<Complex64>)> {
+        let n = self.segment_len;
+        if k > n / 2 {
+            return None;
+        }
+        let fc = bin_centroid(Some(self), k, self.sample_rate_hz, n);
+        // DC and Nyquist are their own images (`E S^-1` is not a shift there). Near 0 Hz the main
+        // lobe also holds the negative frequencies' image of a line, which a rational model with
+        // real coefficients continues analytically (`W(-f) = conj W(f)`), so the first order
+        // holds there too: measured, zeroing the first four bins left misfits of 27-286 times the
+        // noise at 0.24-0.73 Hz on an independent simulator's sines.
+        if k == 0 || k == n / 2 {
+            return Some((fc, Matrix3::zeros()));
+        }
+        let df = self.sample_rate_hz / n as f64;
+        Some((
+            fc,
+            offset(&self.power[k], &self.shifted[k], fc, k as f64 * df, df),
+        ))
     }
 }
 
 /// The power centroid of each bin from the moments' traces (the bin centres without moments).
 fn centroids(moments: Option<&InputMoments>, sample_rate_hz: f64, n: usize) -> Vec<f64> {
-    let df = sample_rate_hz / n as f64;
-    let bins = n / 2 + 1;
-    let nyquist = 0.5 * sample_rate_hz;
-    (0..bins)
-        .map(|k| {
-            let f = k as f64 * df;
-            let Some(m) = moments else { return f };
-            let den = m.power[k].trace().re;
-            let c_hz = f + m.shifted[k].trace().re / den / (2.0 * std::f64::consts::PI);
-            if den > 0.0 && c_hz.is_finite() {
-                c_hz.clamp(
-                    (f - MAIN_LOBE_BINS * df).max(0.5 * f),
-                    (f + MAIN_LOBE_BINS * df).min(nyquist).max(0.5 * f),
-                )
-            } else {
-                f
-            }
-        })
+    (0..=n / 2)
+        .map(|k| bin_centroid(moments, k, sample_rate_hz, n))
         .collect()
+}
+
+/// The power centroid of bin `k` (its centre without moments), held as the module docs say.
+fn bin_centroid(moments: Option<&InputMoments>, k: usize, sample_rate_hz: f64, n: usize) -> f64 {
+    let df = sample_rate_hz / n as f64;
+    let nyquist = 0.5 * sample_rate_hz;
+    let f = k as f64 * df;
+    let Some(m) = moments else { return f };
+    let den = m.power[k].trace().re;
+    let c_hz = f + m.shifted[k].trace().re / den / (2.0 * std::f64::consts::PI);
+    if den > 0.0 && c_hz.is_finite() {
+        c_hz.clamp(
+            (f - MAIN_LOBE_BINS * df).max(0.5 * f),
+            (f + MAIN_LOBE_BINS * df).min(nyquist).max(0.5 * f),
+        )
+    } else {
+        f
+    }
 }
 
 /// `E S^-1 / 2 pi - (f_c - f_k) I` of one bin, direction by direction of `S`'s eigenvectors `v`:

@@ -177,7 +177,8 @@ impl InputCentroids {
     /// The bin centres with no offsets (a window without a derivative).
     #[must_use]
     pub fn centres(sample_rate_hz: f64, segment_len: usize) -> Self {
-        let hz = centroids(None, sample_rate_hz, segment_len);
+        let df = sample_rate_hz / segment_len as f64;
+        let hz: Vec<f64> = (0..=segment_len / 2).map(|k| k as f64 * df).collect();
         Self {
             offset_hz: vec![Matrix3::zeros(); hz.len()],
             hz,
@@ -229,13 +230,15 @@ impl InputMoments {
         if k > n / 2 {
             return None;
         }
-        let fc = bin_centroid(Some(self), k, self.sample_rate_hz, n);
+        let (fc, held) = self.bin_centroid(k);
         // DC and Nyquist are their own images (`E S^-1` is not a shift there). Near 0 Hz the main
         // lobe also holds the negative frequencies' image of a line, which a rational model with
         // real coefficients continues analytically (`W(-f) = conj W(f)`), so the first order
         // holds there too: measured, zeroing the first four bins left misfits of 27-286 times the
         // noise at 0.24-0.73 Hz on an independent simulator's sines.
-        if k == 0 || k == n / 2 {
+        // Where `f_c` was held (the bins near 0 Hz, whose image from the negative frequencies is
+        // no first-order shift), no offsets either.
+        if k == 0 || k == n / 2 || held {
             return Some((fc, Matrix3::zeros()));
         }
         let df = self.sample_rate_hz / n as f64;
@@ -244,30 +247,24 @@ impl InputMoments {
             offset(&self.power[k], &self.shifted[k], fc, k as f64 * df, df),
         ))
     }
-}
-
-/// The power centroid of each bin from the moments' traces (the bin centres without moments).
-fn centroids(moments: Option<&InputMoments>, sample_rate_hz: f64, n: usize) -> Vec<f64> {
-    (0..=n / 2)
-        .map(|k| bin_centroid(moments, k, sample_rate_hz, n))
-        .collect()
-}
-
-/// The power centroid of bin `k` (its centre without moments), held as the module docs say.
-fn bin_centroid(moments: Option<&InputMoments>, k: usize, sample_rate_hz: f64, n: usize) -> f64 {
-    let df = sample_rate_hz / n as f64;
-    let nyquist = 0.5 * sample_rate_hz;
-    let f = k as f64 * df;
-    let Some(m) = moments else { return f };
-    let den = m.power[k].trace().re;
-    let c_hz = f + m.shifted[k].trace().re / den / (2.0 * std::f64::consts::PI);
-    if den > 0.0 && c_hz.is_finite() {
-        c_hz.clamp(
+    /// The power centroid of native bin `k` from the moments' traces, held within
+    /// [`MAIN_LOBE_BINS`] bins of `f_k`, at or above `f_k / 2` and at or below Nyquist (module docs;
+    /// `f_k` for a bin without power or a non-finite centroid), and whether it was held.
+    fn bin_centroid(&self, k: usize) -> (f64, bool) {
+        let df = self.sample_rate_hz / self.segment_len as f64;
+        let f = k as f64 * df;
+        let den = self.power[k].trace().re;
+        let c_hz = f + self.shifted[k].trace().re / den / (2.0 * std::f64::consts::PI);
+        if !(den > 0.0 && c_hz.is_finite()) {
+            return (f, true);
+        }
+        let held = c_hz.clamp(
             (f - MAIN_LOBE_BINS * df).max(0.5 * f),
-            (f + MAIN_LOBE_BINS * df).min(nyquist).max(0.5 * f),
-        )
-    } else {
-        f
+            (f + MAIN_LOBE_BINS * df)
+                .min(0.5 * self.sample_rate_hz)
+                .max(0.5 * f),
+        );
+        (held, (held - c_hz).abs() > 1e-9 * df)
     }
 }
 
@@ -281,8 +278,7 @@ fn bin_centroid(moments: Option<&InputMoments>, k: usize, sample_rate_hz: f64, n
 /// specific forces at high frequency lie near the plane normal to the lever arm, so its `S` has
 /// one weak direction: it alone is left out, the other two still moved (zeroing the whole matrix
 /// there left chi2 per bin of 5-30 times its expectation on delays of 5-10 ms, growing as
-/// `tau^2`). Zero where `f_c` was held (the bins near 0 Hz, whose image from the negative
-/// frequencies is no first-order shift).
+/// `tau^2`). A bin whose centroid was held gets none ([`InputMoments::centroid_at`]).
 fn offset(
     power: &Matrix3<Complex64>,
     shifted: &Matrix3<Complex64>,
@@ -291,9 +287,7 @@ fn offset(
     df: f64,
 ) -> Matrix3<Complex64> {
     let mut g = Matrix3::zeros();
-    let raw = fk + shifted.trace().re / power.trace().re / (2.0 * std::f64::consts::PI);
-    let held = (raw - fc).abs();
-    if held.is_nan() || held > 1e-9 * df || !power.iter().all(|z| z.is_finite()) {
+    if !power.iter().all(|z| z.is_finite()) {
         return g;
     }
     // Every direction kept (the common case): the formula itself, without the eigenvectors. The

@@ -20,7 +20,14 @@
 //!    delay is not judged by it: from order 2 the delay also trades with the numerator's first
 //!    coefficient, so an all-pole sensor filter can leave it undetermined, and such a candidate
 //!    stays admissible as before. A real sensor lag in simulated runs has `d_1` about 4.5 ms and
-//!    its delay known to 0.01-0.02 ms;
+//!    its delay known to 0.01-0.02 ms. Nor is a negative delay admissible when the numerator's
+//!    zeros give its lead back as lag (their low-frequency lag, minus the mean of `N_0^-1 N_1`'s
+//!    eigenvalues, positive beyond two of its standard deviations: zeros in the right half
+//!    plane). A sensor's filters have no such zeros, and a lead with a lag that cancels it is the
+//!    delay-only phase with a gain rising across the band, the reference's band limit again. Found
+//!    on 20-40 s pieces of the real recordings (after the rule on the poles' lag): order 2 with
+//!    a pair near 35 Hz, a delay of -6.6 +- 2.3 ms and zeros adding 4.78 +- 0.40 ms, whose whole
+//!    phase is that of a 4.13-4.24 ms delay and whose gain rises by 10 % across the band;
 //! 5. its static gain agrees with its in-band gain: at the band's lowest frequency the model,
 //!    delay removed, is within [`STATIC_GAIN_AGREEMENT`] of `K` (relative Frobenius). Otherwise
 //!    `K` is an extrapolation below the data;
@@ -47,6 +54,7 @@
 use std::f64::consts::PI;
 use std::fmt;
 
+use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
@@ -108,6 +116,19 @@ pub enum Rejection {
         tau_std_s: f64,
         /// The poles' lag at low frequency (`d_1`, the sum of their time constants), s.
         pole_lag_s: f64,
+    },
+    /// A negative delay whose lead the numerator's zeros give back as lag (rule 4): zeros in the
+    /// right half plane, which a sensor's filters do not have.
+    DelayTradedForZeros {
+        /// The delay, s.
+        tau_s: f64,
+        /// Its standard deviation, s.
+        tau_std_s: f64,
+        /// The lag the numerator adds at low frequency (minus the mean of `N_0^-1 N_1`'s
+        /// eigenvalues), s.
+        zero_lag_s: f64,
+        /// Its standard deviation, s.
+        zero_lag_std_s: f64,
     },
     /// The static gain is an extrapolation: it differs from the in-band gain.
     StaticGainDisagrees {
@@ -201,6 +222,22 @@ impl fmt::Display for Rejection {
                 tau_s * 1e3,
                 tau_std_s * 1e3,
                 pole_lag_s * 1e3
+            ),
+            Rejection::DelayTradedForZeros {
+                tau_s,
+                tau_std_s,
+                zero_lag_s,
+                zero_lag_std_s,
+            } => write!(
+                f,
+                "its delay is negative ({:.3} +- {:.3} ms) and its numerator's zeros add a lag \
+                 ({:.3} +- {:.3} ms, zeros in the right half plane) that gives the lead back: \
+                 a sensor's filters have no such zeros, so the zeros and the delay stand in for \
+                 each other",
+                tau_s * 1e3,
+                tau_std_s * 1e3,
+                zero_lag_s * 1e3,
+                zero_lag_std_s * 1e3
             ),
             Rejection::StaticGainDisagrees { difference } => write!(
                 f,
@@ -309,6 +346,17 @@ fn physical_rejection(data: &Prepared, model: &Model, inflation: f64) -> Option<
             pole_lag_s,
         });
     }
+    if model.tau < 0.0
+        && let Some((zero_lag_s, zero_lag_std_s)) = numerator_lag(model, &std, w_ref)
+        && zero_lag_s > 2.0 * zero_lag_std_s
+    {
+        return Some(Rejection::DelayTradedForZeros {
+            tau_s: model.tau,
+            tau_std_s,
+            zero_lag_s,
+            zero_lag_std_s,
+        });
+    }
     let n_num = model.num.len();
     let relative_std = (0..order)
         .map(|m| std[ELEMENTS * n_num + m] / model.den[m].abs())
@@ -325,6 +373,31 @@ fn physical_rejection(data: &Prepared, model: &Model, inflation: f64) -> Option<
         });
     }
     None
+}
+
+/// The lag the numerator adds at low frequency and its standard deviation, s: `N(s) = N_0 (I +
+/// N_0^-1 N_1 s + ...)`, so its phase there is a lead of `N_0^-1 N_1` (a matrix, s); the lag is
+/// minus a third of its trace (the mean over the axes, whatever their order or mixing). Positive
+/// for zeros in the right half plane. The deviation is propagated from the parameters' `std`
+/// (normalised, as [`Model::parameter_std`] gives them) to first order, each parameter on its
+/// own. `None` without a first-order numerator coefficient (orders 0 and 1) or when `N_0` is
+/// singular.
+fn numerator_lag(model: &Model, std: &[f64], w_ref: f64) -> Option<(f64, f64)> {
+    let matrix = |c: &[f64; ELEMENTS]| Matrix3::from_fn(|i, j| c[3 * i + j]);
+    let (n0, n1) = (matrix(model.num.first()?), matrix(model.num.get(1)?));
+    let a = n0.try_inverse()?;
+    let lag = -(a * n1).trace() / 3.0 / w_ref;
+    // d tr(A N_1) = tr(A dN_1) - tr(A dN_0 A N_1).
+    let (by_n1, by_n0) = (a.transpose(), (a * n1 * a).transpose());
+    let variance: f64 = (0..ELEMENTS)
+        .map(|e| {
+            let (i, j) = (e / 3, e % 3);
+            let (s0, s1) = (std.get(e)?, std.get(ELEMENTS + e)?);
+            Some((by_n1[(i, j)] * s1).powi(2) + (by_n0[(i, j)] * s0).powi(2))
+        })
+        .sum::<Option<f64>>()?;
+    let lag_std = variance.sqrt() / 3.0 / w_ref;
+    (lag.is_finite() && lag_std.is_finite()).then_some((lag, lag_std))
 }
 
 /// Rule 6: the first lightly damped pair (poles scaled by `w_ref`, rad/s) whose natural frequency
@@ -369,6 +442,78 @@ mod tests {
         let wn = 2.0 * PI * hz / w_ref;
         let p = Complex64::new(-zeta * wn, wn * (1.0 - zeta * zeta).sqrt());
         vec![p, p.conj()]
+    }
+
+    /// A model `N_0 (1 + a s) / d(s) e^(-tau s)` in the fits' normalised units (`s / w_ref`).
+    fn with_numerator(n0: [f64; ELEMENTS], a_s: f64, w_ref: f64) -> Model {
+        Model {
+            num: vec![n0, n0.map(|v| v * a_s * w_ref)],
+            den: vec![0.3, 0.02],
+            tau: -0.006,
+        }
+    }
+
+    /// The numerator's lag is `-a` for `N_0 (1 + a s)` whatever `N_0` mixes (here a permutation of
+    /// the axes with scale factors, whose diagonal is zero): positive for a zero in the right half
+    /// plane, negative for one in the left; none without a first-order coefficient or with a
+    /// singular `N_0`.
+    #[test]
+    fn the_numerator_s_lag_is_the_zeros_low_frequency_lag() {
+        let w_ref = 80.0;
+        let mixed = [0.0, 1.01, 0.0, 0.0, 0.0, 0.98, 1.02, 0.0, 0.0];
+        let std = vec![0.0; 2 * ELEMENTS + 3];
+        for n0 in [[1.0, 0.01, 0.0, 0.0, 0.99, 0.02, 0.0, 0.0, 1.0], mixed] {
+            for a_s in [-4.78e-3, 2.0e-3] {
+                let (lag, lag_std) = numerator_lag(&with_numerator(n0, a_s, w_ref), &std, w_ref).unwrap();
+                assert!((lag + a_s).abs() < 1e-15, "{lag} for {a_s}");
+                assert!(lag_std.abs() < f64::MIN_POSITIVE, "{lag_std}");
+            }
+        }
+        let first_order = Model {
+            num: vec![mixed],
+            den: vec![0.3],
+            tau: -0.006,
+        };
+        assert!(numerator_lag(&first_order, &std, w_ref).is_none());
+        assert!(numerator_lag(&with_numerator([0.0; ELEMENTS], -1e-3, w_ref), &std, w_ref).is_none());
+    }
+
+    /// The lag's deviation, propagated analytically, against central differences of the lag in
+    /// each parameter (each on its own, as the propagation takes them).
+    #[test]
+    fn the_numerator_s_lag_deviation_is_its_first_order_propagation() {
+        let w_ref = 80.0;
+        let mut rng = crate::rng::Rng::new(5);
+        let mut model = with_numerator(
+            [1.0, 0.01, -0.02, 0.005, 0.99, 0.02, 0.01, 0.0, 1.0],
+            -3e-3,
+            w_ref,
+        );
+        for v in &mut model.num[1] {
+            *v += rng.uniform_in(-0.02, 0.02);
+        }
+        let std: Vec<f64> = (0..2 * ELEMENTS + 3)
+            .map(|_| rng.uniform_in(1e-4, 1e-3))
+            .collect();
+        let (_, analytic) = numerator_lag(&model, &std, w_ref).unwrap();
+        let mut variance = 0.0;
+        for m in 0..2 {
+            for e in 0..ELEMENTS {
+                let h = 1e-6;
+                let lag_at = |d: f64| {
+                    let mut moved = model.clone();
+                    moved.num[m][e] += d;
+                    numerator_lag(&moved, &std, w_ref).unwrap().0
+                };
+                let slope = (lag_at(h) - lag_at(-h)) / (2.0 * h);
+                variance += (slope * std[m * ELEMENTS + e]).powi(2);
+            }
+        }
+        let numeric = variance.sqrt();
+        assert!(
+            (analytic - numeric).abs() < 1e-6 * numeric,
+            "{analytic:e} {numeric:e}"
+        );
     }
 
     #[test]

@@ -146,6 +146,31 @@ fn plain_file_loads_exact_values_and_metadata() {
     );
 }
 
+/// A run's `Debug` (what a failed assertion or a log line prints) summarises it: the sample count
+/// and time span, not the 100 000 samples of each column.
+#[test]
+fn debug_summarises_the_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, _) = csv(
+        &["t", "roll", "yaw", "pitch", "gx", "gy", "gz", "temp"],
+        100_000,
+        5.0,
+        0.002,
+    );
+    let run = load(&write(dir.path(), "long.csv", &text), &opts()).unwrap();
+    let shown = format!("{run:?}");
+    assert!(shown.len() < 2_000, "{} characters", shown.len());
+    for part in [
+        "samples: 100000",
+        "Some(5.0)",
+        "gyro: true",
+        "accel: false",
+        "\"temp\"",
+    ] {
+        assert!(shown.contains(part), "{part} not in {shown}");
+    }
+}
+
 #[test]
 fn sha256_matches_sha256sum_of_a_fixed_file() {
     let dir = tempfile::tempdir().unwrap();

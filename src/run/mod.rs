@@ -70,8 +70,9 @@ pub struct ExtraColumn {
     pub values: Vec<f64>,
 }
 
-/// A loaded stand run: every column has [`Run::len`] finite values.
-#[derive(Clone, Debug, PartialEq)]
+/// A loaded stand run: every column has [`Run::len`] finite values. Its `Debug` summarises the
+/// columns (length, time span, which blocks) instead of printing every sample.
+#[derive(Clone, PartialEq)]
 pub struct Run {
     /// The file.
     pub source: RunSource,
@@ -91,6 +92,23 @@ pub struct Run {
     pub sidecar: Sidecar,
     /// Things the user should know that are not errors (unknown columns, missing sidecar, BOM).
     pub notices: Vec<String>,
+}
+
+impl std::fmt::Debug for Run {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let extra: Vec<&str> = self.extra.iter().map(|c| c.name.as_str()).collect();
+        f.debug_struct("Run")
+            .field("source", &self.source)
+            .field("samples", &self.len())
+            .field("time_s", &(self.time_s.first(), self.time_s.last()))
+            .field("sample_rate_hz", &self.sample_rate_hz)
+            .field("gyro", &self.gyro.is_some())
+            .field("accel", &self.accel.is_some())
+            .field("extra", &extra)
+            .field("sidecar", &self.sidecar)
+            .field("notices", &self.notices)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Run {

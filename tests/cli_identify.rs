@@ -346,3 +346,51 @@ fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
     assert!(!String::from_utf8_lossy(&o.stderr).contains("no gyro block"));
     assert_eq!(warning_in(&out), None);
 }
+
+/// A run whose accelerometer outputs are noise alone (a dead block beside a good gyro): refused,
+/// exit 2, one line naming the block and how to keep the other (`"blocks"`), nothing written;
+/// with the accelerometer left out, the gyro is identified.
+#[test]
+fn a_dead_block_is_refused_with_how_to_keep_the_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path());
+    let text = std::fs::read_to_string(&run).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let accel: Vec<usize> = ["ax", "ay", "az"]
+        .iter()
+        .map(|c| header.iter().position(|h| h == c).unwrap())
+        .collect();
+    let mut rng = imu_attest::rng::Rng::new(8);
+    let mut dead = header.join(",") + "\n";
+    for line in lines {
+        let mut cells: Vec<String> = line.split(',').map(str::to_owned).collect();
+        for &c in &accel {
+            cells[c] = format!("{:.6e}", 1e-3 * rng.normal());
+        }
+        dead += &(cells.join(",") + "\n");
+    }
+    let dead_run = dir.path().join("dead_accel.csv");
+    std::fs::write(&dead_run, dead).unwrap();
+    std::fs::copy(run.with_extension("json"), dead_run.with_extension("json")).unwrap();
+    let out = dir.path().join("m.json");
+    let o = imu_attest(&[
+        "identify",
+        dead_run.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    for part in ["dead_accel.csv", "accel block", "no usable band", "\"blocks\""] {
+        assert!(stderr.contains(part), "{part}: {stderr}");
+    }
+    assert!(!out.exists());
+    let settings = dir.path().join("gyro.json");
+    std::fs::write(&settings, r#"{"blocks": ["gyro"]}"#).unwrap();
+    let o = identify_with(&dead_run, &settings, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(keys(&model["blocks"]), ["gyro"]);
+}

@@ -60,7 +60,7 @@ pub enum IdentError {
         "{block} block: no usable band between {low_hz} and {high_hz} Hz: the outputs are nowhere \
          coherent with the inputs computed from the angles (best multiple coherence {best_coherence:.2}, \
          at least {min:.2} needed over {bins} bins); check the angle columns and the block's outputs, \
-         or give band_hz"
+         give band_hz, or leave this block out (settings \"blocks\")"
     )]
     NoUsableBand {
         /// The block.

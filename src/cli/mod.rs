@@ -50,7 +50,7 @@ usage:
   imu-attest [gui] [RUN...]                       open the GUI (with these runs loaded)
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel]
-                      [--stand real] [--angle-latency S] [--angle-band-hz HZ]
+                      [--stand real] [--angle-latency S] [--angle-band-hz HZ] [--angle-rate-hz HZ]
                       [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
                       [--sensor-noise default|white] [--random-walk K]
                       [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]

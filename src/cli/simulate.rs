@@ -1,6 +1,6 @@
 //! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
-//! [--angle-band-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
+//! [--angle-band-hz HZ] [--angle-rate-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
 //! [--sensor-noise default|white] [--random-walk K] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
 //! [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF] [--sine roll|yaw|pitch:HZ:DEG]...
 //! --out RUN.csv`
@@ -71,6 +71,19 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                 CliError::Input(format!("--angle-band-hz: '{fb}' is not a positive number of Hz"))
             })?;
         config.stand.band_limit_hz = Some(fb);
+    }
+    if let Some(fr) = args.get("angle-rate-hz") {
+        let fr: f64 = fr
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v > 0.0 && *v < config.rate_hz)
+            .ok_or_else(|| {
+                CliError::Input(format!(
+                    "--angle-rate-hz: '{fr}' is not a number of Hz between 0 and the run's rate ({} Hz)",
+                    config.rate_hz
+                ))
+            })?;
+        config.stand.reference_rate_hz = Some(fr);
     }
     config.stand.coloured_noise_rad =
         args.parsed_or("coloured-angle-noise", config.stand.coloured_noise_rad)?;

@@ -12,6 +12,7 @@ pub mod block_orders;
 pub mod causal_stage;
 pub mod excitation;
 pub mod factorisation;
+pub mod gain_curvature;
 pub mod holdout;
 pub mod identify;
 pub mod selfcheck;

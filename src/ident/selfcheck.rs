@@ -11,6 +11,9 @@
 //!   band where the inputs are noise.
 //! - **Imprecise gain**: with `calibrated`, the largest standard deviation of an element of `K`
 //!   above [`IMPRECISE_GAIN`]: the run does not determine the gain to a percent.
+//! - **Gain changes across the band**: the measured gain rises (or falls) as `1 + b omega^2`
+//!   with no phase, beyond 3 of its deviations, and moves `K` from the gain at low frequency by
+//!   more than `K`'s deviation ([`super::gain_curvature`]: a reference interpolated or smoothed).
 //! - **Negative delay**: `tau + 3 sigma < 0`.
 //! - **Delay absorbed by poles**: a chosen order above 0 whose delay is negative while the
 //!   order-0 candidate's is positive, the two more than 2 sigma apart (the poles' lag replaces part of the delay; a band-limited
@@ -27,6 +30,7 @@ use std::sync::Arc;
 
 use num_complex::Complex64;
 
+use super::gain_curvature;
 use super::identify::row_weights;
 use super::settings::{OrderSetting, Settings, leaves_enough};
 use super::signals::channel_names;
@@ -35,6 +39,10 @@ use super::structural::StructuralFit;
 use super::warnings::IdentWarning;
 use super::wiener::WienerEstimate;
 use crate::block::Block;
+
+/// How many of its standard deviations the gain's curvature must reach to be said (with its bias
+/// on `K` above `K`'s deviation): the convention of the other checks (`negative_delay`).
+pub const CURVATURE_SIGMAS: f64 = 3.0;
 
 /// chi2/dof above which the fit is reported as not explaining the data.
 pub const POOR_FIT: f64 = 2.0;
@@ -75,6 +83,51 @@ pub fn chi2_per_bin(
                 .sum::<f64>()
         })
         .collect()
+}
+
+/// The gain-curvature check (module docs, [`gain_curvature`]): the common `1 + b omega^2` of the
+/// chosen model's residual over the band, with the weights of [`chi2_per_bin`]; said when `b` is
+/// beyond [`CURVATURE_SIGMAS`] of its deviation and the bias it gives `K` exceeds `K`'s relative
+/// deviation.
+#[must_use]
+pub fn gain_changes(
+    block: Block,
+    spectra: &BlockSpectra,
+    noise: &[nalgebra::Matrix3<Complex64>],
+    wiener: &WienerEstimate,
+    band: &[usize],
+    fit: &StructuralFit,
+) -> Option<IdentWarning> {
+    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
+    let bins: Vec<gain_curvature::Bin> = band
+        .iter()
+        .map(|&k| {
+            let f_hz = spectra.model_frequency_hz(k, wiener.estimate);
+            gain_curvature::Bin {
+                omega: 2.0 * std::f64::consts::PI * f_hz,
+                model: fit.response_seen(f_hz, spectra.fit_offset_hz(k, wiener.estimate).as_ref()),
+                estimate: wiener.w_u[k],
+                weights: row_weights(&spectra.s_uu[k], &noise[k], dof),
+            }
+        })
+        .collect();
+    let per_dof = fit.chi2 / fit.dof.max(1) as f64;
+    let widening = (spectra.bin_correlation.max(1.0) * per_dof.max(1.0)).sqrt();
+    let c = gain_curvature::curvature(&bins, &fit.k, widening)?;
+    let norm = |m: &[[f64; 3]; 3]| m.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+    let k_relative_std = norm(&fit.k_std) / norm(&fit.k);
+    let k_bias = c.row_bias;
+    let largest = k_bias.iter().fold(0.0, |m: f64, b| m.max(b.abs()));
+    let said = c.b_s2.abs() > CURVATURE_SIGMAS * c.b_std_s2 && largest > k_relative_std;
+    let to_hz = |w2: f64| w2.sqrt() / (2.0 * std::f64::consts::PI);
+    said.then(|| IdentWarning::GainChangesAcrossBand {
+        rise: c.rise(),
+        rise_std: c.b_std_s2 * (c.omega2_range[1] - c.omega2_range[0]),
+        k_bias,
+        outputs: channel_names(block).1.map(str::to_owned),
+        k_relative_std,
+        band_hz: [to_hz(c.omega2_range[0]), to_hz(c.omega2_range[1])],
+    })
 }
 
 /// The imprecise-gain check of a calibrated block (module docs): the least determined element of
@@ -137,6 +190,7 @@ pub fn self_check(
             worst_chi2_per_dof: worst.1,
         });
     }
+    out.extend(gain_changes(block, spectra, noise, wiener, band, fit));
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);
         for i in 0..3 {

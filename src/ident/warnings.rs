@@ -80,6 +80,25 @@ pub enum IdentWarning {
         /// Its mean chi2 per bin over the expectation (18).
         chi2_per_bin_above: f64,
     },
+    /// The measured gain changes across the band with no phase of its own, beyond its deviation,
+    /// and enough to move `K` (the band's mean gain) by more than `K`'s own deviation from the
+    /// gain at low frequency ([`super::gain_curvature`]: a reference interpolated from a slower
+    /// rate, or smoothed).
+    GainChangesAcrossBand {
+        /// The gain's change from the band's bottom to its top, relative.
+        rise: f64,
+        /// Its standard deviation (widened), relative.
+        rise_std: f64,
+        /// How far each row of `K` (per output, in `outputs`' order) reads above the gain at low
+        /// frequency, relative (its scale; negative: below).
+        k_bias: [f64; 3],
+        /// The block's outputs (`K`'s rows).
+        outputs: [String; 3],
+        /// `K`'s own relative deviation, `||K_std||_F / ||K||_F`.
+        k_relative_std: f64,
+        /// The band, Hz.
+        band_hz: [f64; 2],
+    },
     /// The model does not explain the data to the stated noise: uncertainties widened.
     PoorFit {
         /// chi2 per degree of freedom of the chosen model.
@@ -206,6 +225,51 @@ pub enum IdentWarning {
     },
 }
 
+/// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
+fn relative(x: f64) -> String {
+    if x.abs() >= 1e-4 {
+        format!("{:.2} %", x * 100.0)
+    } else {
+        format!("{:.0} ppm", x * 1e6)
+    }
+}
+
+/// The words of [`IdentWarning::GainChangesAcrossBand`].
+fn gain_change_words(
+    rise: f64,
+    rise_std: f64,
+    k_bias: &[f64; 3],
+    outputs: &[String; 3],
+    k_relative_std: f64,
+    band_hz: [f64; 2],
+) -> String {
+    let rows: Vec<String> = k_bias
+        .iter()
+        .zip(outputs)
+        .map(|(b, name)| {
+            format!(
+                "{}{} ({name})",
+                if *b >= 0.0 { "+" } else { "-" },
+                relative(b.abs())
+            )
+        })
+        .collect();
+    format!(
+        "the gain {} by {} (+- {}) from {:.2} to {:.1} Hz with no phase of its own: the \
+         reference's band limit (angles interpolated from a slower rate, e.g. a motion-capture \
+         system's, or smoothed), a filter in the block, or inputs the angle-noise model shrank; K \
+         is the band's mean gain, and its rows read about {} against the gain at low frequency, \
+         more than K's deviation ({}): a lower band top lessens it",
+        if rise >= 0.0 { "rises" } else { "falls" },
+        relative(rise.abs()),
+        relative(rise_std),
+        band_hz[0],
+        band_hz[1],
+        rows.join(", "),
+        relative(k_relative_std)
+    )
+}
+
 impl fmt::Display for IdentWarning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -263,6 +327,21 @@ impl fmt::Display for IdentWarning {
                  order takes; the diagnosis searches above the band",
                 band_hz[0], band_hz[1]
             ),
+            IdentWarning::GainChangesAcrossBand {
+                rise,
+                rise_std,
+                k_bias,
+                outputs,
+                k_relative_std,
+                band_hz,
+            } => f.write_str(&gain_change_words(
+                *rise,
+                *rise_std,
+                k_bias,
+                outputs,
+                *k_relative_std,
+                *band_hz,
+            )),
             IdentWarning::ImplausibleGain { output, input, value } => write!(
                 f,
                 "K[{output}][{input}] = {value:.4} is implausible for a calibrated block (diagonal \

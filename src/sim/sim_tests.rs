@@ -461,3 +461,40 @@ fn stand_imperfections_do_what_they_say_and_default_to_none() {
     let text = serde_json::to_string(&clean.sidecar).unwrap();
     assert!(!text.contains("\"stand\""), "{text}");
 }
+
+/// A slower reference interpolated linearly weighs a sine by the triangle kernel's response,
+/// `sinc^2(f / f_r)`, exactly at the sine's frequency (its images lie at `k f_r +- f`): a
+/// least-squares fit of the sine's amplitude on the output, over whole periods, against the closed
+/// form (the cubic read-off adds `(f / f_s)^4`).
+#[test]
+fn a_slower_reference_weighs_the_motion_by_the_triangle_kernel() {
+    let (fs, fr) = (500.0, 120.0);
+    let n = 50_000_u32;
+    for f in [2.0, 10.0, 25.0] {
+        let w = 2.0 * std::f64::consts::PI * f;
+        let x: Vec<f64> = (0..n).map(|i| (w * f64::from(i) / fs + 0.3).sin()).collect();
+        let y = super::stand::through_slower_reference(&x, fs, fr);
+        let (mut sc, mut cc) = (0.0, 0.0);
+        for (i, v) in y.iter().enumerate() {
+            let phase = w * i as f64 / fs + 0.3;
+            sc += v * phase.sin();
+            cc += v * phase.cos();
+        }
+        let (gain, quadrature) = (2.0 * sc / f64::from(n), 2.0 * cc / f64::from(n));
+        let sinc = |u: f64| (std::f64::consts::PI * u).sin() / (std::f64::consts::PI * u);
+        let expected = sinc(f / fr).powi(2);
+        assert!(
+            (gain - expected).abs() < 1e-3,
+            "{f} Hz: {gain} against {expected}"
+        );
+        // Zero phase: no delay.
+        assert!(quadrature.abs() < 1e-3, "{f} Hz: quadrature {quadrature}");
+    }
+    // A reference as fast as the run, or a bad rate, leaves the angles as they are.
+    let x = [0.0, 1.0, -2.0, 0.5];
+    assert_eq!(super::stand::through_slower_reference(&x, fs, fs), x.to_vec());
+    assert_eq!(
+        super::stand::through_slower_reference(&x, fs, f64::NAN),
+        x.to_vec()
+    );
+}

@@ -8,7 +8,15 @@
 //!   zero), so the block's delay comes out `latency_s` shorter;
 //! - **band limit**: the measured angle carries nothing above `band_limit_hz` (a zero-phase
 //!   eighth-order Butterworth magnitude, as a reference resampled by symmetric interpolation).
-//!   Above it the angles are noise, and a fit there is errors in variables.
+//!   Above it the angles are noise, and a fit there is errors in variables;
+//! - **a slower reference**: the measured angle sampled at `reference_rate_hz` and interpolated
+//!   linearly onto the run's samples, as a motion-capture reference is resampled onto an IMU's
+//!   (the real recordings' dataset did so from 120 Hz). Zero phase, no delay: on average it weighs
+//!   the motion by `sinc^2(f / f_r)`, `1 - (pi f / f_r)^2 / 3` at low frequency, so the gain
+//!   measured against it rises across the band (found by a helper's independent hand-held
+//!   simulator; the identifier says so, `ident::gain_curvature`). The reference's samples are read
+//!   off the run's grid by a cubic (Catmull-Rom) interpolation, whose own smoothing is of order
+//!   `(f / f_s)^4`.
 //!
 //! Units: rad, s, Hz. The default is a perfect stand (none of them), which keeps every existing
 //! run's bytes unchanged.
@@ -30,6 +38,10 @@ pub struct StandImperfections {
     pub latency_s: f64,
     /// Band limit of the angle measurement, Hz (`None`: none).
     pub band_limit_hz: Option<f64>,
+    /// Rate of a slower reference, Hz (`None`: the angles are measured at every sample): the
+    /// measured angle is sampled at this rate and interpolated linearly onto the run's samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_rate_hz: Option<f64>,
 }
 
 impl StandImperfections {
@@ -42,13 +54,17 @@ impl StandImperfections {
             coloured_corner_hz: 5.0,
             latency_s: 1.5e-3,
             band_limit_hz: Some(30.0),
+            reference_rate_hz: None,
         }
     }
 
     /// Whether any imperfection is on.
     #[must_use]
     pub fn any(&self) -> bool {
-        self.coloured_noise_rad > 0.0 || self.latency_s != 0.0 || self.band_limit_hz.is_some()
+        self.coloured_noise_rad > 0.0
+            || self.latency_s != 0.0
+            || self.band_limit_hz.is_some()
+            || self.reference_rate_hz.is_some()
     }
 }
 
@@ -76,5 +92,38 @@ pub(super) fn measured_angle(
         let scale = imperfect.coloured_noise_rad / grid.mean_square(&noise).sqrt().max(f64::MIN_POSITIVE);
         spectrum.iter_mut().zip(&noise).for_each(|(s, n)| *s += n * scale);
     }
-    grid.fft.inverse(spectrum)
+    let measured = grid.fft.inverse(spectrum);
+    match imperfect.reference_rate_hz {
+        Some(rate) => through_slower_reference(&measured, grid.fft.sample_rate_hz(), rate),
+        None => measured,
+    }
+}
+
+/// `x`, sampled at `fs`, as a reference at `reference_hz` sees it (module docs): read at the
+/// reference's instants `j / reference_hz` (Catmull-Rom), then interpolated linearly back onto
+/// `x`'s samples.
+pub(super) fn through_slower_reference(x: &[f64], fs: f64, reference_hz: f64) -> Vec<f64> {
+    let n = x.len();
+    if n < 2 || !(reference_hz > 0.0 && reference_hz < fs) {
+        return x.to_vec();
+    }
+    let at = |i: isize| x[i.clamp(0, n as isize - 1) as usize];
+    let cubic = |p: f64| {
+        let i = p.floor();
+        let t = p - i;
+        let i = i as isize;
+        let (a, b, c, d) = (at(i - 1), at(i), at(i + 1), at(i + 2));
+        b + 0.5 * t * (c - a + t * (2.0 * a - 5.0 * b + 4.0 * c - d + t * (3.0 * (b - c) + d - a)))
+    };
+    let step = fs / reference_hz;
+    let m = ((n - 1) as f64 / step).floor() as usize + 2;
+    let reference: Vec<f64> = (0..m).map(|j| cubic(j as f64 * step)).collect();
+    (0..n)
+        .map(|i| {
+            let q = i as f64 / step;
+            let j = (q.floor() as usize).min(m - 2);
+            let t = q - j as f64;
+            (1.0 - t) * reference[j] + t * reference[j + 1]
+        })
+        .collect()
 }

@@ -3,30 +3,32 @@
 //!
 //! A reference measured at a lower rate and interpolated onto the block's samples, or smoothed,
 //! passes the motion through a zero-phase low-pass: linear interpolation from a rate `f_r`
-//! weighs the angles by `sinc^2(f / f_r)` on average, `1 - (pi f / f_r)^2 / 3` at low frequency.
-//! The inputs computed from the angles then fall short of the motion by a factor even in `f`,
-//! and the measured gain `W` rises as `1 + b omega^2` with no phase: no delay or admissible
-//! order takes that (a rational model pays for a gain rise with phase), so the delay-only model
-//! takes `K` as the band's information-weighted mean gain, `K_0 (1 + b <omega^2>)`, above the gain
-//! at low frequency. Found by a helper's hand-held simulator (a 120 Hz optical reference
-//! interpolated linearly onto the gyro's samples, as the real recordings' dataset was made): every
-//! diagonal of `K` read high by 0.1-1.7 %, 5 of its standard deviations on average, with nothing
-//! said on most runs; the three real recordings' gain rises by 4-7 % from their band's bottom to
-//! 10-15 Hz.
+//! weighs the angles by `sinc^2(f / f_r)` on average, `1 - (pi f / f_r)^2 / 3` at low frequency,
+//! a cubic spline by a response flat to higher order that droops near `f_r / 3`. The inputs
+//! computed from the angles then fall short of the motion by a factor even in `f`, and the
+//! measured gain `W` rises with no phase: no delay or admissible order takes that (a rational
+//! model pays for a gain rise with phase), so the delay-only model takes `K` as the band's
+//! information-weighted mean gain, above the gain at low frequency. Found by a helper's hand-held
+//! simulator (a 120 Hz optical reference interpolated linearly onto the gyro's samples, as the
+//! real recordings' dataset was made): every diagonal of `K` read high by 0.1-1.7 %, 5 of its
+//! standard deviations on average, with nothing said on most runs; the three real recordings'
+//! gain rises by 5-12 % from their band's bottom to its top.
 //!
-//! [`curvature`] fits the one common `b` to the chosen model's residual by generalised least
-//! squares, with the regressor `(omega^2 - <omega^2>) W` (the part the model's own `K` has not
-//! already taken) and the weights of the self-check's per-bin chi2. Its standard deviation is
-//! widened as the fit's are (the bins' correlation and `sqrt(chi2/dof)` where above 1). How far
-//! each row of `K` then reads from the gain at low frequency follows from the delay-only fit's
+//! [`curvature`] fits one common even gain `1 + b_2 omega^2 + b_4 omega^4` to the chosen model's
+//! residual by generalised least squares, beside each output row's own constant `c_i` (the row's
+//! gain at low frequency relative to the model's, whose `K` row took its band's mean), with the
+//! weights of the self-check's per-bin chi2; two terms, so that a droop steeper than `omega^2`
+//! near the band's top (a cubic spline's) is not extrapolated to low frequency as one.
+//! The covariance is widened as the fit's is (the bins' correlation and `chi2/dof` where above 1).
+//! How far each row of `K` reads from the gain at low frequency follows from the delay-only fit's
 //! normal equations, row by row ([`Curvature::row_bias`]): a row whose weight lies at higher
 //! frequencies (an axis moved faster) reads higher, and rows that share collinear inputs can read
 //! low (the accelerometer's on a simulated stand).
 //!
-//! Units: `omega` in rad/s, `b` in s^2; `K`'s bias and the rise are relative (fractions).
-//! Non-finite bins are skipped; no bins, or no information in them, give `None`.
+//! Units: `omega` in rad/s, `b_2` in s^2, `b_4` in s^4; `K`'s bias and the rise are relative
+//! (fractions). Non-finite bins are skipped; no bins, or no information in them, give `None`.
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, RowVector3};
 use num_complex::Complex64;
 
 /// One band bin: the model and the estimate there, and the weights of the estimate's rows.
@@ -42,44 +44,62 @@ pub struct Bin {
     pub weights: [Matrix3<Complex64>; 3],
 }
 
-/// The fitted gain curvature of a block over its band (module docs).
+/// The fitted even gain of a block over its band (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Curvature {
-    /// `b`, s^2: the gain is `1 + b (omega^2 - <omega^2>)` relative to the model's (whose `K` is
-    /// the band's mean gain), so `1 + b omega^2` relative to that at low frequency up to
-    /// `1 / (1 - b <omega^2>)`.
-    pub b_s2: f64,
-    /// Its standard deviation (widened), s^2.
-    pub b_std_s2: f64,
-    /// `<omega^2>`, the bins' information-weighted mean, rad^2/s^2: the model's gain is the gain
-    /// at low frequency times `1 / (1 - b <omega^2>)`.
-    pub mean_omega2: f64,
-    /// Per output row `i` of `K`, the relative change of its scale the curvature gives the
-    /// delay-only fit: its row is `k_i (I + b_0 M_i A_i^-1)`, with `A_i = sum Re Omega_i` and
-    /// `M_i = sum omega^2 Re Omega_i` over the bins (its normal equations) and `b_0` the curvature
-    /// against the gain at low frequency; the scale is the change's projection on `k_i`.
+    /// `[b_2, b_4]` (s^2, s^4): the gain of output row `i` relative to the model's is
+    /// `1 + c_i + b_2 omega^2 + b_4 omega^4`.
+    pub b: [f64; 2],
+    /// Their covariance (widened).
+    pub b_cov: [[f64; 2]; 2],
+    /// `c_i`: each row's gain at low frequency relative to the model's, less 1 (the model's `K`
+    /// row is its band's mean gain).
+    pub c: [f64; 3],
+    /// The band's lowest and highest `omega`, rad/s.
+    pub omega_range: [f64; 2],
+    /// Per output row `i` of `K`, the relative change of its scale the even gain gives the
+    /// delay-only fit: its row is `k_i (I + sum_p b_p M_pi A_i^-1 / (1 + c_i))`, with
+    /// `A_i = sum Re Omega_i` and `M_pi = sum omega^p Re Omega_i` over the bins (its normal
+    /// equations); the scale is the change's projection on `k_i`. Close to `-c_i / (1 + c_i)` where
+    /// the row's change is a scale alone.
     pub row_bias: [f64; 3],
-    /// The band's lowest and highest `omega^2`, rad^2/s^2.
-    pub omega2_range: [f64; 2],
 }
 
 impl Curvature {
-    /// How far `K` (the band's mean gain) reads above the gain at low frequency, relative.
+    /// The common shape's gain at `omega`, relative to that at low frequency.
+    fn shape(&self, omega: f64) -> f64 {
+        let w2 = omega * omega;
+        let level = 1.0 + self.c.iter().sum::<f64>() / 3.0;
+        1.0 + (self.b[0] * w2 + self.b[1] * w2 * w2) / level
+    }
+
+    /// How far `K` reads above the gain at low frequency, relative: the mean of the rows'.
     #[must_use]
     pub fn k_bias(&self) -> f64 {
-        1.0 / (1.0 - self.b_s2 * self.mean_omega2) - 1.0
+        self.row_bias.iter().sum::<f64>() / 3.0
     }
 
     /// The gain's change from the band's bottom to its top, relative to the bottom's.
     #[must_use]
     pub fn rise(&self) -> f64 {
-        let at = |w2: f64| 1.0 + self.b_s2 * (w2 - self.mean_omega2);
-        at(self.omega2_range[1]) / at(self.omega2_range[0]) - 1.0
+        self.shape(self.omega_range[1]) / self.shape(self.omega_range[0]) - 1.0
+    }
+
+    /// The standard deviation of [`Self::rise`] (to first order in `b`).
+    #[must_use]
+    pub fn rise_std(&self) -> f64 {
+        let (lo, hi) = (self.omega_range[0].powi(2), self.omega_range[1].powi(2));
+        let level = 1.0 + self.c.iter().sum::<f64>() / 3.0;
+        let d = [(hi - lo) / level, (hi * hi - lo * lo) / level];
+        let c = &self.b_cov;
+        (d[0] * d[0] * c[0][0] + 2.0 * d[0] * d[1] * c[0][1] + d[1] * d[1] * c[1][1])
+            .max(0.0)
+            .sqrt()
     }
 }
 
-/// `r Omega r^H` for rows `x` and `r` (real part), `Omega` Hermitian.
-fn form(x: &[Complex64], omega: &Matrix3<Complex64>, r: &[Complex64]) -> f64 {
+/// `Re(x Omega r^H)` for rows `x` and `r`, `Omega` Hermitian.
+fn form(x: &[Complex64; 3], omega: &Matrix3<Complex64>, r: &[Complex64; 3]) -> f64 {
     let mut q = Complex64::new(0.0, 0.0);
     for j in 0..3 {
         for l in 0..3 {
@@ -89,77 +109,87 @@ fn form(x: &[Complex64], omega: &Matrix3<Complex64>, r: &[Complex64]) -> f64 {
     q.re
 }
 
-/// The common gain curvature of `bins` (module docs) of a block whose static gain is `gain`;
-/// `widening` multiplies its standard deviation (`sqrt(bin correlation x max(1, chi2/dof))`).
+fn row(m: &Matrix3<Complex64>, i: usize) -> [Complex64; 3] {
+    [m[(i, 0)], m[(i, 1)], m[(i, 2)]]
+}
+
+fn finite(b: &Bin) -> bool {
+    b.omega.is_finite()
+        && b.model
+            .iter()
+            .chain(b.estimate.iter())
+            .chain(b.weights.iter().flat_map(|w| w.iter()))
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+}
+
+/// The common even gain of `bins` (module docs) of a block whose static gain is `gain`; `widening`
+/// multiplies its standard deviations (`sqrt(bin correlation x max(1, chi2/dof))`).
+///
+/// Five parameters by generalised least squares: each row's own constant `c_i` (the regressor
+/// `W_i`, the model's row) and the common `b_2`, `b_4` (`omega^2 W_i`, `omega^4 W_i`), so each
+/// row's mean is its own and the shape is shared.
 #[must_use]
 pub fn curvature(bins: &[Bin], gain: &[[f64; 3]; 3], widening: f64) -> Option<Curvature> {
-    let row = |m: &Matrix3<Complex64>, i: usize| [m[(i, 0)], m[(i, 1)], m[(i, 2)]];
-    let finite = |b: &&Bin| {
-        b.omega.is_finite()
-            && b.model
-                .iter()
-                .chain(b.estimate.iter())
-                .chain(b.weights.iter().flat_map(|w| w.iter()))
-                .all(|z| z.re.is_finite() && z.im.is_finite())
-    };
-    let bins: Vec<&Bin> = bins.iter().filter(finite).collect();
-    let information = |b: &Bin| -> f64 {
-        (0..3)
-            .map(|i| form(&row(&b.model, i), &b.weights[i], &row(&b.model, i)))
-            .sum()
-    };
-    let (mut total, mut moment) = (0.0, 0.0);
-    let (mut a, mut m) = ([Matrix3::<f64>::zeros(); 3], [Matrix3::<f64>::zeros(); 3]);
+    let bins: Vec<&Bin> = bins.iter().filter(|b| finite(b)).collect();
+    let mut normal = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+    let mut rhs = nalgebra::SVector::<f64, 5>::zeros();
+    let mut a = [Matrix3::<f64>::zeros(); 3];
+    let mut m = [[Matrix3::<f64>::zeros(); 3]; 2];
     for b in &bins {
-        let info = information(b);
-        let w2 = b.omega * b.omega;
-        total += info;
-        moment += info * w2;
+        let powers = [1.0, b.omega.powi(2), b.omega.powi(4)];
         for i in 0..3 {
             let re = b.weights[i].map(|z| z.re);
             a[i] += re;
-            m[i] += re * w2;
+            m[0][i] += re * powers[1];
+            m[1][i] += re * powers[2];
+            let w = row(&b.model, i);
+            let r: [Complex64; 3] = std::array::from_fn(|j| b.estimate[(i, j)] - b.model[(i, j)]);
+            // Parameters: c_0, c_1, c_2, b_2, b_4; this row's are c_i and the b's.
+            let index = [i, 3, 4];
+            let base = form(&w, &b.weights[i], &w);
+            let projected = form(&w, &b.weights[i], &r);
+            for p in 0..3 {
+                rhs[index[p]] += powers[p] * projected;
+                for q in 0..3 {
+                    normal[(index[p], index[q])] += powers[p] * powers[q] * base;
+                }
+            }
         }
     }
-    if !total.is_finite() || total <= 0.0 {
+    let inverse = normal.try_inverse()?;
+    let solution = inverse * rhs;
+    if !solution.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let mean_omega2 = moment / total;
-    let (mut num, mut den) = (0.0, 0.0);
-    for b in &bins {
-        let shift = b.omega * b.omega - mean_omega2;
-        for i in 0..3 {
-            let x = row(&b.model, i).map(|z| z * shift);
-            let r: Vec<Complex64> = (0..3).map(|j| b.estimate[(i, j)] - b.model[(i, j)]).collect();
-            num += form(&x, &b.weights[i], &r);
-            den += form(&x, &b.weights[i], &x);
-        }
-    }
-    if !den.is_finite() || den <= 0.0 {
-        return None;
-    }
-    let omega2 = bins.iter().map(|b| b.omega * b.omega);
-    let lo = omega2.clone().fold(f64::INFINITY, f64::min);
-    let hi = omega2.fold(0.0, f64::max);
-    let b_s2 = num / den;
-    let b_0 = b_s2 / (1.0 - b_s2 * mean_omega2);
+    let scale = widening * widening / 2.0;
+    let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(l, h), b| {
+        (l.min(b.omega), h.max(b.omega))
+    });
+    let c = [solution[0], solution[1], solution[2]];
+    let bs = [solution[3], solution[4]];
     let row_bias = std::array::from_fn(|i| {
-        let k = nalgebra::RowVector3::from(gain[i]);
-        let change = a[i].try_inverse().map(|inv| k * m[i] * inv * b_0);
-        let scale = k.norm_squared();
-        change.map_or(f64::NAN, |c| c.dot(&k) / scale)
+        let k = RowVector3::from(gain[i]);
+        let change = a[i]
+            .try_inverse()
+            .map(|inv| k * (m[0][i] * bs[0] + m[1][i] * bs[1]) * inv / (1.0 + c[i]));
+        change.map_or(f64::NAN, |d| d.dot(&k) / k.norm_squared())
     });
     Some(Curvature {
-        b_s2,
-        b_std_s2: widening / (2.0 * den).sqrt(),
-        mean_omega2,
+        b: bs,
+        b_cov: [
+            [inverse[(3, 3)] * scale, inverse[(3, 4)] * scale],
+            [inverse[(4, 3)] * scale, inverse[(4, 4)] * scale],
+        ],
+        c,
+        omega_range: [lo, hi],
         row_bias,
-        omega2_range: [lo, hi],
     })
 }
 
 #[cfg(test)]
 mod tests {
+    use std::f64::consts::PI;
+
     use nalgebra::Matrix3;
     use num_complex::Complex64;
 
@@ -201,13 +231,14 @@ mod tests {
             .collect()
     }
 
-    /// The curvature relative to the band's mean gain of a gain `1 + b omega^2`.
-    fn relative_to_the_mean(b: f64, mean_omega2: f64) -> f64 {
-        b / (1.0 + b * mean_omega2)
+    /// The rise from the bins' bottom (0.125 Hz) to their top (15 Hz) of a gain `1 + b omega^2`.
+    fn true_rise(b: f64) -> f64 {
+        let (bottom, top) = ((2.0 * PI * 0.125).powi(2), (2.0 * PI * 15.0).powi(2));
+        b * (top - bottom) / (1.0 + b * bottom)
     }
 
-    /// Over 200 seeds the curvature's error over its standard deviation has rms near 1, with
-    /// and without a curvature; the bias of `K` and the rise follow from `b`.
+    /// Over 200 seeds the rise's error over its standard deviation has rms near 1, with and
+    /// without a curvature; noise-free, the rise, `K`'s bias and each row's follow from `b`.
     #[test]
     fn the_curvature_is_recovered_within_its_deviation() {
         let mut rng = Rng::new(31);
@@ -215,7 +246,7 @@ mod tests {
             let z: Vec<f64> = (0..200)
                 .map(|_| {
                     let c = curvature(&bins(&mut rng, b, 2e-3), &K, 1.0).unwrap();
-                    (c.b_s2 - relative_to_the_mean(b, c.mean_omega2)) / c.b_std_s2
+                    (c.rise() - true_rise(b)) / c.rise_std()
                 })
                 .collect();
             let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
@@ -223,27 +254,63 @@ mod tests {
         }
         let c = curvature(&bins(&mut rng, 1e-5, 1e-9), &K, 1.0).unwrap();
         assert!(
-            (c.b_s2 - relative_to_the_mean(1e-5, c.mean_omega2)).abs() < 1e-12,
-            "{}",
-            c.b_s2
+            (c.rise() - true_rise(1e-5)).abs() < 1e-8,
+            "{} against {}",
+            c.rise(),
+            true_rise(1e-5)
         );
-        // Against the gain at low frequency: the model's K reads b <omega^2> high, and the gain
-        // rises by 1e-5 (top - bottom) over its value at the bottom.
-        let top = (2.0 * std::f64::consts::PI * 15.0).powi(2);
-        let bottom = (2.0 * std::f64::consts::PI * 0.125).powi(2);
-        let rise = 1e-5 * (top - bottom) / (1.0 + 1e-5 * bottom);
-        assert!((c.rise() - rise).abs() < 1e-8, "{} against {rise}", c.rise());
-        assert!((c.omega2_range[1] - top).abs() < 1e-6 * top);
-        assert!((c.k_bias() - 1e-5 * c.mean_omega2).abs() < 1e-8, "{}", c.k_bias());
-        // Equal weights everywhere: every row's scale reads the same.
-        for bias in c.row_bias {
-            assert!((bias - 1e-5 * c.mean_omega2).abs() < 1e-8, "{bias}");
+        assert!(c.b[1].abs() < 1e-12, "{:?}", c.b);
+        assert!((c.omega_range[1] - 2.0 * PI * 15.0).abs() < 1e-9);
+        // The model's K reads b <omega^2> high, every row alike (equal weights everywhere).
+        let mean: f64 = (1..=120)
+            .map(|i| (2.0 * PI * 0.125 * f64::from(i)).powi(2))
+            .sum::<f64>()
+            / 120.0;
+        assert!(
+            (c.k_bias() - 1e-5 * mean).abs() < 1e-8,
+            "{} against {}",
+            c.k_bias(),
+            1e-5 * mean
+        );
+        for (bias, offset) in c.row_bias.iter().zip(c.c) {
+            assert!((bias - 1e-5 * mean).abs() < 1e-8, "{bias}");
+            assert!(
+                (offset + 1e-5 * mean / (1.0 + 1e-5 * mean)).abs() < 1e-8,
+                "{offset}"
+            );
         }
         // Widening scales the deviation alone.
         let wide = curvature(&bins(&mut Rng::new(2), 0.0, 2e-3), &K, 3.0).unwrap();
         let plain = curvature(&bins(&mut Rng::new(2), 0.0, 2e-3), &K, 1.0).unwrap();
-        assert!((wide.b_std_s2 - 3.0 * plain.b_std_s2).abs() < 1e-12 * plain.b_std_s2);
-        assert_eq!(wide.b_s2.to_bits(), plain.b_s2.to_bits());
+        assert!((wide.rise_std() - 3.0 * plain.rise_std()).abs() < 1e-12 * plain.rise_std());
+        assert_eq!(wide.b.map(f64::to_bits), plain.b.map(f64::to_bits));
+    }
+
+    /// A gain flat at low frequency that rises as `omega^4` near the band's top (a cubic spline's
+    /// droop) is not extrapolated to low frequency as a curvature: `K`'s bias is the small mean of
+    /// the rise, not the `omega^2` fit's.
+    #[test]
+    fn a_steep_rise_at_the_top_is_not_read_as_a_low_frequency_curvature() {
+        let mut rng = Rng::new(9);
+        let c4 = 1e-9;
+        let mut steep = bins(&mut rng, 0.0, 1e-9);
+        let mean4 = steep.iter().map(|b| b.omega.powi(4)).sum::<f64>() / steep.len() as f64;
+        for b in &mut steep {
+            let delay = Complex64::from_polar(1.0, -b.omega * 0.0042);
+            let k = Matrix3::from_fn(|i, j| Complex64::from(K[i][j]));
+            b.model = k * delay * Complex64::from(1.0 + c4 * mean4);
+            b.estimate = k * delay * Complex64::from(1.0 + c4 * b.omega.powi(4));
+        }
+        let c = curvature(&steep, &K, 1.0).unwrap();
+        assert!(
+            (c.k_bias() - c4 * mean4).abs() < 1e-6 * c4 * mean4,
+            "{} against {}",
+            c.k_bias(),
+            c4 * mean4
+        );
+        let (bottom, top) = (2.0 * PI * 0.125, 2.0 * PI * 15.0);
+        let rise = c4 * (top.powi(4) - bottom.powi(4)) / (1.0 + c4 * bottom.powi(4));
+        assert!((c.rise() - rise).abs() < 1e-9, "{} against {rise}", c.rise());
     }
 
     /// Each row's bias against a brute-force fit: the delay-only `K` fitted by whitened least
@@ -333,11 +400,7 @@ mod tests {
         let mut some = bins(&mut rng, 1e-5, 1e-9);
         some[3].estimate[(1, 1)] = Complex64::new(f64::NAN, 0.0);
         let c = curvature(&some, &K, 1.0).unwrap();
-        assert!(
-            (c.b_s2 / relative_to_the_mean(1e-5, c.mean_omega2) - 1.0).abs() < 1e-3,
-            "{}",
-            c.b_s2
-        );
+        assert!((c.rise() / true_rise(1e-5) - 1.0).abs() < 1e-3, "{}", c.rise());
         for b in &mut some {
             b.omega = f64::NAN;
         }

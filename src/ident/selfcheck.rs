@@ -85,10 +85,10 @@ pub fn chi2_per_bin(
         .collect()
 }
 
-/// The gain-curvature check (module docs, [`gain_curvature`]): the common `1 + b omega^2` of the
-/// chosen model's residual over the band, with the weights of [`chi2_per_bin`]; said when `b` is
-/// beyond [`CURVATURE_SIGMAS`] of its deviation and the bias it gives `K` exceeds `K`'s relative
-/// deviation.
+/// The gain-curvature check (module docs, [`gain_curvature`]): the common even gain of the
+/// chosen model's residual over the band, with the weights of [`chi2_per_bin`]; said when its rise
+/// across the band is beyond [`CURVATURE_SIGMAS`] of its deviation and the bias it gives a row of
+/// `K` exceeds `K`'s relative deviation.
 #[must_use]
 pub fn gain_changes(
     block: Block,
@@ -118,15 +118,15 @@ pub fn gain_changes(
     let k_relative_std = norm(&fit.k_std) / norm(&fit.k);
     let k_bias = c.row_bias;
     let largest = k_bias.iter().fold(0.0, |m: f64, b| m.max(b.abs()));
-    let said = c.b_s2.abs() > CURVATURE_SIGMAS * c.b_std_s2 && largest > k_relative_std;
-    let to_hz = |w2: f64| w2.sqrt() / (2.0 * std::f64::consts::PI);
+    let said = c.rise().abs() > CURVATURE_SIGMAS * c.rise_std() && largest > k_relative_std;
+    let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
     said.then(|| IdentWarning::GainChangesAcrossBand {
         rise: c.rise(),
-        rise_std: c.b_std_s2 * (c.omega2_range[1] - c.omega2_range[0]),
+        rise_std: c.rise_std(),
         k_bias,
         outputs: channel_names(block).1.map(str::to_owned),
         k_relative_std,
-        band_hz: [to_hz(c.omega2_range[0]), to_hz(c.omega2_range[1])],
+        band_hz: [to_hz(c.omega_range[0]), to_hz(c.omega_range[1])],
     })
 }
 

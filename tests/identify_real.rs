@@ -272,7 +272,7 @@ fn a_poor_fit_is_flagged_on_real_data_and_not_on_a_clean_simulated_run() {
 }
 
 /// The optical reference was resampled from 120 Hz onto the gyro's samples (the dataset's
-/// authors'): the gain measured against it rises across the band with no phase, 5-12 % to the
+/// authors'): the gain measured against it rises across the band with no phase, 6-10 % to the
 /// band's top on these runs, and some row of `K` reads high by more than `K`'s deviation on each,
 /// so it is said on each. One reference system: the curvature `b` (the rise over the band's
 /// `omega^2` span) agrees between the runs within 40 %.

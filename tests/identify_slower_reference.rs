@@ -59,15 +59,21 @@ fn a_slower_reference_s_gain_rise_is_said_with_each_row_s_bias() {
                 b.block
             );
             let (rise, k_bias) = said.expect("the gain rise is said");
-            // sinc^-2(f / 120 Hz) rises by 10 % at 17 Hz: the band reaches well beyond.
+            // sinc^-2(f / 120 Hz) rises by 10 % at 20 Hz: the band reaches beyond.
             assert!(rise > 0.1, "rise {rise}");
-            // Each row's bias within a third of the row's actual error (the curvature is
-            // `omega^2`, the interpolation's `1 / sinc^2` a little steeper) and never of the
-            // wrong sign; rows off by less than 0.3 % within 0.1 %.
+            // Each row's bias within 40 % of the row's actual error (two even terms, the
+            // interpolation's `1 / sinc^2` steeper still; measured 0.66-0.97 of it) and of its
+            // sign wherever the row is off by more than 0.1 %; rows off by less than 0.3 % within
+            // 0.12 %.
             for (s, a) in k_bias.iter().zip(actual) {
                 assert!(
-                    (s - a).abs() < (a.abs() / 3.0).max(1e-3),
+                    (s - a).abs() < (0.4 * a.abs()).max(1.2e-3),
                     "{regime:?} {:?}: said {k_bias:?}, actual {actual:?}",
+                    b.block
+                );
+                assert!(
+                    a.abs() < 1e-3 || s * a > 0.0,
+                    "{regime:?} {:?}: {k_bias:?} {actual:?}",
                     b.block
                 );
             }

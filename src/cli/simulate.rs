@@ -58,7 +58,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         config.stand = StandImperfections::real();
     } else if let Some(other) = args.get("stand") {
         return Err(CliError::Input(format!(
-            "--stand: unknown stand '{other}' (known: real; or give --angle-latency, --angle-band-hz, --coloured-angle-noise)"
+            "--stand: unknown stand '{other}' (known: real; or give --angle-latency, --angle-band-hz, --angle-rate-hz, --coloured-angle-noise)"
         )));
     }
     config.stand.latency_s = args.parsed_or("angle-latency", config.stand.latency_s)?;

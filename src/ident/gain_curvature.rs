@@ -12,7 +12,7 @@
 //! simulator (a 120 Hz optical reference interpolated linearly onto the gyro's samples, as the
 //! real recordings' dataset was made): every diagonal of `K` read high by 0.1-1.7 %, 5 of its
 //! standard deviations on average, with nothing said on most runs; the three real recordings'
-//! gain rises by 5-12 % from their band's bottom to its top.
+//! gain rises by 6-10 % from their band's bottom to its top.
 //!
 //! [`curvature`] fits one common even gain `1 + b_2 omega^2 + b_4 omega^4` to the chosen model's
 //! residual by generalised least squares, beside each output row's own constant `c_i` (the row's
@@ -74,8 +74,8 @@ impl Curvature {
     }
 
     /// How far `K` reads above the gain at low frequency, relative: the mean of the rows'.
-    #[must_use]
-    pub fn k_bias(&self) -> f64 {
+    #[cfg(test)]
+    fn k_bias(&self) -> f64 {
         self.row_bias.iter().sum::<f64>() / 3.0
     }
 
@@ -122,14 +122,18 @@ fn finite(b: &Bin) -> bool {
             .all(|z| z.re.is_finite() && z.im.is_finite())
 }
 
-/// The common even gain of `bins` (module docs) of a block whose static gain is `gain`; `widening`
-/// multiplies its standard deviations (`sqrt(bin correlation x max(1, chi2/dof))`).
+/// The common even gain of `bins` (module docs) of a block whose static gain is `gain`, its
+/// covariance widened by `sqrt(bin_correlation x max(1, chi2/dof))` of this fit's own residual
+/// (on the bins' weights, not the structural fit's narrowed ones).
 ///
 /// Five parameters by generalised least squares: each row's own constant `c_i` (the regressor
 /// `W_i`, the model's row) and the common `b_2`, `b_4` (`omega^2 W_i`, `omega^4 W_i`), so each
-/// row's mean is its own and the shape is shared.
+/// row's mean is its own and the shape is shared. The rows' biases take the delay as fixed: the
+/// even gain has no phase, so it moves the delay only through the weights' imaginary
+/// cross-terms, a second-order coupling this leaves out. `None` without bins or information, or
+/// when a row's bias is not finite (a zero row of `gain`).
 #[must_use]
-pub fn curvature(bins: &[Bin], gain: &[[f64; 3]; 3], widening: f64) -> Option<Curvature> {
+pub fn curvature(bins: &[Bin], gain: &[[f64; 3]; 3], bin_correlation: f64) -> Option<Curvature> {
     let bins: Vec<&Bin> = bins.iter().filter(|b| finite(b)).collect();
     let mut normal = nalgebra::SMatrix::<f64, 5, 5>::zeros();
     let mut rhs = nalgebra::SVector::<f64, 5>::zeros();
@@ -161,19 +165,35 @@ pub fn curvature(bins: &[Bin], gain: &[[f64; 3]; 3], widening: f64) -> Option<Cu
     if !solution.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let scale = widening * widening / 2.0;
+    // This fit's own chi2: the residual less the fitted even gain, 18 real degrees of freedom per
+    // bin less the five parameters.
+    let mut chi2 = 0.0;
+    for b in &bins {
+        let w2 = b.omega * b.omega;
+        for i in 0..3 {
+            let factor = solution[i] + solution[3] * w2 + solution[4] * w2 * w2;
+            let left: [Complex64; 3] =
+                std::array::from_fn(|j| b.estimate[(i, j)] - b.model[(i, j)] * (1.0 + factor));
+            chi2 += 2.0 * form(&left, &b.weights[i], &left);
+        }
+    }
+    let dof = (18 * bins.len()).saturating_sub(5).max(1) as f64;
+    let scale = bin_correlation.max(1.0) * (chi2 / dof).max(1.0) / 2.0;
     let (lo, hi) = bins.iter().fold((f64::INFINITY, 0.0_f64), |(l, h), b| {
         (l.min(b.omega), h.max(b.omega))
     });
     let c = [solution[0], solution[1], solution[2]];
     let bs = [solution[3], solution[4]];
-    let row_bias = std::array::from_fn(|i| {
+    let row_bias: [f64; 3] = std::array::from_fn(|i| {
         let k = RowVector3::from(gain[i]);
         let change = a[i]
             .try_inverse()
             .map(|inv| k * (m[0][i] * bs[0] + m[1][i] * bs[1]) * inv / (1.0 + c[i]));
         change.map_or(f64::NAN, |d| d.dot(&k) / k.norm_squared())
     });
+    if !row_bias.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     Some(Curvature {
         b: bs,
         b_cov: [
@@ -252,6 +272,20 @@ mod tests {
             let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
             assert!((0.85..1.15).contains(&rms), "b {b}: z rms {rms}");
         }
+        // Weights that understate the noise fourfold: the fit's own chi2/dof (about 4) widens the
+        // deviation to the scatter again.
+        let z: Vec<f64> = (0..200)
+            .map(|_| {
+                let mut understated = bins(&mut rng, 1e-5, 2e-3);
+                for b in &mut understated {
+                    b.weights = b.weights.map(|w| w * Complex64::from(4.0));
+                }
+                let c = curvature(&understated, &K, 1.0).unwrap();
+                (c.rise() - true_rise(1e-5)) / c.rise_std()
+            })
+            .collect();
+        let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        assert!((0.85..1.15).contains(&rms), "understated weights: z rms {rms}");
         let c = curvature(&bins(&mut rng, 1e-5, 1e-9), &K, 1.0).unwrap();
         assert!(
             (c.rise() - true_rise(1e-5)).abs() < 1e-8,
@@ -279,8 +313,8 @@ mod tests {
                 "{offset}"
             );
         }
-        // Widening scales the deviation alone.
-        let wide = curvature(&bins(&mut Rng::new(2), 0.0, 2e-3), &K, 3.0).unwrap();
+        // The bins' correlation widens the deviation alone.
+        let wide = curvature(&bins(&mut Rng::new(2), 0.0, 2e-3), &K, 9.0).unwrap();
         let plain = curvature(&bins(&mut Rng::new(2), 0.0, 2e-3), &K, 1.0).unwrap();
         assert!((wide.rise_std() - 3.0 * plain.rise_std()).abs() < 1e-12 * plain.rise_std());
         assert_eq!(wide.b.map(f64::to_bits), plain.b.map(f64::to_bits));
@@ -392,10 +426,15 @@ mod tests {
         );
     }
 
-    /// No bins, or only non-finite ones, give nothing; a non-finite bin among good ones is skipped.
+    /// No bins, or only non-finite ones, or a zero row of the gain give nothing; a non-finite bin
+    /// among good ones is skipped.
     #[test]
     fn empty_or_non_finite_bins_give_nothing() {
         assert!(curvature(&[], &K, 1.0).is_none());
+        // A zero row of the gain has no scale to read a bias of: nothing, rather than a NaN.
+        let mut zero_row = K;
+        zero_row[1] = [0.0; 3];
+        assert!(curvature(&bins(&mut Rng::new(3), 1e-5, 1e-9), &zero_row, 1.0).is_none());
         let mut rng = Rng::new(4);
         let mut some = bins(&mut rng, 1e-5, 1e-9);
         some[3].estimate[(1, 1)] = Complex64::new(f64::NAN, 0.0);

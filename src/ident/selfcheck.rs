@@ -11,9 +11,11 @@
 //!   band where the inputs are noise.
 //! - **Imprecise gain**: with `calibrated`, the largest standard deviation of an element of `K`
 //!   above [`IMPRECISE_GAIN`]: the run does not determine the gain to a percent.
-//! - **Gain changes across the band**: the measured gain rises (or falls) as `1 + b omega^2`
-//!   with no phase, beyond 3 of its deviations, and moves `K` from the gain at low frequency by
-//!   more than `K`'s deviation ([`super::gain_curvature`]: a reference interpolated or smoothed).
+//! - **Gain changes across the band**: the measured gain rises (or falls) evenly in frequency,
+//!   with no phase, beyond 3 of its deviations, and moves a row of `K` from the gain at low
+//!   frequency by more than `K`'s relative deviation `||K_std||_F / ||K||_F` (for a `K` near the
+//!   identity about `sqrt(3)` times one row's scale deviation, so stricter than a row's own test)
+//!   ([`super::gain_curvature`]: a reference interpolated or smoothed).
 //! - **Negative delay**: `tau + 3 sigma < 0`.
 //! - **Delay absorbed by poles**: a chosen order above 0 whose delay is negative while the
 //!   order-0 candidate's is positive, the two more than 2 sigma apart (the poles' lag replaces part of the delay; a band-limited
@@ -111,9 +113,7 @@ pub fn gain_changes(
             }
         })
         .collect();
-    let per_dof = fit.chi2 / fit.dof.max(1) as f64;
-    let widening = (spectra.bin_correlation.max(1.0) * per_dof.max(1.0)).sqrt();
-    let c = gain_curvature::curvature(&bins, &fit.k, widening)?;
+    let c = gain_curvature::curvature(&bins, &fit.k, spectra.bin_correlation)?;
     let norm = |m: &[[f64; 3]; 3]| m.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
     let k_relative_std = norm(&fit.k_std) / norm(&fit.k);
     let k_bias = c.row_bias;

@@ -470,6 +470,8 @@ fn stand_imperfections_do_what_they_say_and_default_to_none() {
 fn a_slower_reference_weighs_the_motion_by_the_triangle_kernel() {
     let (fs, fr) = (500.0, 120.0);
     let n = 50_000_u32;
+    // At 2 Hz the weight is 0.99909: the tolerance (the read-off's own smoothing, 3.5e-4 at
+    // 10 Hz) is about half its distance from 1.
     for f in [2.0, 10.0, 25.0] {
         let w = 2.0 * std::f64::consts::PI * f;
         let x: Vec<f64> = (0..n).map(|i| (w * f64::from(i) / fs + 0.3).sin()).collect();
@@ -484,11 +486,11 @@ fn a_slower_reference_weighs_the_motion_by_the_triangle_kernel() {
         let sinc = |u: f64| (std::f64::consts::PI * u).sin() / (std::f64::consts::PI * u);
         let expected = sinc(f / fr).powi(2);
         assert!(
-            (gain - expected).abs() < 1e-3,
+            (gain - expected).abs() < 5e-4,
             "{f} Hz: {gain} against {expected}"
         );
         // Zero phase: no delay.
-        assert!(quadrature.abs() < 1e-3, "{f} Hz: quadrature {quadrature}");
+        assert!(quadrature.abs() < 5e-4, "{f} Hz: quadrature {quadrature}");
     }
     // A reference as fast as the run, or a bad rate, leaves the angles as they are.
     let x = [0.0, 1.0, -2.0, 0.5];

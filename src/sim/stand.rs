@@ -16,7 +16,10 @@
 //!   measured against it rises across the band (found by a helper's independent hand-held
 //!   simulator; the identifier says so, `ident::gain_curvature`). The reference's samples are read
 //!   off the run's grid by a cubic (Catmull-Rom) interpolation, whose own smoothing is of order
-//!   `(f / f_s)^4`.
+//!   `(f / f_s)^4`. The coloured noise is resampled with the angles; the white angle noise and
+//!   the quantisation are added after, at the run's rate (an encoder's, not the reference's). A
+//!   rate at or above the run's has no effect (`through_slower_reference` returns the angles as
+//!   they are; the command line refuses it).
 //!
 //! Units: rad, s, Hz. The default is a perfect stand (none of them), which keeps every existing
 //! run's bytes unchanged.
@@ -101,7 +104,7 @@ pub(super) fn measured_angle(
 
 /// `x`, sampled at `fs`, as a reference at `reference_hz` sees it (module docs): read at the
 /// reference's instants `j / reference_hz` (Catmull-Rom), then interpolated linearly back onto
-/// `x`'s samples.
+/// `x`'s samples. Fewer than two samples, or a rate not within `(0, fs)`, return `x` as it is.
 pub(super) fn through_slower_reference(x: &[f64], fs: f64, reference_hz: f64) -> Vec<f64> {
     let n = x.len();
     if n < 2 || !(reference_hz > 0.0 && reference_hz < fs) {

@@ -22,8 +22,8 @@
 //!    stays admissible as before. A real sensor lag in simulated runs has `d_1` about 4.5 ms and
 //!    its delay known to 0.01-0.02 ms. Nor is a negative delay admissible when the numerator's
 //!    zeros give its lead back as lag (their low-frequency lag, minus the mean of `N_0^-1 N_1`'s
-//!    eigenvalues, positive beyond two of its standard deviations: zeros in the right half
-//!    plane). A sensor's filters have no such zeros, and a lead with a lag that cancels it is the
+//!    eigenvalues, positive beyond two of its standard deviations, bounded as if its parameters
+//!    were fully correlated: zeros in the right half plane). A sensor's filters have no such zeros, and a lead with a lag that cancels it is the
 //!    delay-only phase with a gain rising across the band, the reference's band limit again. Found
 //!    on 20-40 s pieces of the real recordings (after the rule on the poles' lag): order 2 with
 //!    a pair near 35 Hz, a delay of -6.6 +- 2.3 ms and zeros adding 4.78 +- 0.40 ms, whose whole
@@ -378,10 +378,12 @@ fn physical_rejection(data: &Prepared, model: &Model, inflation: f64) -> Option<
 /// The lag the numerator adds at low frequency and its standard deviation, s: `N(s) = N_0 (I +
 /// N_0^-1 N_1 s + ...)`, so its phase there is a lead of `N_0^-1 N_1` (a matrix, s); the lag is
 /// minus a third of its trace (the mean over the axes, whatever their order or mixing). Positive
-/// for zeros in the right half plane. The deviation is propagated from the parameters' `std`
-/// (normalised, as [`Model::parameter_std`] gives them) to first order, each parameter on its
-/// own. `None` without a first-order numerator coefficient (orders 0 and 1) or when `N_0` is
-/// singular.
+/// for zeros in the right half plane. The deviation is bounded from the parameters' `std`
+/// (normalised, as [`Model::parameter_std`] gives them) to first order: each parameter's
+/// contribution added in magnitude, as if all were fully correlated (the diagonal `N_1` terms all
+/// trade with the one delay, so they move together), which no correlation can exceed; the rule's
+/// "two deviations" is then at least two. `None` without a first-order numerator coefficient
+/// (orders 0 and 1) or when `N_0` is singular.
 fn numerator_lag(model: &Model, std: &[f64], w_ref: f64) -> Option<(f64, f64)> {
     let matrix = |c: &[f64; ELEMENTS]| Matrix3::from_fn(|i, j| c[3 * i + j]);
     let (n0, n1) = (matrix(model.num.first()?), matrix(model.num.get(1)?));
@@ -389,14 +391,14 @@ fn numerator_lag(model: &Model, std: &[f64], w_ref: f64) -> Option<(f64, f64)> {
     let lag = -(a * n1).trace() / 3.0 / w_ref;
     // d tr(A N_1) = tr(A dN_1) - tr(A dN_0 A N_1).
     let (by_n1, by_n0) = (a.transpose(), (a * n1 * a).transpose());
-    let variance: f64 = (0..ELEMENTS)
+    let bound: f64 = (0..ELEMENTS)
         .map(|e| {
             let (i, j) = (e / 3, e % 3);
             let (s0, s1) = (std.get(e)?, std.get(ELEMENTS + e)?);
-            Some((by_n1[(i, j)] * s1).powi(2) + (by_n0[(i, j)] * s0).powi(2))
+            Some((by_n1[(i, j)] * s1).abs() + (by_n0[(i, j)] * s0).abs())
         })
         .sum::<Option<f64>>()?;
-    let lag_std = variance.sqrt() / 3.0 / w_ref;
+    let lag_std = bound / 3.0 / w_ref;
     (lag.is_finite() && lag_std.is_finite()).then_some((lag, lag_std))
 }
 
@@ -478,8 +480,8 @@ mod tests {
         assert!(numerator_lag(&with_numerator([0.0; ELEMENTS], -1e-3, w_ref), &std, w_ref).is_none());
     }
 
-    /// The lag's deviation, propagated analytically, against central differences of the lag in
-    /// each parameter (each on its own, as the propagation takes them).
+    /// The lag's deviation bound, propagated analytically, against central differences of the
+    /// lag in each parameter (their contributions added in magnitude, as the bound takes them).
     #[test]
     fn the_numerator_s_lag_deviation_is_its_first_order_propagation() {
         let w_ref = 80.0;
@@ -496,7 +498,7 @@ mod tests {
             .map(|_| rng.uniform_in(1e-4, 1e-3))
             .collect();
         let (_, analytic) = numerator_lag(&model, &std, w_ref).unwrap();
-        let mut variance = 0.0;
+        let mut bound = 0.0;
         for m in 0..2 {
             for e in 0..ELEMENTS {
                 let h = 1e-6;
@@ -506,10 +508,10 @@ mod tests {
                     numerator_lag(&moved, &std, w_ref).unwrap().0
                 };
                 let slope = (lag_at(h) - lag_at(-h)) / (2.0 * h);
-                variance += (slope * std[m * ELEMENTS + e]).powi(2);
+                bound += (slope * std[m * ELEMENTS + e]).abs();
             }
         }
-        let numeric = variance.sqrt();
+        let numeric = bound;
         assert!(
             (analytic - numeric).abs() < 1e-6 * numeric,
             "{analytic:e} {numeric:e}"

@@ -44,6 +44,21 @@ pub struct Bin {
     pub weights: [Matrix3<Complex64>; 3],
 }
 
+impl Bin {
+    /// The bin's chi2: `2 sum_i r_i Omega_i r_i^H` of the residual `r = estimate - model` (18
+    /// real degrees of freedom expected).
+    #[must_use]
+    pub fn chi2(&self) -> f64 {
+        let r = self.estimate - self.model;
+        (0..3)
+            .map(|i| {
+                let row = r.row(i);
+                2.0 * (row * self.weights[i] * row.adjoint())[(0, 0)].re
+            })
+            .sum()
+    }
+}
+
 /// The fitted even gain of a block over its band (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Curvature {

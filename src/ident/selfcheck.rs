@@ -58,51 +58,22 @@ pub const GAIN_TOLERANCE: f64 = 0.1;
 /// motions of another simulator (0.02 degrees) gave 0.012-0.17 on the accelerometer.
 pub const IMPRECISE_GAIN: f64 = 0.01;
 
-/// Per-bin chi2 of `fit` against the Wiener estimate over the native `band` bins, with the
-/// weights `Omega_i = (n_eq - 3) S_uu / S_psi,ii` as given to the structural fit (before its
-/// narrowing to the local scatter, `structural::scatter`, which only raises them where they
-/// overstate the noise: a misfit here is one there); `noise` is `S_psi` per bin.
+/// The band's native bins as the self-check compares them: the chosen model as the estimate sees
+/// it (at the bin's frequency, with its offsets), the Wiener estimate, and the weights
+/// `Omega_i = (n_eq - 3) S_uu / S_psi,ii` as given to the structural fit (before its narrowing to
+/// the local scatter, `structural::scatter`, which only raises them where they overstate the
+/// noise: a misfit here is one there); `noise` is `S_psi` per bin. [`chi2_per_bin`] and the
+/// gain-curvature check read the same bins.
 #[must_use]
-pub fn chi2_per_bin(
+pub fn band_bins(
     spectra: &BlockSpectra,
     noise: &[nalgebra::Matrix3<Complex64>],
     wiener: &WienerEstimate,
     band: &[usize],
     fit: &StructuralFit,
-) -> Vec<f64> {
+) -> Vec<gain_curvature::Bin> {
     let dof = (spectra.equivalent_averages - 3.0).max(1.0);
     band.iter()
-        .map(|&k| {
-            let f_hz = spectra.model_frequency_hz(k, wiener.estimate);
-            let model = fit.response_seen(f_hz, spectra.fit_offset_hz(k, wiener.estimate).as_ref());
-            let r = wiener.w_u[k] - model;
-            let omega = row_weights(&spectra.s_uu[k], &noise[k], dof);
-            (0..3)
-                .map(|i| {
-                    let row = r.row(i);
-                    2.0 * (row * omega[i] * row.adjoint())[(0, 0)].re
-                })
-                .sum::<f64>()
-        })
-        .collect()
-}
-
-/// The gain-curvature check (module docs, [`gain_curvature`]): the common even gain of the
-/// chosen model's residual over the band, with the weights of [`chi2_per_bin`]; said when its rise
-/// across the band is beyond [`CURVATURE_SIGMAS`] of its deviation and the bias it gives a row of
-/// `K` exceeds `K`'s relative deviation.
-#[must_use]
-pub fn gain_changes(
-    block: Block,
-    spectra: &BlockSpectra,
-    noise: &[nalgebra::Matrix3<Complex64>],
-    wiener: &WienerEstimate,
-    band: &[usize],
-    fit: &StructuralFit,
-) -> Option<IdentWarning> {
-    let dof = (spectra.equivalent_averages - 3.0).max(1.0);
-    let bins: Vec<gain_curvature::Bin> = band
-        .iter()
         .map(|&k| {
             let f_hz = spectra.model_frequency_hz(k, wiener.estimate);
             gain_curvature::Bin {
@@ -112,8 +83,36 @@ pub fn gain_changes(
                 weights: row_weights(&spectra.s_uu[k], &noise[k], dof),
             }
         })
-        .collect();
-    let c = gain_curvature::curvature(&bins, &fit.k, spectra.bin_correlation)?;
+        .collect()
+}
+
+/// Per-bin chi2 of `fit` against the Wiener estimate over the native `band` bins ([`band_bins`]).
+#[must_use]
+pub fn chi2_per_bin(
+    spectra: &BlockSpectra,
+    noise: &[nalgebra::Matrix3<Complex64>],
+    wiener: &WienerEstimate,
+    band: &[usize],
+    fit: &StructuralFit,
+) -> Vec<f64> {
+    band_bins(spectra, noise, wiener, band, fit)
+        .iter()
+        .map(gain_curvature::Bin::chi2)
+        .collect()
+}
+
+/// The gain-curvature check (module docs, [`gain_curvature`]) on the band's `bins`
+/// ([`band_bins`]): the common even gain of the chosen model's residual; said when its rise
+/// across the band is beyond [`CURVATURE_SIGMAS`] of its deviation and the bias it gives a row of
+/// `K` exceeds `K`'s relative deviation.
+#[must_use]
+pub fn gain_changes(
+    block: Block,
+    bins: &[gain_curvature::Bin],
+    bin_correlation: f64,
+    fit: &StructuralFit,
+) -> Option<IdentWarning> {
+    let c = gain_curvature::curvature(bins, &fit.k, bin_correlation)?;
     let norm = |m: &[[f64; 3]; 3]| m.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
     let k_relative_std = norm(&fit.k_std) / norm(&fit.k);
     let k_bias = c.row_bias;
@@ -166,9 +165,10 @@ pub fn self_check(
             segment_auto: settings.welch.segment_auto,
         });
     }
+    let bins = band_bins(spectra, noise, wiener, band, fit);
     let per_dof = fit.chi2 / fit.dof.max(1) as f64;
     if per_dof > POOR_FIT {
-        let chi2 = chi2_per_bin(spectra, noise, wiener, band, fit);
+        let chi2: Vec<f64> = bins.iter().map(gain_curvature::Bin::chi2).collect();
         let mut worst = ([0.0, 0.0], 0.0);
         let mut start = 0;
         while start < band.len() {
@@ -190,7 +190,7 @@ pub fn self_check(
             worst_chi2_per_dof: worst.1,
         });
     }
-    out.extend(gain_changes(block, spectra, noise, wiener, band, fit));
+    out.extend(gain_changes(block, &bins, spectra.bin_correlation, fit));
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);
         for i in 0..3 {

@@ -272,3 +272,48 @@ fn an_extended_gyro_keeps_the_witness_noise_estimate_in_its_deviations() {
         }
     }
 }
+
+/// A reference interpolated from 120 Hz: the delay-only model gives `K` at low frequency and
+/// carries the even gain; the joint fit of an accepted effect (its own design and weights) gives
+/// its gain as fitted, without the even gain, and the warning says `K` is not moved.
+#[test]
+fn an_extended_model_gives_its_own_gain_without_the_even_gain() {
+    use imu_attest::ident::warnings::IdentWarning;
+    use imu_attest::sim::SimConfig;
+    use imu_attest::sim::stand::StandImperfections;
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.duration_s = 120.0;
+    config.rate_hz = 500.0;
+    config.seed = 94;
+    config.effects = vec!["scale_nonlinearity:gyro".parse().expect("effect")];
+    config.stand = StandImperfections {
+        reference_rate_hz: Some(120.0),
+        ..StandImperfections::default()
+    };
+    let (_, run) = sim_common::simulated_run(&config);
+    let low_frequency = |warnings: &[IdentWarning]| {
+        warnings.iter().find_map(|w| match w {
+            IdentWarning::GainChangesAcrossBand {
+                k_at_low_frequency, ..
+            } => Some(*k_at_low_frequency),
+            _ => None,
+        })
+    };
+    let identified =
+        imu_attest::ident::identify::identify_run(&run, &Settings::default()).expect("identified");
+    let gyro = identified
+        .blocks
+        .iter()
+        .find(|b| b.block == Block::Gyro)
+        .expect("gyro");
+    assert!(gyro.structural.even_gain.is_some(), "{:?}", gyro.warnings);
+    assert_eq!(low_frequency(&gyro.warnings), Some(true));
+    let model = extend(run, &[(Block::Gyro, Effect::ScaleNonlinearity)]);
+    let gyro = &model.blocks["gyro"];
+    assert!(gyro.effects.is_some() && gyro.even_gain.is_none());
+    assert_eq!(low_frequency(&gyro.fit.warnings), Some(false));
+    // The response is the effects' alone.
+    let e = gyro.effects.as_ref().expect("effects");
+    let f = gyro.band_hz[1];
+    assert_eq!(gyro.response(f), e.response(&gyro.k, gyro.tau_s, f));
+}

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
-use imu_attest::gui::view::results::band_label;
+use imu_attest::gui::view::results::{band_label, k_heading};
 use imu_attest::gui::{App, WorkerMode};
 use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::Settings;
@@ -80,6 +80,15 @@ fn results_show_the_band_the_warnings_and_the_rejected_orders_of_a_real_run() {
         );
     }
     harness.get_by_label_contains("auto: lowest BIC among the admissible orders");
+    // The reference was interpolated from 120 Hz: the gain rises across the band, and K is shown
+    // as the gain at low frequency, with how far the model's even gain rises at the band's top.
+    let even = m.even_gain.expect("an even gain in the delay-only model");
+    let heading = k_heading(m);
+    assert!(heading.starts_with("K at low frequency"), "{heading}");
+    let top = (even.at(m.band_hz[1]) - 1.0) * 100.0;
+    assert!((3.0..20.0).contains(&top), "{top}");
+    assert!(heading.contains(&format!("{top:+.2} %")), "{heading}");
+    harness.get_by_label(&heading);
 }
 
 #[test]

@@ -50,12 +50,21 @@ impl Comparison {
     /// static gains of different structures, which the engineer should be told).
     #[must_use]
     pub fn orders_differ(&self, block: &str) -> bool {
-        let mut orders = self
-            .runs
-            .iter()
-            .filter_map(|r| r.blocks.get(block))
-            .map(|b| b.order);
-        orders.next().is_some_and(|first| orders.any(|o| o != first))
+        self.runs_differ(block, |b| b.order)
+    }
+
+    /// Whether some runs' `K` of `block` are the gain at low frequency (an even gain in the
+    /// model) and others' the band's mean gain: their difference then holds the even gain's
+    /// bias too, which the engineer should be told.
+    #[must_use]
+    pub fn gains_differ_in_kind(&self, block: &str) -> bool {
+        self.runs_differ(block, |b| b.k_at_low_frequency)
+    }
+
+    /// Whether the runs that have `block` differ in `figure`.
+    fn runs_differ<T: PartialEq>(&self, block: &str, figure: impl Fn(&BlockFigures) -> T) -> bool {
+        let mut values = self.runs.iter().filter_map(|r| r.blocks.get(block)).map(figure);
+        values.next().is_some_and(|first| values.any(|v| v != first))
     }
 
     /// A pair's label: `later - earlier`, by file (two runs of one regime differ).
@@ -115,6 +124,10 @@ pub struct BlockFigures {
     pub tau_std_s: Option<f64>,
     /// Structural order.
     pub order: usize,
+    /// Whether `K` is the gain at low frequency under an even gain in the model (the gain changes
+    /// across the band with no phase, `gain_changes_across_band`); otherwise it is as fitted.
+    #[serde(default)]
+    pub k_at_low_frequency: bool,
 }
 
 impl BlockFigures {
@@ -125,6 +138,7 @@ impl BlockFigures {
             tau_s: b.tau_s,
             tau_std_s: b.fit.tau_std_s,
             order: b.order,
+            k_at_low_frequency: b.even_gain.is_some(),
         }
     }
 }

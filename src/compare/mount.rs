@@ -146,6 +146,7 @@ mod tests {
             tau_s: 4e-3,
             tau_std_s: Some(1e-5),
             order: 0,
+            k_at_low_frequency: false,
         }
     }
 

@@ -32,6 +32,7 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
         stationarity: None,
         noise: None,
         effects: None,
+        even_gain: None,
         fit: Fit {
             k_std: [[k_std; 3]; 3],
             tau_std_s,
@@ -117,6 +118,36 @@ fn differences_and_significance_follow_the_combined_std() {
     .expect("two runs");
     assert!(c.orders_differ("gyro"));
     assert!(!c.orders_differ("accel"), "no such block: nothing differs");
+    assert!(!c.gains_differ_in_kind("gyro"), "neither carries an even gain");
+    // One run's K at low frequency (an even gain in its model), the other's a band's mean.
+    let mut low = block(1.0, Some(0.001), 0.004, Some(1e-4));
+    low.even_gain = Some(even_gain());
+    let c = compare(&[
+        model(
+            "cruise",
+            vec![("gyro", block(1.0, Some(0.001), 0.004, Some(1e-4)))],
+        ),
+        model("approach", vec![("gyro", low.clone())]),
+    ])
+    .expect("two runs");
+    assert!(c.gains_differ_in_kind("gyro"));
+    assert!(c.runs[1].blocks["gyro"].k_at_low_frequency && !c.runs[0].blocks["gyro"].k_at_low_frequency);
+    let c = compare(&[
+        model("cruise", vec![("gyro", low.clone())]),
+        model("approach", vec![("gyro", low)]),
+    ])
+    .expect("two runs");
+    assert!(!c.gains_differ_in_kind("gyro"), "both at low frequency");
+}
+
+fn even_gain() -> crate::ident::gain_curvature::EvenGain {
+    crate::ident::gain_curvature::EvenGain {
+        coefficients: [1e-5, 0.0],
+        coefficients_std: [1e-6, 1e-11],
+        k_change: [[0.004, 0.0, 0.0], [0.0, 0.004, 0.0], [0.0, 0.0, 0.004]],
+        k_change_std: [[1e-4; 3]; 3],
+        band_top_hz: 15.0,
+    }
 }
 
 /// The comparison echoes the first run's settings; a run whose settings as used differ (the

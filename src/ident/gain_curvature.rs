@@ -30,6 +30,7 @@
 
 use nalgebra::{Matrix3, RowVector3};
 use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
 
 /// One band bin: the model and the estimate there, and the weights of the estimate's rows.
 #[derive(Clone, Copy, Debug)]
@@ -73,11 +74,50 @@ pub struct Curvature {
     /// The band's lowest and highest `omega`, rad/s.
     pub omega_range: [f64; 2],
     /// Per output row `i` of `K`, the relative change of its scale the even gain gives the
-    /// delay-only fit: its row is `k_i (I + sum_p b_p M_pi A_i^-1 / (1 + c_i))`, with
-    /// `A_i = sum Re Omega_i` and `M_pi = sum omega^p Re Omega_i` over the bins (its normal
-    /// equations); the scale is the change's projection on `k_i`. Close to `-c_i / (1 + c_i)` where
-    /// the row's change is a scale alone.
+    /// delay-only fit, against the gain at low frequency: the projection of
+    /// [`Self::row_change`] on the fitted row `k_i`, over `1 + c_i`, with `A_i = sum Re Omega_i`
+    /// and `M_pi = sum omega^p Re Omega_i` over the bins (its normal equations). Close to `-c_i`
+    /// where the row's change is a scale alone.
     pub row_bias: [f64; 3],
+    /// Per output row `i`, the whole change the even gain gives the delay-only fit's row,
+    /// `k_i sum_p b_p M_pi A_i^-1` with `k_i` that fit's row (`b` is relative to the model, so no
+    /// `1 + c_i` here; its scale over `1 + c_i` is [`Self::row_bias`]): that fit's `K` less this is
+    /// the gain at low frequency (exactly for noise-free data and the same weights).
+    pub row_change: [[f64; 3]; 3],
+    /// The standard deviation of each element of [`Self::row_change`], from `b`'s covariance (the
+    /// change is linear in `b`).
+    pub row_change_std: [[f64; 3]; 3],
+}
+
+/// The even gain a delay-only model carries beside `K e^(-tau s)` when its block's gain changes
+/// across the band with no phase ([`Curvature`]): the model's response is `g(omega) K e^(-tau s)`,
+/// `g = 1 + b_2 omega^2 + b_4 omega^4`, `K` the gain at low frequency (`g(0) = 1`). Units:
+/// `omega` in rad/s, `b_2` in s^2, `b_4` in s^4.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvenGain {
+    /// `[b_2, b_4]`, s^2 and s^4.
+    pub coefficients: [f64; 2],
+    /// Their standard deviations (widened as the fit's), s^2 and s^4.
+    pub coefficients_std: [f64; 2],
+    /// What was taken from the delay-only fit's `K` to give the gain at low frequency
+    /// ([`Curvature::row_change`]); an accepted effect's gain, a band's mean too, is moved by the
+    /// same.
+    pub k_change: [[f64; 3]; 3],
+    /// Its standard deviation per element, added in quadrature to `K`'s.
+    pub k_change_std: [[f64; 3]; 3],
+    /// The top of the band it was fitted on, Hz: above it `g` is held at its value there (a
+    /// polynomial in `omega` is no model of anything beyond its data; the residual, validation
+    /// and noise terms evaluate the model up to the Nyquist frequency).
+    pub band_top_hz: f64,
+}
+
+impl EvenGain {
+    /// `g` at `f_hz` (Hz), held constant above [`Self::band_top_hz`].
+    #[must_use]
+    pub fn at(&self, f_hz: f64) -> f64 {
+        let w2 = (std::f64::consts::TAU * f_hz.abs().min(self.band_top_hz)).powi(2);
+        1.0 + self.coefficients[0] * w2 + self.coefficients[1] * w2 * w2
+    }
 }
 
 impl Curvature {
@@ -98,6 +138,20 @@ impl Curvature {
     #[must_use]
     pub fn rise(&self) -> f64 {
         self.shape(self.omega_range[1]) / self.shape(self.omega_range[0]) - 1.0
+    }
+
+    /// The even gain relative to the gain at low frequency, for the model ([`EvenGain`]): `b` over
+    /// the rows' mean level `1 + mean(c)`.
+    #[must_use]
+    pub fn even_gain(&self) -> EvenGain {
+        let level = 1.0 + self.c.iter().sum::<f64>() / 3.0;
+        EvenGain {
+            coefficients: self.b.map(|b| b / level),
+            coefficients_std: [self.b_cov[0][0], self.b_cov[1][1]].map(|v| v.max(0.0).sqrt() / level),
+            k_change: self.row_change,
+            k_change_std: self.row_change_std,
+            band_top_hz: self.omega_range[1] / std::f64::consts::TAU,
+        }
     }
 
     /// The standard deviation of [`Self::rise`] (to first order in `b`).
@@ -199,25 +253,55 @@ pub fn curvature(bins: &[Bin], gain: &[[f64; 3]; 3], bin_correlation: f64) -> Op
     });
     let c = [solution[0], solution[1], solution[2]];
     let bs = [solution[3], solution[4]];
+    // Each row's change is linear in b: k_i M_pi A_i^-1 per unit b_p, `k_i` the fitted row (the
+    // fit's K_i = k0_i (I + beta M A^-1) and b = beta (1 + c_i), so K_i b M A^-1 = K_i - k0_i).
+    let mut per_b = [[RowVector3::<f64>::zeros(); 3]; 2];
+    for i in 0..3 {
+        let k = RowVector3::from(gain[i]);
+        let a_inverse = a[i].try_inverse()?;
+        for p in 0..2 {
+            per_b[p][i] = k * m[p][i] * a_inverse;
+        }
+    }
+    let b_cov = [
+        [inverse[(3, 3)] * scale, inverse[(3, 4)] * scale],
+        [inverse[(4, 3)] * scale, inverse[(4, 4)] * scale],
+    ];
+    let row_change: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| bs[0] * per_b[0][i][j] + bs[1] * per_b[1][i][j]));
+    let row_change_std: [[f64; 3]; 3] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let d = [per_b[0][i][j], per_b[1][i][j]];
+            (d[0] * d[0] * b_cov[0][0] + 2.0 * d[0] * d[1] * b_cov[0][1] + d[1] * d[1] * b_cov[1][1])
+                .max(0.0)
+                .sqrt()
+        })
+    });
+    // The scale relative to the gain at low frequency, k0_i = K_i (1 + c_i) for a scale alone.
     let row_bias: [f64; 3] = std::array::from_fn(|i| {
         let k = RowVector3::from(gain[i]);
-        let change = a[i]
-            .try_inverse()
-            .map(|inv| k * (m[0][i] * bs[0] + m[1][i] * bs[1]) * inv / (1.0 + c[i]));
-        change.map_or(f64::NAN, |d| d.dot(&k) / k.norm_squared())
+        RowVector3::from(row_change[i]).dot(&k) / k.norm_squared() / (1.0 + c[i])
     });
-    if !row_bias.iter().all(|v| v.is_finite()) {
+    let level = 1.0 + c.iter().sum::<f64>() / 3.0;
+    if !row_bias
+        .iter()
+        .chain(row_change.iter().flatten())
+        .chain(row_change_std.iter().flatten())
+        .chain(b_cov.iter().flatten())
+        .all(|v| v.is_finite())
+        || !level.is_finite()
+        || level <= 0.5
+    {
         return None;
     }
     Some(Curvature {
         b: bs,
-        b_cov: [
-            [inverse[(3, 3)] * scale, inverse[(3, 4)] * scale],
-            [inverse[(4, 3)] * scale, inverse[(4, 4)] * scale],
-        ],
+        b_cov,
         c,
         omega_range: [lo, hi],
         row_bias,
+        row_change,
+        row_change_std,
     })
 }
 
@@ -439,6 +523,83 @@ mod tests {
             "{:?}",
             c.row_bias
         );
+        // The whole change of each row, cross-couplings included, is the brute-force fit's less
+        // the gain at low frequency (within 2 % of the row's change).
+        for i in 0..3 {
+            let actual: [f64; 3] = std::array::from_fn(|j| fitted[i][j] - K[i][j]);
+            let size = actual.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for j in 0..3 {
+                assert!(
+                    (c.row_change[i][j] - actual[j]).abs() < 0.02 * size,
+                    "row {i}: change {:?} against {actual:?}",
+                    c.row_change[i]
+                );
+            }
+        }
+    }
+
+    /// Over 200 seeds each element of a row's change scatters about its noise-free value as its
+    /// standard deviation says (z rms near 1, the nine elements pooled).
+    #[test]
+    fn each_row_s_change_scatters_as_its_deviation_says() {
+        let clean = curvature(&bins(&mut Rng::new(5), 1e-5, 1e-9), &K, 1.0).unwrap();
+        let mut rng = Rng::new(77);
+        let z: Vec<f64> = (0..200)
+            .flat_map(|_| {
+                let c = curvature(&bins(&mut rng, 1e-5, 2e-3), &K, 1.0).unwrap();
+                (0..9)
+                    .map(|e| {
+                        let (i, j) = (e / 3, e % 3);
+                        (c.row_change[i][j] - clean.row_change[i][j]) / c.row_change_std[i][j]
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        assert!((0.85..1.15).contains(&rms), "z rms {rms}");
+        // The model's even gain is relative to the gain at low frequency: `g` at the bins' top
+        // over `g` at their bottom is the rise.
+        let g = clean.even_gain();
+        let (bottom, top) = (0.125, 15.0);
+        assert!(
+            (g.at(top) / g.at(bottom) - 1.0 - clean.rise()).abs() < 1e-9,
+            "{} against {}",
+            g.at(top) / g.at(bottom) - 1.0,
+            clean.rise()
+        );
+        assert_eq!(g.k_change, clean.row_change);
+        // Above the band's top g is held at its value there.
+        assert_eq!(g.at(15.0).to_bits(), g.at(250.0).to_bits());
+        assert!(g.at(14.0) < g.at(15.0));
+    }
+
+    /// Noise-free, with the model's own `K` (the band's mean gain `K (1 + b <omega^2>)`, as the
+    /// identifier passes it): each row's change is exactly that less `K`, the rows' bias is
+    /// `b <omega^2>`, and the model's even gain is `b` itself, relative to the gain at low
+    /// frequency.
+    #[test]
+    fn with_the_model_s_own_k_the_change_and_the_even_gain_are_exact() {
+        let b = 1e-5;
+        let mean: f64 = (1..=120)
+            .map(|i| (2.0 * PI * 0.125 * f64::from(i)).powi(2))
+            .sum::<f64>()
+            / 120.0;
+        let fitted: [[f64; 3]; 3] = K.map(|r| r.map(|v| v * (1.0 + b * mean)));
+        let c = curvature(&bins(&mut Rng::new(6), b, 1e-12), &fitted, 1.0).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = fitted[i][j] - K[i][j];
+                assert!(
+                    (c.row_change[i][j] - want).abs() < 1e-9 * want.abs().max(1e-6),
+                    "{i} {j}: {} against {want}",
+                    c.row_change[i][j]
+                );
+            }
+            assert!((c.row_bias[i] - b * mean).abs() < 1e-9, "{:?}", c.row_bias);
+        }
+        let g = c.even_gain();
+        assert!((g.coefficients[0] - b).abs() < 1e-9 * b, "{:?}", g.coefficients);
+        assert!(g.coefficients[1].abs() < 1e-16, "{:?}", g.coefficients);
     }
 
     /// No bins, or only non-finite ones, or a zero row of the gain give nothing; a non-finite bin

@@ -308,7 +308,7 @@ fn identify_excited(
             warnings.push(IdentWarning::UntrustedBand { ranges_hz: ranges });
         }
     }
-    warnings.extend(self_check(
+    let (checks, curvature) = self_check(
         block,
         &spectra,
         &factorisation.noise_psd,
@@ -316,7 +316,27 @@ fn identify_excited(
         &band,
         &structural,
         settings,
-    ));
+    );
+    warnings.extend(checks);
+    // A gain that changes across the band with no phase: a delay-only model's K is the band's
+    // mean gain; it is given at low frequency instead, the model carrying the even gain.
+    let structural = match curvature {
+        Some(c) if structural.order == 0 => {
+            let mut corrected = (*structural).clone();
+            if corrected.take_even_gain(c.even_gain()) {
+                for w in &mut warnings {
+                    if let IdentWarning::GainChangesAcrossBand {
+                        k_at_low_frequency, ..
+                    } = w
+                    {
+                        *k_at_low_frequency = true;
+                    }
+                }
+            }
+            Arc::new(corrected)
+        }
+        _ => structural,
+    };
     if let Some(refusal) = weak.filter(|r| !determined(&structural, block, r)) {
         return Err(refusal);
     }

@@ -32,7 +32,7 @@ use std::sync::Arc;
 
 use num_complex::Complex64;
 
-use super::gain_curvature;
+use super::gain_curvature::{self, Curvature};
 use super::identify::row_weights;
 use super::settings::{OrderSetting, Settings, leaves_enough};
 use super::signals::channel_names;
@@ -111,7 +111,7 @@ pub fn gain_changes(
     bins: &[gain_curvature::Bin],
     bin_correlation: f64,
     fit: &StructuralFit,
-) -> Option<IdentWarning> {
+) -> Option<(IdentWarning, Curvature)> {
     let c = gain_curvature::curvature(bins, &fit.k, bin_correlation)?;
     let norm = |m: &[[f64; 3]; 3]| m.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
     let k_relative_std = norm(&fit.k_std) / norm(&fit.k);
@@ -119,13 +119,17 @@ pub fn gain_changes(
     let largest = k_bias.iter().fold(0.0, |m: f64, b| m.max(b.abs()));
     let said = c.rise().abs() > CURVATURE_SIGMAS * c.rise_std() && largest > k_relative_std;
     let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
-    said.then(|| IdentWarning::GainChangesAcrossBand {
-        rise: c.rise(),
-        rise_std: c.rise_std(),
-        k_bias,
-        outputs: channel_names(block).1.map(str::to_owned),
-        k_relative_std,
-        band_hz: [to_hz(c.omega_range[0]), to_hz(c.omega_range[1])],
+    said.then(|| {
+        let warning = IdentWarning::GainChangesAcrossBand {
+            rise: c.rise(),
+            rise_std: c.rise_std(),
+            k_bias,
+            outputs: channel_names(block).1.map(str::to_owned),
+            k_relative_std,
+            band_hz: [to_hz(c.omega_range[0]), to_hz(c.omega_range[1])],
+            k_at_low_frequency: false,
+        };
+        (warning, c)
     })
 }
 
@@ -145,7 +149,8 @@ pub fn imprecise_gain(block: Block, fit: &StructuralFit) -> Option<IdentWarning>
     })
 }
 
-/// The self-check's warnings of one block (see the module docs).
+/// The self-check's warnings of one block (see the module docs), and the even gain of a gain that
+/// changes across the band where that is said (for [`StructuralFit::take_even_gain`]).
 #[must_use]
 pub fn self_check(
     block: Block,
@@ -155,7 +160,7 @@ pub fn self_check(
     band: &[usize],
     fit: &StructuralFit,
     settings: &Settings,
-) -> Vec<IdentWarning> {
+) -> (Vec<IdentWarning>, Option<Curvature>) {
     let mut out = Vec::new();
     if !leaves_enough(spectra.n_averages, spectra.equivalent_averages) {
         out.push(IdentWarning::FewSegments {
@@ -190,7 +195,8 @@ pub fn self_check(
             worst_chi2_per_dof: worst.1,
         });
     }
-    out.extend(gain_changes(block, &bins, spectra.bin_correlation, fit));
+    let (change, curvature) = gain_changes(block, &bins, spectra.bin_correlation, fit).unzip();
+    out.extend(change);
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);
         for i in 0..3 {
@@ -237,5 +243,5 @@ pub fn self_check(
     {
         out.push(IdentWarning::InadmissibleOrder { order: n, reason });
     }
-    out
+    (out, curvature)
 }

@@ -83,7 +83,8 @@ pub enum IdentWarning {
     /// The measured gain changes across the band with no phase of its own, beyond its deviation,
     /// and enough to move `K` (the band's mean gain) by more than `K`'s own deviation from the
     /// gain at low frequency ([`super::gain_curvature`]: a reference interpolated from a slower
-    /// rate, or smoothed).
+    /// rate, or smoothed). A delay-only model's `K` is then given at low frequency and the model
+    /// carries the even gain (`k_at_low_frequency`); a rational order's is left as fitted.
     GainChangesAcrossBand {
         /// The gain's change from the band's bottom to its top, relative.
         rise: f64,
@@ -98,6 +99,10 @@ pub enum IdentWarning {
         k_relative_std: f64,
         /// The band, Hz.
         band_hz: [f64; 2],
+        /// Whether the model's `K` is the gain at low frequency (the delay-only fit's less the
+        /// rows' change, the even gain in the model's response); `false`: `K` as fitted.
+        #[serde(default)]
+        k_at_low_frequency: bool,
     },
     /// The model does not explain the data to the stated noise: uncertainties widened.
     PoorFit {
@@ -242,6 +247,7 @@ fn gain_change_words(
     outputs: &[String; 3],
     k_relative_std: f64,
     band_hz: [f64; 2],
+    k_at_low_frequency: bool,
 ) -> String {
     let rows: Vec<String> = k_bias
         .iter()
@@ -254,19 +260,33 @@ fn gain_change_words(
             )
         })
         .collect();
+    let what = if k_at_low_frequency {
+        format!(
+            "the delay-only fit's K, the band's mean gain, read its rows about {} off the gain at \
+             low frequency, more than K's deviation ({}): K is given at low frequency (its \
+             deviations widened by the correction's) and the model carries the change as an even \
+             gain; a lower band top lessens the correction",
+            rows.join(", "),
+            relative(k_relative_std)
+        )
+    } else {
+        format!(
+            "K is the band's mean gain, and its rows read about {} off the gain at low \
+             frequency, more than K's deviation ({}): a lower band top lessens it",
+            rows.join(", "),
+            relative(k_relative_std)
+        )
+    };
     format!(
         "the gain {} by {} (+- {}) from {:.2} to {:.1} Hz with no phase of its own: the \
          reference's band limit (angles interpolated from a slower rate, e.g. a motion-capture \
-         system's, or smoothed), a filter in the block, or inputs the angle-noise model shrank; K \
-         is the band's mean gain, and its rows read about {} against the gain at low frequency, \
-         more than K's deviation ({}): a lower band top lessens it",
+         system's, or smoothed), a filter in the block, or inputs the angle-noise model shrank; \
+         {what}",
         if rise >= 0.0 { "rises" } else { "falls" },
         relative(rise.abs()),
         relative(rise_std),
         band_hz[0],
         band_hz[1],
-        rows.join(", "),
-        relative(k_relative_std)
     )
 }
 
@@ -334,6 +354,7 @@ impl fmt::Display for IdentWarning {
                 outputs,
                 k_relative_std,
                 band_hz,
+                k_at_low_frequency,
             } => f.write_str(&gain_change_words(
                 *rise,
                 *rise_std,
@@ -341,6 +362,7 @@ impl fmt::Display for IdentWarning {
                 outputs,
                 *k_relative_std,
                 *band_hz,
+                *k_at_low_frequency,
             )),
             IdentWarning::ImplausibleGain { output, input, value } => write!(
                 f,

@@ -170,6 +170,7 @@ mod tests {
             scale_factor_error_std_ppm: [std * 1e6; 3],
             misalignment_mrad: [[0.0; 3]; 3],
             misalignment_std_mrad: [[std * 1e3; 3]; 3],
+            even_gain: None,
             fitted: crate::ident::structural::FittedOrders::default(),
         }
     }

@@ -23,6 +23,7 @@ pub mod validation;
 pub use effects::ModelEffects;
 
 use crate::faults::RecordingFault;
+use crate::ident::gain_curvature::EvenGain;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::settings::{Estimate, Settings};
 use crate::ident::signals::channel_names;
@@ -158,6 +159,12 @@ pub struct BlockModel {
     /// `poles` are the effects' ([`effects`]). Absent when none was accepted.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub effects: Option<ModelEffects>,
+    /// The even gain of a block whose gain changes across the band with no phase (the warning
+    /// `gain_changes_across_band`), in a delay-only model: the response is `g(omega)` times the
+    /// rest and `K` the gain at low frequency ([`crate::ident::gain_curvature::EvenGain`]).
+    /// Absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub even_gain: Option<EvenGain>,
     /// Quality figures.
     pub fit: Fit,
 }
@@ -270,6 +277,7 @@ impl BlockModel {
             stationarity: b.stationarity.as_deref().cloned(),
             noise: None,
             effects: None,
+            even_gain: s.even_gain,
             fit: Fit {
                 k_std: s.k_std.map(|r| r.map(finite)),
                 tau_std_s: finite(s.tau_std_s),
@@ -298,10 +306,11 @@ impl BlockModel {
 
 impl BlockModel {
     /// The model's response at `f_hz` (Hz), `s = j 2 pi f`: `N(s) / d(s) e^(-tau s)`, or with
-    /// accepted effects their extended response ([`ModelEffects::response`]).
+    /// accepted effects their extended response ([`ModelEffects::response`]); times the even gain
+    /// where there is one.
     #[must_use]
     pub fn response(&self, f_hz: f64) -> Matrix3<Complex64> {
-        match &self.effects {
+        let r = match &self.effects {
             Some(e) => e.response(&self.k, self.tau_s, f_hz),
             None => crate::ident::structural::rational_response(
                 &self.numerator,
@@ -309,6 +318,10 @@ impl BlockModel {
                 self.tau_s,
                 f_hz,
             ),
+        };
+        match &self.even_gain {
+            Some(g) => r * Complex64::from(g.at(f_hz)),
+            None => r,
         }
     }
 
@@ -335,6 +348,18 @@ impl BlockModel {
             }),
             None => k_std,
         };
+        // The joint fit is its own (the diagnosis's design and weights, its effects may take
+        // part of a gain rise): its gain is given as fitted, without the delay-only model's even
+        // gain, and the gain-rise warning says so.
+        self.even_gain = None;
+        for w in &mut self.fit.warnings {
+            if let IdentWarning::GainChangesAcrossBand {
+                k_at_low_frequency, ..
+            } = w
+            {
+                *k_at_low_frequency = false;
+            }
+        }
         self.k = k;
         self.tau_s = tau_s;
         self.order = 0;

@@ -14,6 +14,11 @@ use crate::gui::pipeline::RunId;
 pub const ORDERS_DIFFER: &str = "the compared models have different orders: their K are static \
     gains of different structures (fix the order in the settings to compare like with like)";
 
+/// Said when some compared runs' `K` are the gain at low frequency and others' the band's mean.
+pub const GAINS_DIFFER_IN_KIND: &str = "some compared runs' K are the gain at low frequency (their \
+    gain changes across the band with no phase; an even gain in the model) and others' the band's \
+    mean gain: their differences hold that change too";
+
 /// The line counting a block's significant differences, e.g. `gyro: 2 significant differences`.
 #[must_use]
 pub fn significance_label(comparison: &Comparison, block: &str) -> String {
@@ -86,6 +91,9 @@ pub fn show(
     }
     if c.orders_differ(block) {
         ui.colored_label(ui.visuals().warn_fg_color, ORDERS_DIFFER);
+    }
+    if c.gains_differ_in_kind(block) {
+        ui.colored_label(ui.visuals().warn_fg_color, GAINS_DIFFER_IN_KIND);
     }
     egui::ScrollArea::vertical().show(ui, |ui| {
         // Wider than the tab with three or more runs: scrolled sideways, never under Results.

@@ -61,6 +61,22 @@ pub fn k_row_label(block: &str, m: &BlockModel, i: usize) -> String {
     format!("{block} K {}: {a:+.6} {b:+.6} {c:+.6}", m.outputs[i])
 }
 
+/// The heading of the K rows: what K is, and with an even gain in the model (a gain that changes
+/// across the band with no phase), that K is the gain at low frequency and how far `g` moves it
+/// at the band's top.
+#[must_use]
+pub fn k_heading(m: &BlockModel) -> String {
+    match &m.even_gain {
+        Some(g) => format!(
+            "K at low frequency (the model is g(f) K e^(-tau s), g {:+.2} % at {:.1} Hz against \
+             low frequency: the gain changes across the band; rows: outputs; columns: inputs)",
+            (g.at(m.band_hz[1]) - 1.0) * 100.0,
+            m.band_hz[1]
+        ),
+        None => "K (rows: outputs; columns: inputs)".to_owned(),
+    }
+}
+
 /// Draws the results of the selected run, with the model export button.
 pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Command>) {
     ui.horizontal(|ui| {
@@ -132,7 +148,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
                 if m.fit.stable { "stable" } else { "UNSTABLE" }
             ));
         }
-        ui.label("K (rows: outputs; columns: inputs)");
+        ui.label(k_heading(m));
         for i in 0..3 {
             ui.monospace(k_row_label(name, m, i));
         }

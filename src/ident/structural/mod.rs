@@ -96,6 +96,8 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::Serialize;
 
+use crate::ident::gain_curvature::EvenGain;
+
 /// The highest rational order fitted.
 pub const MAX_ORDER: usize = 4;
 
@@ -298,6 +300,11 @@ pub struct StructuralFit {
     pub misalignment_mrad: [[f64; 3]; 3],
     /// Standard deviation of `misalignment_mrad`, mrad; 0 on the diagonal.
     pub misalignment_std_mrad: [[f64; 3]; 3],
+    /// The even gain of a delay-only model whose block's gain changes across the band with no
+    /// phase (`gain_changes_across_band`): the response is `g(omega) K e^(-tau s)` and `K` the gain
+    /// at low frequency ([`Self::take_even_gain`]). Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub even_gain: Option<EvenGain>,
     /// Every order's model as fitted, kept for [`refit_structure`] (not serialised).
     #[serde(skip)]
     pub fitted: FittedOrders,
@@ -316,11 +323,43 @@ impl StructuralFit {
         }
     }
 
-    /// The fitted model's response at `f_hz` (Hz): `N(s) / d(s) e^(-tau s)`, `s = j 2 pi f`.
-    /// Non-finite only at a pole on the imaginary axis or for a non-finite `f_hz`.
+    /// The fitted model's response at `f_hz` (Hz): `N(s) / d(s) e^(-tau s)`, `s = j 2 pi f`,
+    /// times the even gain where there is one. Non-finite only at a pole on the imaginary axis or
+    /// for a non-finite `f_hz`.
     #[must_use]
     pub fn response(&self, f_hz: f64) -> Matrix3<Complex64> {
-        rational_response(&self.numerator, &self.denominator, self.tau_s, f_hz)
+        let r = rational_response(&self.numerator, &self.denominator, self.tau_s, f_hz);
+        match &self.even_gain {
+            Some(g) => r * Complex64::from(g.at(f_hz)),
+            None => r,
+        }
+    }
+
+    /// Makes a delay-only model's `K` the gain at low frequency under the even gain `even`
+    /// ([`EvenGain`]): `K` less its change, each element's deviation widened in quadrature by the
+    /// change's, the static figures with it, and the model's response multiplied by `g`. The
+    /// delay is kept (the even gain has no phase). `false`, and nothing changed, at an order above
+    /// 0: a rational model's zeros take part of a gain rise themselves.
+    pub fn take_even_gain(&mut self, even: EvenGain) -> bool {
+        if self.order != 0 || self.even_gain.is_some() {
+            return false;
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                self.k[i][j] -= even.k_change[i][j];
+                let std = self.k_std[i][j].hypot(even.k_change_std[i][j]);
+                self.set_k_std(i, j, std);
+            }
+            self.scale_factor_error_ppm[i] = (self.k[i][i] - 1.0) * 1e6;
+            for j in (0..3).filter(|&j| j != i) {
+                self.misalignment_mrad[i][j] = self.k[i][j] * 1e3;
+            }
+        }
+        if let Some(n0) = self.numerator.first_mut() {
+            *n0 = self.k;
+        }
+        self.even_gain = Some(even);
+        true
     }
 }
 

@@ -101,6 +101,7 @@ pub(super) fn assemble(
         scale_factor_error_std_ppm: ieee.ppm_std,
         misalignment_mrad: ieee.mrad,
         misalignment_std_mrad: ieee.mrad_std,
+        even_gain: None,
         fitted: super::FittedOrders::default(),
     }
 }

@@ -400,3 +400,67 @@ fn degenerate_data_gives_no_nan() {
     assert!(fit.tau_std_s.is_infinite());
     assert!(fit.k_std.iter().flatten().all(|s| s.is_finite() && *s > 0.0));
 }
+
+/// `take_even_gain` on a delay-only fit: `K` less the change, each deviation widened in
+/// quadrature (the static figures alike), the response `g(f) K e^(-j 2 pi f tau)` in closed form;
+/// once only, and never at an order above 0.
+#[test]
+fn an_even_gain_moves_a_delay_only_k_to_low_frequency() {
+    use crate::ident::gain_curvature::EvenGain;
+    let mut rng = Rng::new(8);
+    let k = random_gain(&mut rng);
+    let tau = 0.0041;
+    let data = synthesise(&Truth::gain_delay(k, tau), &mut rng, 1.0);
+    let before = fit(&data, OrderChoice::Fixed(0)).expect("fit");
+    let even = EvenGain {
+        coefficients: [5e-6, 1e-10],
+        coefficients_std: [4e-7, 6e-11],
+        k_change: std::array::from_fn(|i| std::array::from_fn(|j| 1e-3 * (1.0 + (3 * i + j) as f64))),
+        k_change_std: std::array::from_fn(|i| std::array::from_fn(|j| 1e-4 * (1.0 + (i + 2 * j) as f64))),
+        band_top_hz: 30.0,
+    };
+    let mut after = before.clone();
+    assert!(after.take_even_gain(even));
+    for i in 0..3 {
+        for j in 0..3 {
+            assert_eq!(
+                after.k[i][j].to_bits(),
+                (before.k[i][j] - even.k_change[i][j]).to_bits()
+            );
+            let std = before.k_std[i][j].hypot(even.k_change_std[i][j]);
+            assert!((after.k_std[i][j] - std).abs() < 1e-15, "{i} {j}");
+            if i == j {
+                assert!((after.scale_factor_error_ppm[i] - (after.k[i][i] - 1.0) * 1e6).abs() < 1e-6);
+                assert!((after.scale_factor_error_std_ppm[i] - std * 1e6).abs() < 1e-6);
+            } else {
+                assert!((after.misalignment_mrad[i][j] - after.k[i][j] * 1e3).abs() < 1e-9);
+                assert!((after.misalignment_std_mrad[i][j] - std * 1e3).abs() < 1e-9);
+            }
+        }
+    }
+    assert_eq!(after.numerator, vec![after.k]);
+    assert_eq!((after.tau_s, after.tau_std_s), (before.tau_s, before.tau_std_s));
+    for f in [0.3_f64, 7.0, 24.5, 30.0, 80.0] {
+        // g held at its band top's value above it.
+        let held = 2.0 * PI * f.min(30.0);
+        let g = 1.0 + 5e-6 * held * held + 1e-10 * held.powi(4);
+        let want =
+            Matrix3::from_fn(|i, j| Complex64::from_polar(g * after.k[i][j], -2.0 * PI * f * after.tau_s));
+        let err = (after.response(f) - want).map(Complex64::norm).max();
+        assert!(err < 1e-12, "{f} Hz: {err:e}");
+    }
+    // Once only: a second even gain changes nothing.
+    let again = after.clone();
+    assert!(!after.take_even_gain(even));
+    assert_eq!(after, again);
+    // A rational order's zeros take part of a rise themselves: left as fitted.
+    let lagged = Truth {
+        num: vec![k],
+        den: vec![0.003],
+        tau,
+    };
+    let mut first = fit(&synthesise(&lagged, &mut rng, 0.0), OrderChoice::Fixed(1)).expect("fit");
+    let unchanged = first.clone();
+    assert!(!first.take_even_gain(even));
+    assert_eq!(first, unchanged);
+}

@@ -89,6 +89,18 @@ fn a_slower_reference_s_gain_rise_is_said_and_k_given_at_low_frequency() {
                 b.block
             );
             let (rise, k_bias) = said.expect("the gain rise is said");
+            // Once, and saying K is given at low frequency.
+            let told: Vec<bool> = b
+                .warnings
+                .iter()
+                .filter_map(|w| match w {
+                    IdentWarning::GainChangesAcrossBand {
+                        k_at_low_frequency, ..
+                    } => Some(*k_at_low_frequency),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(told, [true], "{regime:?} {:?}", b.block);
             // sinc^-2(f / 120 Hz) rises by 10 % at 20 Hz: the band reaches beyond.
             assert!(rise > 0.1, "rise {rise}");
             // Each row's bias within 40 % of the row's actual error (two even terms, the

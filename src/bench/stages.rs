@@ -190,6 +190,7 @@ fn structural_stage(state: &mut BenchState) -> Result<(), BenchError> {
             state.settings.order.of(*block),
             crate::ident::holdout::cached_held_out(sp, band_hz).as_deref(),
             None,
+            None,
         )?);
     }
     Ok(())

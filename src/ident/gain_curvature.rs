@@ -99,11 +99,12 @@ pub struct EvenGain {
     pub coefficients: [f64; 2],
     /// Their standard deviations (widened as the fit's), s^2 and s^4.
     pub coefficients_std: [f64; 2],
-    /// What was taken from the delay-only fit's `K` to give the gain at low frequency
-    /// ([`Curvature::row_change`]); an accepted effect's gain, a band's mean too, is moved by the
-    /// same.
+    /// The delay-only fit's `K` (the band's mean gain) less the gain at low frequency: the
+    /// first-order [`Curvature::row_change`] from the curvature, the difference of the two fits
+    /// once the block is fitted over `g` (`super::even_gain`).
     pub k_change: [[f64; 3]; 3],
-    /// Its standard deviation per element, added in quadrature to `K`'s.
+    /// What `g`'s own uncertainty moves each element of `K` by (from [`Curvature::row_change`]'s
+    /// deviation), added in quadrature to `K`'s.
     pub k_change_std: [[f64; 3]; 3],
     /// The top of the band it was fitted on, Hz: above it `g` is held at its value there (a
     /// polynomial in `omega` is no model of anything beyond its data; the residual, validation

@@ -18,8 +18,10 @@ use super::band::{
     usable_band,
 };
 use super::band_top::misfit_edge;
+use super::even_gain::over_even_gain;
 use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings};
+use super::gain_curvature::EvenGain;
 use super::holdout::{HeldOut, cached_held_out};
 use super::selfcheck::{chi2_per_bin, self_check};
 use super::session::{Session, Start};
@@ -58,6 +60,9 @@ pub struct BlockIdentification {
     /// The fit over the usable band the coherence found, when the band was ended below it at a
     /// misfit ([`super::band_top`]): where the next retune's first fit starts from.
     pub usable_band_fit: Option<Arc<StructuralFit>>,
+    /// The fit to the estimate as measured, when `structural` was fitted over an even gain
+    /// ([`super::even_gain`]): where the next retune's fit over the band starts from.
+    pub first_fit: Option<Arc<StructuralFit>>,
     /// The stretches' fits (the stationarity check, on a shorter segment for a record too short
     /// for stretches at the settings' segment; `None` for a record too short even then).
     pub stationarity: Option<Arc<Stationarity>>,
@@ -68,7 +73,8 @@ pub struct BlockIdentification {
 /// The structural fits a retune of a block starts from ([`identify_block_from`]'s `previous`).
 #[derive(Clone, Debug)]
 pub struct FitStart {
-    /// The block's fit as reported.
+    /// The block's fit to the estimate as measured: the fit reported, or the first fit when the
+    /// reported one was fitted over an even gain.
     pub fit: Arc<StructuralFit>,
     /// Its fit over the usable band, when the band was ended below it at a misfit.
     pub usable_band: Option<Arc<StructuralFit>>,
@@ -79,7 +85,7 @@ impl BlockIdentification {
     #[must_use]
     pub fn fit_start(&self) -> FitStart {
         FitStart {
-            fit: self.structural.clone(),
+            fit: self.first_fit.clone().unwrap_or_else(|| self.structural.clone()),
             usable_band: self.usable_band_fit.clone(),
         }
     }
@@ -220,6 +226,7 @@ fn identify_excited(
             settings.order.of(block),
             held_out.as_deref(),
             previous,
+            None,
         )?;
         Ok((band_hz, wiener, band, Arc::new(structural)))
     };
@@ -276,24 +283,34 @@ fn identify_excited(
     );
     warnings.extend(trimmed);
     let stationarity = cached_stationarity(&spectra, band_hz);
-    let structural = match &stationarity {
-        Some(st) => {
-            let mut widened = (*structural).clone();
-            widen(&mut widened, st);
-            Arc::new(widened)
+    // The gyro's own noise in the angle-noise model: its gains' deviations carry the bias that
+    // leaves, before the self-check judges their precision.
+    let witness = spectra
+        .gyro_witnessed
+        .then(|| bias_estimate(&spectra, &factorisation.coherence, &band));
+    let widened = |fit: &StructuralFit| -> (StructuralFit, Option<IdentWarning>) {
+        let mut w = fit.clone();
+        if let Some(st) = stationarity.as_deref() {
+            widen(&mut w, st);
         }
-        None => structural,
+        let said = witness.and_then(|e| widen_for_witness_noise(&mut w, e));
+        (w, said)
     };
-    let structural = if spectra.gyro_witnessed {
-        // The gyro's own noise in the angle-noise model: its gains' deviations carry the bias that
-        // leaves, before the self-check judges their precision.
-        let estimate = bias_estimate(&spectra, &factorisation.coherence, &band);
-        let mut widened = (*structural).clone();
-        warnings.extend(widen_for_witness_noise(&mut widened, estimate));
-        Arc::new(widened)
-    } else {
-        structural
-    };
+    let (first, said) = widened(&structural);
+    warnings.extend(said);
+    let held_out = cached_held_out(&spectra, band_hz);
+    let over = over_even_gain(
+        block,
+        &spectra,
+        &factorisation,
+        &wiener,
+        &band,
+        Arc::new(first),
+        settings.order.of(block),
+        held_out.as_deref(),
+        &|f| widened(f).0,
+    )?;
+    let structural = over.fit;
     if let Some(st) = stationarity.as_deref().filter(|st| st.drifts()) {
         let duration = st.stretches.last().map_or(0.0, |l| l.span_s[1]) - st.stretches[0].span_s[0];
         warnings.push(IdentWarning::DelayDrift {
@@ -308,7 +325,7 @@ fn identify_excited(
             warnings.push(IdentWarning::UntrustedBand { ranges_hz: ranges });
         }
     }
-    let (checks, curvature) = self_check(
+    warnings.extend(self_check(
         block,
         &spectra,
         &factorisation.noise_psd,
@@ -316,27 +333,8 @@ fn identify_excited(
         &band,
         &structural,
         settings,
-    );
-    warnings.extend(checks);
-    // A gain that changes across the band with no phase: a delay-only model's K is the band's
-    // mean gain; it is given at low frequency instead, the model carrying the even gain.
-    let structural = match curvature {
-        Some(c) if structural.order == 0 => {
-            let mut corrected = (*structural).clone();
-            if corrected.take_even_gain(c.even_gain()) {
-                for w in &mut warnings {
-                    if let IdentWarning::GainChangesAcrossBand {
-                        k_at_low_frequency, ..
-                    } = w
-                    {
-                        *k_at_low_frequency = true;
-                    }
-                }
-            }
-            Arc::new(corrected)
-        }
-        _ => structural,
-    };
+    ));
+    warnings.extend(over.warning);
     if let Some(refusal) = weak.filter(|r| !determined(&structural, block, r)) {
         return Err(refusal);
     }
@@ -349,6 +347,7 @@ fn identify_excited(
         band,
         structural,
         usable_band_fit,
+        first_fit: over.first,
         stationarity,
         warnings,
     })
@@ -399,10 +398,17 @@ pub fn row_weights(
 ///
 /// With `held_out` (the halves' figures, [`cached_held_out`]), `auto` admits an order above 0 only
 /// when it predicts held-out data better than every lower order (admissibility rule 7). With
-/// `previous`, the fit starts from it ([`refit_structure`]).
+/// `previous`, the fit starts from it ([`refit_structure`]). With `even` (an even gain of the
+/// block's gain across the band, [`super::even_gain`]), the fit is to `W_u / g` (each row's
+/// weight times `g^2`, the estimate's covariance over `g^2`): every order's `N(0)` is then the
+/// gain at low frequency; the fit returned carries no even gain itself.
 ///
 /// # Errors
 /// [`IdentError::Structural`] when the fit refuses its input or fails numerically.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the fit's stages, each its own cached input"
+)]
 pub fn structural_fit(
     spectra: &BlockSpectra,
     factorisation: &Factorisation,
@@ -411,16 +417,30 @@ pub fn structural_fit(
     order: OrderSetting,
     held_out: Option<&HeldOut>,
     previous: Option<&StructuralFit>,
+    even: Option<&EvenGain>,
 ) -> Result<StructuralFit, IdentError> {
     let frequency_hz: Vec<f64> = band
         .iter()
         .map(|&k| spectra.model_frequency_hz(k, wiener.estimate))
         .collect();
-    let response: Vec<Matrix3<Complex64>> = band.iter().map(|&k| wiener.w_u[k]).collect();
+    // g where the model is compared with the estimate (the input's centroid for H1).
+    let g: Vec<f64> = frequency_hz
+        .iter()
+        .map(|&f| even.map_or(1.0, |e| e.at(f)))
+        .collect();
+    let response: Vec<Matrix3<Complex64>> = band
+        .iter()
+        .zip(&g)
+        .map(|(&k, g)| wiener.w_u[k] / Complex64::from(*g))
+        .collect();
     let dof = (spectra.equivalent_averages - 3.0).max(1.0);
     let row_weight: Vec<[Matrix3<Complex64>; 3]> = band
         .iter()
-        .map(|&k| row_weights(&spectra.s_uu[k], &factorisation.noise_psd[k], dof))
+        .zip(&g)
+        .map(|(&k, g)| {
+            row_weights(&spectra.s_uu[k], &factorisation.noise_psd[k], dof)
+                .map(|w| w * Complex64::from(g * g))
+        })
         .collect();
     let choice = match order {
         OrderSetting::Fixed(n) => OrderChoice::Fixed(n),

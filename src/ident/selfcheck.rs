@@ -15,7 +15,9 @@
 //!   with no phase, beyond 3 of its deviations, and moves a row of `K` from the gain at low
 //!   frequency by more than `K`'s relative deviation `||K_std||_F / ||K||_F` (for a `K` near the
 //!   identity about `sqrt(3)` times one row's scale deviation, so stricter than a row's own test)
-//!   ([`super::gain_curvature`]: a reference interpolated or smoothed).
+//!   ([`super::gain_curvature`]: a reference interpolated or smoothed). Here for a rational
+//!   order's own residual; a delay-only model's is checked before the self-check, where it decides
+//!   the fit over an even gain ([`super::even_gain`]).
 //! - **Negative delay**: `tau + 3 sigma < 0`.
 //! - **Delay absorbed by poles**: a chosen order above 0 whose delay is negative while the
 //!   order-0 candidate's is positive, the two more than 2 sigma apart (the poles' lag replaces part of the delay; a band-limited
@@ -149,8 +151,9 @@ pub fn imprecise_gain(block: Block, fit: &StructuralFit) -> Option<IdentWarning>
     })
 }
 
-/// The self-check's warnings of one block (see the module docs), and the even gain of a gain that
-/// changes across the band where that is said (for [`StructuralFit::take_even_gain`]).
+/// The self-check's warnings of one block (see the module docs). A delay-only model's gain
+/// change is checked before, on the fit as measured (`super::even_gain`), where it decides the fit
+/// over an even gain; here only a rational order's.
 #[must_use]
 pub fn self_check(
     block: Block,
@@ -160,7 +163,7 @@ pub fn self_check(
     band: &[usize],
     fit: &StructuralFit,
     settings: &Settings,
-) -> (Vec<IdentWarning>, Option<Curvature>) {
+) -> Vec<IdentWarning> {
     let mut out = Vec::new();
     if !leaves_enough(spectra.n_averages, spectra.equivalent_averages) {
         out.push(IdentWarning::FewSegments {
@@ -195,8 +198,9 @@ pub fn self_check(
             worst_chi2_per_dof: worst.1,
         });
     }
-    let (change, curvature) = gain_changes(block, &bins, spectra.bin_correlation, fit).unzip();
-    out.extend(change);
+    if fit.order > 0 {
+        out.extend(gain_changes(block, &bins, spectra.bin_correlation, fit).map(|(w, _)| w));
+    }
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);
         for i in 0..3 {
@@ -243,5 +247,5 @@ pub fn self_check(
     {
         out.push(IdentWarning::InadmissibleOrder { order: n, reason });
     }
-    (out, curvature)
+    out
 }

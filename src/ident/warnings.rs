@@ -83,8 +83,9 @@ pub enum IdentWarning {
     /// The measured gain changes across the band with no phase of its own, beyond its deviation,
     /// and enough to move `K` (the band's mean gain) by more than `K`'s own deviation from the
     /// gain at low frequency ([`super::gain_curvature`]: a reference interpolated from a slower
-    /// rate, or smoothed). A delay-only model's `K` is then given at low frequency and the model
-    /// carries the even gain (`k_at_low_frequency`); a rational order's is left as fitted.
+    /// rate, or smoothed). The block is then fitted again over the even gain and, where that fit is
+    /// delay-only, `K` is given at low frequency and the model carries the even gain
+    /// (`k_at_low_frequency`, `super::even_gain`); otherwise `K` is left as fitted.
     GainChangesAcrossBand {
         /// The gain's change from the band's bottom to its top, relative.
         rise: f64,
@@ -99,8 +100,8 @@ pub enum IdentWarning {
         k_relative_std: f64,
         /// The band, Hz.
         band_hz: [f64; 2],
-        /// Whether the model's `K` is the gain at low frequency (the delay-only fit's less the
-        /// rows' change, the even gain in the model's response); `false`: `K` as fitted.
+        /// Whether the model's `K` is the gain at low frequency (the block fitted again over the
+        /// even gain, which the model's response carries); `false`: `K` as fitted.
         #[serde(default)]
         k_at_low_frequency: bool,
     },
@@ -263,9 +264,9 @@ fn gain_change_words(
     let what = if k_at_low_frequency {
         format!(
             "the delay-only fit's K, the band's mean gain, read its rows about {} off the gain at \
-             low frequency, more than K's deviation ({}): K is given at low frequency (its \
-             deviations widened by the correction's) and the model carries the change as an even \
-             gain; a lower band top lessens the correction",
+             low frequency, more than K's deviation ({}): the block is fitted again over the even \
+             gain, K is given at low frequency (its deviations not below the delay-only fit's) and \
+             the model carries the change; a lower band top lessens it",
             rows.join(", "),
             relative(k_relative_std)
         )

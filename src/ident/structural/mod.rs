@@ -302,7 +302,7 @@ pub struct StructuralFit {
     pub misalignment_std_mrad: [[f64; 3]; 3],
     /// The even gain of a delay-only model whose block's gain changes across the band with no
     /// phase (`gain_changes_across_band`): the response is `g(omega) K e^(-tau s)` and `K` the gain
-    /// at low frequency ([`Self::take_even_gain`]). Absent otherwise.
+    /// at low frequency ([`Self::carry_even_gain`], `ident::even_gain`). Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub even_gain: Option<EvenGain>,
     /// Every order's model as fitted, kept for [`refit_structure`] (not serialised).
@@ -335,28 +335,20 @@ impl StructuralFit {
         }
     }
 
-    /// Makes a delay-only model's `K` the gain at low frequency under the even gain `even`
-    /// ([`EvenGain`]): `K` less its change, each element's deviation widened in quadrature by the
-    /// change's, the static figures with it, and the model's response multiplied by `g`. The
-    /// delay is kept (the even gain has no phase). `false`, and nothing changed, at an order above
-    /// 0: a rational model's zeros take part of a gain rise themselves.
-    pub fn take_even_gain(&mut self, even: EvenGain) -> bool {
+    /// Gives a delay-only model fitted to the estimate over the even gain `even`
+    /// ([`EvenGain`], `K` already the gain at low frequency) the even gain in its response, and
+    /// each element of `K` the deviation `g`'s own uncertainty adds (`even.k_change_std`, in
+    /// quadrature; the static figures with it). `false`, and nothing changed, at an order above 0
+    /// or when the fit carries one already.
+    pub fn carry_even_gain(&mut self, even: EvenGain) -> bool {
         if self.order != 0 || self.even_gain.is_some() {
             return false;
         }
         for i in 0..3 {
             for j in 0..3 {
-                self.k[i][j] -= even.k_change[i][j];
                 let std = self.k_std[i][j].hypot(even.k_change_std[i][j]);
                 self.set_k_std(i, j, std);
             }
-            self.scale_factor_error_ppm[i] = (self.k[i][i] - 1.0) * 1e6;
-            for j in (0..3).filter(|&j| j != i) {
-                self.misalignment_mrad[i][j] = self.k[i][j] * 1e3;
-            }
-        }
-        if let Some(n0) = self.numerator.first_mut() {
-            *n0 = self.k;
         }
         self.even_gain = Some(even);
         true

@@ -1,0 +1,178 @@
+//! The block's fit over an even gain: when the measured gain changes across the band with no phase
+//! of its own (a reference interpolated from a slower rate or smoothed, inputs the angle-noise
+//! model shrank; [`super::gain_curvature`]), the delay-only model takes `K` as the band's mean
+//! gain, and `auto` may take the change as dynamics (poles and zeros the block does not have:
+//! order 3 on 2 of 12 simulated runs with a 240 Hz linearly interpolated reference, one of them
+//! with a delay of -8.5 ms).
+//!
+//! [`over_even_gain`] reads the even gain off the delay-only model's residual (the same check
+//! that says `gain_changes_across_band`), fits every order again to `W_u / g`, and keeps that
+//! fit when it is delay-only: its `K` is then the gain at low frequency, its model `g K e^(-tau
+//! s)`, and its deviations widened in quadrature by what `g`'s own uncertainty moves `K` by, and
+//! never below the delay-only fit's (widened by that fit's misfit: `g`'s two-term shape is an
+//! assumption, and on simulated runs with a 120 Hz linearly interpolated reference the
+//! accelerometer's `K` kept a third of its bias, 2.1 of the narrower deviations rms). When
+//! the fit over `g` still needs poles, the dynamics are the block's (a sensor's low-pass also
+//! bends the gain, with phase): the first fit is kept, as fitted. A fixed order above 0 is the
+//! user's structure and is left alone.
+//!
+//! Units as [`super::gain_curvature`]: `omega` in rad/s, `K` dimensionless. Nothing here panics
+//! on any input; a check that cannot be made (no bins, no information) leaves the fit as it was.
+
+use std::sync::Arc;
+
+use super::IdentError;
+use super::factorisation::Factorisation;
+use super::gain_curvature::EvenGain;
+use super::holdout::HeldOut;
+use super::identify::structural_fit;
+use super::selfcheck::{band_bins, gain_changes};
+use super::settings::OrderSetting;
+use super::spectra::BlockSpectra;
+use super::structural::StructuralFit;
+use super::warnings::IdentWarning;
+use super::wiener::WienerEstimate;
+use crate::block::Block;
+
+/// What [`over_even_gain`] gives: the fit to report and, when it was fitted over an even gain,
+/// the first fit (where the next retune starts from) and the warning that says so.
+#[derive(Clone, Debug)]
+pub struct OverEvenGain {
+    /// The fit to report.
+    pub fit: Arc<StructuralFit>,
+    /// The fit to the estimate as measured, when `fit` is the fit over the even gain.
+    pub first: Option<Arc<StructuralFit>>,
+    /// `gain_changes_across_band` where the delay-only model's residual says it: with
+    /// `k_at_low_frequency` (and each row's bias as applied) when `fit` is over the gain; as
+    /// fitted when the first fit was delay-only and the fit over the gain was not kept; `None`
+    /// when the first fit has an order above 0 and is kept (the self-check then judges that
+    /// fit's own residual).
+    pub warning: Option<IdentWarning>,
+}
+
+/// The block's fit, over an even gain where its delay-only model's residual shows one (module
+/// docs). `fit` is the fit to the estimate as measured with its deviations widened (the
+/// stretches' spread, the gyro's own noise: `widened` does that to a new fit), `held_out` the
+/// halves' figures.
+///
+/// # Errors
+/// [`IdentError`] when the delay-only model of a fit of a higher order cannot be fitted; a fit
+/// over the even gain that fails leaves the first fit, with the warning.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the fit's stages, each its own cached input"
+)]
+pub fn over_even_gain(
+    block: Block,
+    spectra: &BlockSpectra,
+    factorisation: &Factorisation,
+    wiener: &WienerEstimate,
+    band: &[usize],
+    fit: Arc<StructuralFit>,
+    order: OrderSetting,
+    held_out: Option<&HeldOut>,
+    widened: &dyn Fn(&StructuralFit) -> StructuralFit,
+) -> Result<OverEvenGain, IdentError> {
+    let unchanged = |fit: Arc<StructuralFit>, warning| OverEvenGain {
+        fit,
+        first: None,
+        warning,
+    };
+    if matches!(order, OrderSetting::Fixed(n) if n > 0) {
+        return Ok(unchanged(fit, None));
+    }
+    // The delay-only model of the same data: the fit itself, or its order 0 fitted again from
+    // the models the fit kept.
+    let delay_only = if fit.order == 0 {
+        fit.clone()
+    } else {
+        match structural_fit(
+            spectra,
+            factorisation,
+            wiener,
+            band,
+            OrderSetting::Fixed(0),
+            held_out,
+            Some(&fit),
+            None,
+        ) {
+            Ok(d) => Arc::new(widened(&d)),
+            // No delay-only model to read the gain off: the fit as it is (never a new refusal).
+            Err(_) => return Ok(unchanged(fit, None)),
+        }
+    };
+    let bins = band_bins(spectra, &factorisation.noise_psd, wiener, band, &delay_only);
+    let Some((warning, curvature)) = gain_changes(block, &bins, spectra.bin_correlation, &delay_only) else {
+        return Ok(unchanged(fit, None));
+    };
+    let even = curvature.even_gain();
+    let said = (fit.order == 0).then(|| warning.clone());
+    let Ok(over) = structural_fit(
+        spectra,
+        factorisation,
+        wiener,
+        band,
+        order,
+        held_out,
+        None,
+        Some(&even),
+    ) else {
+        return Ok(unchanged(fit, said));
+    };
+    if over.order > 0 {
+        // Poles over the even gain too: the block's own dynamics, its fit as fitted.
+        return Ok(unchanged(fit, said));
+    }
+    let mut over = widened(&over);
+    let change: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| delay_only.k[i][j] - over.k[i][j]));
+    over.carry_even_gain(EvenGain {
+        k_change: change,
+        ..even
+    });
+    // The even gain's shape is assumed (two terms; a linear interpolation's `1 / sinc^2` is
+    // steeper): a fit that explains the data better through it does not know K better than the
+    // delay-only fit did, whose deviations its misfit widened. Those, with g's, are the floor.
+    for i in 0..3 {
+        for j in 0..3 {
+            let floor = delay_only.k_std[i][j].hypot(even.k_change_std[i][j]);
+            if over.k_std[i][j] < floor {
+                over.set_k_std(i, j, floor);
+            }
+        }
+    }
+    if !fit.fitted.from_scratch() {
+        // The even gain was read off a refined fit: provisional, as that fit was.
+        over.fitted.mark_refined();
+    }
+    // Each row's bias as applied: the change's projection on the row at low frequency.
+    let applied: [f64; 3] = std::array::from_fn(|i| {
+        let row = over.k[i];
+        let norm: f64 = row.iter().map(|v| v * v).sum();
+        (0..3).map(|j| change[i][j] * row[j]).sum::<f64>() / norm
+    });
+    let warning = match warning {
+        IdentWarning::GainChangesAcrossBand {
+            rise,
+            rise_std,
+            outputs,
+            k_relative_std,
+            band_hz,
+            ..
+        } => IdentWarning::GainChangesAcrossBand {
+            rise,
+            rise_std,
+            k_bias: applied,
+            outputs,
+            k_relative_std,
+            band_hz,
+            k_at_low_frequency: true,
+        },
+        other => other,
+    };
+    Ok(OverEvenGain {
+        fit: Arc::new(over),
+        first: Some(fit),
+        warning: Some(warning),
+    })
+}

@@ -509,3 +509,52 @@ fn a_given_segment_with_few_segments_is_warned_or_refused() {
         "{msg}"
     );
 }
+
+/// A retune (the app's): the block identified again from its own fit start, whose fit over the
+/// even gain it starts from. The same settings reuse every fit exactly (the same model, not
+/// provisional); a changed Lambda refines them (provisional until a cold fit, as any retune), and
+/// the fit is still over the even gain with `K` near the cold fit's.
+#[test]
+fn a_retune_starts_the_fit_over_the_even_gain_from_the_previous_one() {
+    use imu_attest::ident::identify::identify_block_from;
+    use imu_attest::ident::settings::LambdaSetting;
+    let b = gyro(&real("broad07_fast_rotation"), &Settings::default());
+    let start = b.fit_start();
+    assert!(start.over_even_gain.is_some() && b.first_fit.is_some());
+    assert!(std::sync::Arc::ptr_eq(
+        &start.fit,
+        b.first_fit.as_ref().expect("first fit")
+    ));
+    let again = identify_block_from(
+        b.block,
+        b.spectra.clone(),
+        b.factorisation.clone(),
+        &Settings::default(),
+        Some(&start),
+    )
+    .expect("identified again");
+    assert_eq!(again.structural.k, b.structural.k);
+    assert_eq!(again.structural.even_gain, b.structural.even_gain);
+    assert!(again.structural.fitted.from_scratch());
+    let settings = Settings {
+        lambda: LambdaSetting::Values([1e-4; 3]),
+        ..Settings::default()
+    };
+    let cold = gyro(&real("broad07_fast_rotation"), &settings);
+    let warm = identify_block_from(
+        b.block,
+        b.spectra.clone(),
+        b.factorisation.clone(),
+        &settings,
+        Some(&start),
+    )
+    .expect("retuned");
+    assert!(warm.structural.even_gain.is_some() && cold.structural.even_gain.is_some());
+    assert!(!warm.structural.fitted.from_scratch() && cold.structural.fitted.from_scratch());
+    for i in 0..3 {
+        for j in 0..3 {
+            let d = (warm.structural.k[i][j] - cold.structural.k[i][j]).abs();
+            assert!(d < 0.1 * cold.structural.k_std[i][j], "K[{i}][{j}]: {d}");
+        }
+    }
+}

@@ -53,7 +53,8 @@ pub struct OverEvenGain {
 /// The block's fit, over an even gain where its delay-only model's residual shows one (module
 /// docs). `fit` is the fit to the estimate as measured with its deviations widened (the
 /// stretches' spread, the gyro's own noise: `widened` does that to a new fit), `held_out` the
-/// halves' figures.
+/// halves' figures; the fit over the even gain starts from `previous` (an earlier one, in the
+/// app's retunes) where given, and is then provisional as any refined fit is.
 ///
 /// # Errors
 /// [`IdentError`] when the delay-only model of a fit of a higher order cannot be fitted; a fit
@@ -71,6 +72,7 @@ pub fn over_even_gain(
     fit: Arc<StructuralFit>,
     order: OrderSetting,
     held_out: Option<&HeldOut>,
+    previous: Option<&StructuralFit>,
     widened: &dyn Fn(&StructuralFit) -> StructuralFit,
 ) -> Result<OverEvenGain, IdentError> {
     let unchanged = |fit: Arc<StructuralFit>, warning| OverEvenGain {
@@ -114,7 +116,7 @@ pub fn over_even_gain(
         band,
         order,
         held_out,
-        None,
+        previous,
         Some(&even),
     ) else {
         return Ok(unchanged(fit, said));

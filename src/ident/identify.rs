@@ -78,6 +78,8 @@ pub struct FitStart {
     pub fit: Arc<StructuralFit>,
     /// Its fit over the usable band, when the band was ended below it at a misfit.
     pub usable_band: Option<Arc<StructuralFit>>,
+    /// Its fit over an even gain, when that was the fit reported ([`super::even_gain`]).
+    pub over_even_gain: Option<Arc<StructuralFit>>,
 }
 
 impl BlockIdentification {
@@ -87,6 +89,7 @@ impl BlockIdentification {
         FitStart {
             fit: self.first_fit.clone().unwrap_or_else(|| self.structural.clone()),
             usable_band: self.usable_band_fit.clone(),
+            over_even_gain: self.first_fit.as_ref().map(|_| self.structural.clone()),
         }
     }
 }
@@ -308,6 +311,7 @@ fn identify_excited(
         Arc::new(first),
         settings.order.of(block),
         held_out.as_deref(),
+        previous.and_then(|p| p.over_even_gain.as_deref()),
         &|f| widened(f).0,
     )?;
     let structural = over.fit;

@@ -57,8 +57,9 @@ pub struct OverEvenGain {
 /// app's retunes) where given, and is then provisional as any refined fit is.
 ///
 /// # Errors
-/// [`IdentError`] when the delay-only model of a fit of a higher order cannot be fitted; a fit
-/// over the even gain that fails leaves the first fit, with the warning.
+/// None at present: a delay-only model that cannot be fitted, or a fit over the even gain that
+/// fails, leaves the first fit (with the warning where it was said); the `Result` keeps the
+/// stages' signature.
 #[expect(
     clippy::too_many_arguments,
     reason = "the fit's stages, each its own cached input"
@@ -150,7 +151,7 @@ pub fn over_even_gain(
     // Each row's bias as applied: the change's projection on the row at low frequency.
     let applied: [f64; 3] = std::array::from_fn(|i| {
         let row = over.k[i];
-        let norm: f64 = row.iter().map(|v| v * v).sum();
+        let norm: f64 = row.iter().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
         (0..3).map(|j| change[i][j] * row[j]).sum::<f64>() / norm
     });
     let warning = match warning {

@@ -173,8 +173,11 @@ pub fn self_check(
             segment_auto: settings.welch.segment_auto,
         });
     }
-    let bins = band_bins(spectra, noise, wiener, band, fit);
+    // The band's bins, built only for the checks that read them: a poor fit's worst octave and a
+    // rational order's gain change (a delay-only model's was read before, `super::even_gain`).
     let per_dof = fit.chi2 / fit.dof.max(1) as f64;
+    let bins = (per_dof > POOR_FIT || fit.order > 0).then(|| band_bins(spectra, noise, wiener, band, fit));
+    let bins = bins.as_deref().unwrap_or_default();
     if per_dof > POOR_FIT {
         let chi2: Vec<f64> = bins.iter().map(gain_curvature::Bin::chi2).collect();
         let mut worst = ([0.0, 0.0], 0.0);
@@ -199,7 +202,7 @@ pub fn self_check(
         });
     }
     if fit.order > 0 {
-        out.extend(gain_changes(block, &bins, spectra.bin_correlation, fit).map(|(w, _)| w));
+        out.extend(gain_changes(block, bins, spectra.bin_correlation, fit).map(|(w, _)| w));
     }
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);

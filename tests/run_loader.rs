@@ -315,6 +315,62 @@ fn exponents_plus_signs_spaces_and_late_start_are_read() {
 }
 
 #[test]
+fn quoted_names_and_cells_load_as_plain_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, values) = csv(&ALL, 60, 0.0, 0.01);
+    let quote = |line: &str| {
+        line.split(',')
+            .map(|c| format!("\"{c}\""))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let (header, rows) = text.split_once('\n').unwrap();
+    let names_only = format!("{}\n{rows}", quote(header));
+    let everything: String = text.lines().map(|l| quote(l) + "\n").collect();
+    for (k, variant) in [names_only, everything].iter().enumerate() {
+        let run = load(&write(dir.path(), &format!("q{k}.csv"), variant), &opts()).unwrap();
+        assert_columns(&run, &ALL, &values);
+    }
+    // A quote left open is not a number: the cell is named as written.
+    let open = text.replacen("\n0", "\n\"0", 1);
+    let err = load_err(&write(dir.path(), "open.csv", open), &opts());
+    assert!(
+        matches!(
+            err,
+            LoadError::NotNumeric {
+                line: 2,
+                column: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_name_in_another_case_is_named_in_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "c.csv",
+        csv(&["t", "Roll", "yaw", "pitch", "gx", "gy", "gz"], 20, 0.0, 0.01).0,
+    );
+    let err = load_err(&path, &opts());
+    assert!(
+        matches!(&err, LoadError::MissingColumn { column: "roll", near_miss: Some((2, name)), .. } if name == "Roll"),
+        "{err}"
+    );
+    assert!(err.to_string().contains("column 2 is named 'Roll'"), "{err}");
+    // Without a near miss the message is as before.
+    let path = write(
+        dir.path(),
+        "d.csv",
+        csv(&["t", "yaw", "pitch", "gx", "gy", "gz"], 20, 0.0, 0.01).0,
+    );
+    assert!(!load_err(&path, &opts()).to_string().contains("named"));
+}
+
+#[test]
 fn bom_crlf_missing_final_newline_and_blank_trailing_lines_are_accepted() {
     let dir = tempfile::tempdir().unwrap();
     let (text, values) = csv(&ALL[..7], 50, 0.0, 0.01);

@@ -48,7 +48,13 @@ pub enum LoadError {
         path: PathBuf,
     },
     /// A required column, or a column needed to complete a block, is missing from the header.
-    #[error("{}:{header_line}: missing column '{column}': {why}", path.display())]
+    #[error(
+        "{}:{header_line}: missing column '{column}': {why}{}",
+        path.display(),
+        near_miss.as_ref().map_or(String::new(), |(col, name)| format!(
+            " (column {col} is named '{name}': names are lower case, as in the contract)"
+        ))
+    )]
     MissingColumn {
         /// The file.
         path: PathBuf,
@@ -58,6 +64,8 @@ pub enum LoadError {
         header_line: usize,
         /// Why it is needed.
         why: &'static str,
+        /// A header name equal to the missing one but for case, and its column (1-based).
+        near_miss: Option<(usize, String)>,
     },
     /// A header cell is empty (for example a trailing comma).
     #[error("{}:1:{column}: column {column} has no name", path.display())]

@@ -1,7 +1,10 @@
 //! The header line: which column holds what.
 //!
-//! Names are case-sensitive and exact after trimming spaces: `t`, `roll`, `yaw`, `pitch`,
-//! `gx`, `gy`, `gz`, `ax`, `ay`, `az`. Column order is free; other names are kept as extra columns.
+//! Names are case-sensitive and exact after trimming spaces and one pair of enclosing double
+//! quotes (RFC 4180: `"t"` is `t`): `t`, `roll`, `yaw`, `pitch`, `gx`, `gy`, `gz`, `ax`, `ay`, `az`.
+//! Column order is free; other names are kept as extra columns. A missing name that is present
+//! in another case (`Roll`) is named in the error: not taken, since `T` is as often a
+//! temperature as a time.
 
 use std::path::Path;
 
@@ -47,7 +50,10 @@ impl Layout {
                 found,
             });
         }
-        let names: Vec<String> = line.split(',').map(|n| n.trim().to_owned()).collect();
+        let names: Vec<String> = line
+            .split(',')
+            .map(|n| unquote(n.trim()).trim().to_owned())
+            .collect();
         for (i, name) in names.iter().enumerate() {
             if name.is_empty() {
                 return Err(LoadError::EmptyColumnName {
@@ -64,11 +70,15 @@ impl Layout {
             }
         }
         let find = |wanted: &str| names.iter().position(|n| n == wanted);
-        let missing = |column, why| LoadError::MissingColumn {
+        let missing = |column: &'static str, why| LoadError::MissingColumn {
             path: path.to_owned(),
             column,
             header_line: 1,
             why,
+            near_miss: names
+                .iter()
+                .position(|n| n.eq_ignore_ascii_case(column))
+                .map(|i| (i + 1, names[i].clone())),
         };
         let mut required = [0; 4];
         for (slot, name) in required.iter_mut().zip(REQUIRED) {
@@ -114,4 +124,12 @@ impl Layout {
     pub fn width(&self) -> usize {
         self.names.len()
     }
+}
+
+/// `text` without one pair of enclosing double quotes (RFC 4180 quoting of a header name or a
+/// number cell), else as it is.
+pub(super) fn unquote(text: &str) -> &str {
+    text.strip_prefix('"')
+        .and_then(|t| t.strip_suffix('"'))
+        .unwrap_or(text)
 }

@@ -1,8 +1,9 @@
 //! One piece of whole lines parsed into column vectors, on one rayon thread.
 //!
 //! Lines go through the fast path ([`super::number::fast_row`]) first; a line it does not take is
-//! parsed by `str::parse` here, which words the fault. Cells are trimmed of spaces and tabs, a
-//! trailing `\r` (CRLF) is dropped, numbers may carry a leading `+` and exponents. NaN and
+//! parsed by `str::parse` here, which words the fault. Cells are trimmed of spaces and tabs and of
+//! one pair of enclosing double quotes (`"0.5"`, as some loggers write), a trailing `\r` (CRLF) is
+//! dropped, numbers may carry a leading `+` and exponents. NaN and
 //! infinities are refused. Line numbers in faults are relative to the piece.
 
 use super::number::fast_row;
@@ -106,7 +107,7 @@ fn parse_row(line: &str, cols: &mut [Vec<f64>]) -> Result<(), Fault> {
         found += 1;
         let Some(col) = cols.get_mut(column) else { continue };
         let cell = cell.trim_ascii();
-        match cell.parse::<f64>() {
+        match super::header::unquote(cell).trim_ascii().parse::<f64>() {
             Ok(v) if v.is_finite() => col.push(v),
             Ok(_) => {
                 return Err(Fault::NonFinite {

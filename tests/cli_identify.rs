@@ -394,3 +394,56 @@ fn a_dead_block_is_refused_with_how_to_keep_the_other() {
     let model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(keys(&model["blocks"]), ["gyro"]);
 }
+
+/// The loader's notices reach the user (contract section 2): an ignored column on a run that is
+/// identified, and a missing sidecar on the refusal it explains (its zero lever arm leaves the
+/// accelerometer's vertical input flat), in the refusal's one line.
+#[test]
+fn notices_are_printed_and_join_a_refusal_they_explain() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path());
+    let text = std::fs::read_to_string(&run).unwrap();
+    let with_extra: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| format!("{l},{}\n", if i == 0 { "temp_c" } else { "21.5" }))
+        .collect();
+    let extra = dir.path().join("extra.csv");
+    std::fs::write(&extra, with_extra).unwrap();
+    std::fs::copy(run.with_extension("json"), extra.with_extension("json")).unwrap();
+    let out = dir.path().join("m.json");
+    let o = imu_attest(&[
+        "identify",
+        extra.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("imu-attest: note: extra.csv: unknown column 'temp_c' kept and ignored"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("no sidecar"), "{stderr}");
+
+    std::fs::remove_file(extra.with_extension("json")).unwrap();
+    std::fs::remove_file(&out).unwrap();
+    let o = imu_attest(&[
+        "identify",
+        extra.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    for part in [
+        "axis fy not excited",
+        "accel_lever_arm_m",
+        "(note: no sidecar extra.json",
+        "lever arms zero",
+    ] {
+        assert!(stderr.contains(part), "{part}: {stderr}");
+    }
+    assert!(!out.exists());
+}

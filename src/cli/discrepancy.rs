@@ -62,6 +62,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     };
 
     let run = std::sync::Arc::new(super::progress::load_run(run_path)?);
+    let notices = run.notices.clone();
     let report = diagnose_session(
         &mut Session::new(run),
         &settings,
@@ -72,11 +73,15 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     )
     .map_err(|e| {
         if e.is_input_error() {
-            CliError::Input(format!("{}: {e}", run_path.display()))
+            CliError::Input(super::progress::with_notes(
+                format!("{}: {e}", run_path.display()),
+                &notices,
+            ))
         } else {
             CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
         }
     })?;
+    super::progress::print_notes(run_path, &notices);
     let value = serde_json::to_value(&report).map_err(|e| CliError::Internal(e.into()))?;
     if let Some(path) = crate::model::first_non_finite(&value) {
         return Err(CliError::Internal(anyhow::anyhow!(

@@ -87,6 +87,7 @@ pub(super) fn identify_in(
     accepted: &[(Block, Effect)],
 ) -> Result<Model, CliError> {
     let settings = settings.for_run(session.run());
+    let notices = session.run().notices.clone();
     // Settings that do not fit this run are the user's input; anything else is ours.
     let bar = super::progress::bar(1, "identifying {wide_bar} {pos}/{len} {msg} {elapsed}");
     let model = extended_model(session, &settings, accepted, &mut |step| {
@@ -100,11 +101,15 @@ pub(super) fn identify_in(
     bar.finish_and_clear();
     let model = model.map_err(|e| {
         if e.is_input_error() {
-            CliError::Input(format!("{}: {e}", run_path.display()))
+            CliError::Input(super::progress::with_notes(
+                format!("{}: {e}", run_path.display()),
+                &notices,
+            ))
         } else {
             CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
         }
     })?;
+    super::progress::print_notes(run_path, &notices);
     for (name, block) in &model.blocks {
         for warning in &block.fit.warnings {
             eprintln!("imu-attest: warning: {name} block: {warning}");

@@ -62,3 +62,25 @@ pub fn load_run(path: &Path) -> Result<Run, CliError> {
     progress.finish_and_clear();
     result.map_err(|e| CliError::Input(e.to_string()))
 }
+
+/// The loader's notices for `path`, one line each on stderr (`imu-attest: note: run.csv: no
+/// sidecar run.json: ...`): contract section 2 has the program say when it assumed a missing
+/// sidecar's defaults or ignores a column. Printed when the command succeeds; on a refusal they
+/// join its one line instead ([`with_notes`]).
+pub fn print_notes(path: &Path, notices: &[String]) {
+    for notice in notices {
+        eprintln!("imu-attest: note: {}: {notice}", display_name(path));
+    }
+}
+
+/// A refusal's one line with the run's notices after it, so that a refusal a notice explains
+/// (no sidecar: the lever arms taken as zero, the accelerometer's vertical input then flat)
+/// says so on the same line.
+#[must_use]
+pub fn with_notes(message: String, notices: &[String]) -> String {
+    if notices.is_empty() {
+        message
+    } else {
+        format!("{message} (note: {})", notices.join("; "))
+    }
+}

@@ -82,8 +82,9 @@ pub enum IdentError {
     /// still. Its response cannot be identified from this run.
     #[error(
         "{block} block: axis {axis} not excited between {low_hz} and {high_hz} Hz (weakest input \
-         direction has {relative_power:.1e} of the strongest's power): move that stand axis, \
-         identify from a run that does, or leave this block out (settings \"blocks\")"
+         direction has {relative_power:.1e} of the strongest's power): {}, identify from a run \
+         that does, or leave this block out (settings \"blocks\")",
+        excitation::advice(axis)
     )]
     NotExcited {
         /// The block (`"gyro"` or `"accel"`).

@@ -403,11 +403,11 @@ fn notices_are_printed_and_join_a_refusal_they_explain() {
     let dir = tempfile::tempdir().unwrap();
     let run = simulated_run(dir.path());
     let text = std::fs::read_to_string(&run).unwrap();
-    let with_extra: String = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| format!("{l},{}\n", if i == 0 { "temp_c" } else { "21.5" }))
-        .collect();
+    let mut with_extra = String::new();
+    for (i, line) in text.lines().enumerate() {
+        with_extra += line;
+        with_extra += if i == 0 { ",temp_c\n" } else { ",21.5\n" };
+    }
     let extra = dir.path().join("extra.csv");
     std::fs::write(&extra, with_extra).unwrap();
     std::fs::copy(run.with_extension("json"), extra.with_extension("json")).unwrap();

@@ -8,8 +8,8 @@
 //!
 //! A run with a gyro block carries a second, independent measurement of the same motion: the
 //! gyro's outputs, turned into Euler rates at the measured angles ([`euler_rate`]), the
-//! **witness** `w`. Per bin the part of each measured angle that no linear filter of the witness
-//! explains is
+//! **witness** `w` (in platform axes first when the gyro is mounted turned, [`super::mount`]).
+//! Per bin the part of each measured angle that no linear filter of the witness explains is
 //!
 //! `N_c = S_yy - S_yw S_ww^-1 S_wy`,
 //!
@@ -51,6 +51,7 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 
 use super::kinematics::euler_rate;
+use super::mount::{in_platform_axes, turned_mounting};
 use super::observer::{daniell_half_width, remove_line};
 use crate::fourier::{RecordFft, fast_len};
 use crate::spectral::Window;
@@ -234,6 +235,11 @@ pub(super) fn coloured_noise(
 ) -> Vec<[f64; 3]> {
     let n = angles[0].len();
     let rate = grid.sample_rate_hz();
+    // A gyro mounted turned: its outputs in platform axes first (`super::mount`).
+    let platform = turned_mounting(angles, body_rates, rate).map(|q| in_platform_axes(&q, body_rates));
+    let body_rates = platform
+        .as_ref()
+        .map_or(body_rates, |p| p.each_ref().map(Vec::as_slice));
     let count = ((n as f64 / (MIN_STRETCH_S * rate)) as usize).clamp(1, MAX_STRETCHES);
     let count = if count.is_multiple_of(2) { count - 1 } else { count };
     let stretches: Vec<(f64, Vec<[f64; 3]>)> = (0..count)

@@ -9,4 +9,5 @@
 pub mod colour;
 pub mod inputs;
 pub mod kinematics;
+pub mod mount;
 pub mod observer;

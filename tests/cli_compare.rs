@@ -23,6 +23,17 @@ fn sample(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// `dir/broken.csv`, with a cell that is not a number on its third line.
+fn broken_run(dir: &Path) -> PathBuf {
+    let bad = dir.join("broken.csv");
+    std::fs::write(
+        &bad,
+        "t,roll,yaw,pitch,gx,gy,gz\n0,0,0,0,0,0,0\n0.002,0,abc,0,0,0,0\n",
+    )
+    .unwrap();
+    bad
+}
+
 fn order0_settings(dir: &Path) -> PathBuf {
     let settings = dir.join("s.json");
     std::fs::write(&settings, r#"{"order": 0}"#).unwrap();
@@ -150,12 +161,7 @@ fn with_diagnose_the_findings_are_compared() {
 #[test]
 fn a_bad_run_or_a_single_run_exits_2_without_output() {
     let dir = tempfile::tempdir().unwrap();
-    let bad = dir.path().join("broken.csv");
-    std::fs::write(
-        &bad,
-        "t,roll,yaw,pitch,gx,gy,gz\n0,0,0,0,0,0,0\n0.002,0,abc,0,0,0,0\n",
-    )
-    .unwrap();
+    let bad = broken_run(dir.path());
     let out = dir.path().join("comparison.json");
     let cruise = sample("cruise.csv.gz");
     for args in [
@@ -239,4 +245,44 @@ fn the_real_unit_s_runs_agree_on_the_delay_and_a_rotation_of_its_axes_is_told_ap
         stderr.contains("broad25_tapping.csv.gz - broad11_slow_translation.csv.gz: the axes are rotated by"),
         "{stderr}"
     );
+}
+
+/// A first run identified with notices (no sidecar) and warnings, then a bad second run: exit
+/// status 2 with the bad run's one line; the first run's notices are printed only when the
+/// comparison is written.
+#[test]
+fn a_later_run_s_refusal_stays_one_line_after_an_earlier_run_s_notices() {
+    let dir = tempfile::tempdir().unwrap();
+    let no_sidecar = dir.path().join("no_sidecar.csv.gz");
+    std::fs::copy(sample("cruise.csv.gz"), &no_sidecar).unwrap();
+    let bad = broken_run(dir.path());
+    let settings = dir.path().join("gyro.json");
+    std::fs::write(&settings, r#"{"blocks": ["gyro"], "order": 0}"#).unwrap();
+    let out = dir.path().join("comparison.json");
+    let compare = |runs: [&Path; 2]| {
+        imu_attest(&[
+            "compare",
+            runs[0].to_str().unwrap(),
+            runs[1].to_str().unwrap(),
+            "--settings",
+            settings.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = compare([&no_sidecar, &bad]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("broken.csv"), "{stderr}");
+    assert!(!out.exists());
+    // Both runs good: the comparison is written and the notices printed.
+    let o = compare([&no_sidecar, &sample("cruise.csv.gz")]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("imu-attest: note: no_sidecar.csv.gz: no sidecar no_sidecar.json"),
+        "{stderr}"
+    );
+    assert!(out.exists());
 }

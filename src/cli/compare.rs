@@ -35,10 +35,15 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     inputs.extend(settings_path);
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
     let mut models = Vec::with_capacity(runs.len());
+    // Every run's notes and warnings, printed once the comparison is written: a later run's
+    // refusal (exit status 2) stays one line.
+    let mut messages = Vec::new();
     let mut reports = Vec::new();
     for r in &runs {
         let mut session = Session::new(Arc::new(super::progress::load_run(r)?));
-        models.push(identify_in(r, &mut session, &settings, &[])?);
+        let (model, lines) = identify_in(r, &mut session, &settings, &[])?;
+        models.push(model);
+        messages.extend(lines);
         if diagnose {
             let report =
                 diagnose_session(&mut session, &settings, &DiagnoseOptions::default()).map_err(|e| {
@@ -64,12 +69,14 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     }
     for block in crate::block::Block::BOTH.map(crate::block::Block::name) {
         for line in comparison.mount_lines(block) {
-            eprintln!("imu-attest: {block} block, {line}");
+            messages.push(format!("imu-attest: {block} block, {line}"));
         }
     }
     write_atomic(&out, |w| {
         serde_json::to_writer_pretty(&mut *w, &comparison).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })
-    .map_err(|e| CliError::Input(e.to_string()))
+    .map_err(|e| CliError::Input(e.to_string()))?;
+    super::identify::print_messages(&messages);
+    Ok(())
 }

@@ -81,7 +81,6 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
         }
     })?;
-    super::progress::print_notes(run_path, &notices);
     let value = serde_json::to_value(&report).map_err(|e| CliError::Internal(e.into()))?;
     if let Some(path) = crate::model::first_non_finite(&value) {
         return Err(CliError::Internal(anyhow::anyhow!(
@@ -92,5 +91,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         serde_json::to_writer_pretty(&mut *w, &value).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })
-    .map_err(|e| CliError::Input(e.to_string()))
+    .map_err(|e| CliError::Input(e.to_string()))?;
+    super::identify::print_messages(&super::progress::note_lines(run_path, &notices));
+    Ok(())
 }

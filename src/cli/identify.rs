@@ -60,32 +60,44 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     inputs.extend(effects_path);
     ensure_not_input(&out, &inputs).map_err(|e| CliError::Input(e.to_string()))?;
 
-    let model = identify_model(run_path, &settings, &accepted)?;
+    let (model, messages) = identify_model(run_path, &settings, &accepted)?;
     model.write_file(&out).map_err(|e| match e {
         OutputError::NonFinite { .. } => CliError::Internal(anyhow::anyhow!("model not written: {e}")),
         other => CliError::Input(other.to_string()),
-    })
+    })?;
+    print_messages(&messages);
+    Ok(())
 }
 
-/// Loads and identifies one run into its checked model (shared with `compare`), the `accepted`
-/// effects in its blocks' models.
+/// The lines a successful command prints on stderr: printed only once its output is written, so
+/// that a refusal (exit status 2) stays one line.
+pub(super) fn print_messages(messages: &[String]) {
+    for line in messages {
+        eprintln!("{line}");
+    }
+}
+
+/// Loads and identifies one run into its checked model and the lines to print when the command
+/// succeeds ([`identify_in`]), the `accepted` effects in its blocks' models.
 pub(super) fn identify_model(
     run_path: &Path,
     settings: &Settings,
     accepted: &[(Block, Effect)],
-) -> Result<Model, CliError> {
+) -> Result<(Model, Vec<String>), CliError> {
     let run = Arc::new(super::progress::load_run(run_path)?);
     identify_in(run_path, &mut Session::new(run), settings, accepted)
 }
 
-/// Identifies the run of `session` (loaded from `run_path`) into its checked model; the
+/// Identifies the run of `session` (loaded from `run_path`) into its checked model, with the
+/// lines to print on stderr once the command's output is written: the loader's notices, the
+/// fit's warnings, recording faults (a refusal carries the notices on its one line instead). The
 /// session keeps its stages for what comes next (`compare --diagnose`).
 pub(super) fn identify_in(
     run_path: &Path,
     session: &mut Session,
     settings: &Settings,
     accepted: &[(Block, Effect)],
-) -> Result<Model, CliError> {
+) -> Result<(Model, Vec<String>), CliError> {
     let settings = settings.for_run(session.run());
     let notices = session.run().notices.clone();
     // Settings that do not fit this run are the user's input; anything else is ours.
@@ -109,31 +121,31 @@ pub(super) fn identify_in(
             CliError::Internal(anyhow::anyhow!("{}: {e}", run_path.display()))
         }
     })?;
-    super::progress::print_notes(run_path, &notices);
+    let mut messages = super::progress::note_lines(run_path, &notices);
     for (name, block) in &model.blocks {
         for warning in &block.fit.warnings {
-            eprintln!("imu-attest: warning: {name} block: {warning}");
+            messages.push(format!("imu-attest: warning: {name} block: {warning}"));
         }
         for n in block.effects.iter().flat_map(|e| &e.not_added) {
-            eprintln!(
+            messages.push(format!(
                 "imu-attest: warning: {name} block: {} not added: {}",
                 n.effect, n.reason
-            );
+            ));
         }
     }
     for (block, effect) in accepted {
         if !model.blocks.contains_key(block.name()) {
-            eprintln!(
+            messages.push(format!(
                 "imu-attest: warning: {effect} not added: the run has no {} block",
                 block.name()
-            );
+            ));
         }
     }
     for fault in &model.recording_faults {
-        eprintln!("imu-attest: warning: {fault}");
+        messages.push(format!("imu-attest: warning: {fault}"));
     }
     model
         .check_finite()
         .map_err(|e| CliError::Internal(anyhow::anyhow!("model not written: {e}")))?;
-    Ok(model)
+    Ok((model, messages))
 }

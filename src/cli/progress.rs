@@ -63,14 +63,16 @@ pub fn load_run(path: &Path) -> Result<Run, CliError> {
     result.map_err(|e| CliError::Input(e.to_string()))
 }
 
-/// The loader's notices for `path`, one line each on stderr (`imu-attest: note: run.csv: no
-/// sidecar run.json: ...`): contract section 2 has the program say when it assumed a missing
-/// sidecar's defaults or ignores a column. Printed when the command succeeds; on a refusal they
-/// join its one line instead ([`with_notes`]).
-pub fn print_notes(path: &Path, notices: &[String]) {
-    for notice in notices {
-        eprintln!("imu-attest: note: {}: {notice}", display_name(path));
-    }
+/// The loader's notices for `path` as stderr lines (`imu-attest: note: run.csv: no sidecar
+/// run.json: ...`): contract section 2 has the program say when it assumed a missing sidecar's
+/// defaults or ignores a column. Printed when the command succeeds, after its output is written;
+/// on a refusal they join its one line instead ([`with_notes`]).
+#[must_use]
+pub fn note_lines(path: &Path, notices: &[String]) -> Vec<String> {
+    notices
+        .iter()
+        .map(|notice| format!("imu-attest: note: {}: {notice}", display_name(path)))
+        .collect()
 }
 
 /// A refusal's one line with the run's notices after it, so that a refusal a notice explains

@@ -45,6 +45,8 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let given = model_path.as_deref().map(read_model).transpose()?;
 
     let mut reports = Vec::new();
+    // Notes and warnings, printed once the page is written (a refusal stays one line).
+    let mut messages = Vec::new();
     for path in &args.positional {
         let path = Path::new(path);
         let run = Arc::new(super::progress::load_run(path)?);
@@ -65,24 +67,33 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         };
         let bar = super::progress::bar(1, "{spinner} reporting {msg} {elapsed}");
         bar.set_message(path.display().to_string());
+        let notices = run.notices.clone();
         let report = run_report(&mut Session::new(run), &settings, model);
         bar.finish_and_clear();
         let report = report.map_err(|e| {
             if e.is_input_error() {
-                CliError::Input(format!("{}: {e}", path.display()))
+                CliError::Input(super::progress::with_notes(
+                    format!("{}: {e}", path.display()),
+                    &notices,
+                ))
             } else {
                 CliError::Internal(anyhow::anyhow!("{}: {e}", path.display()))
             }
         })?;
+        messages.extend(super::progress::note_lines(path, &notices));
         for (name, b) in &report.model.blocks {
             for w in &b.fit.warnings {
-                eprintln!("imu-attest: warning: {}: {name} block: {w}", path.display());
+                messages.push(format!(
+                    "imu-attest: warning: {}: {name} block: {w}",
+                    path.display()
+                ));
             }
         }
         reports.push(report);
     }
     let (page, checks) = render(&reports, spec.as_ref(), &utc_now());
     write_page(&out, &page).map_err(|e| CliError::Input(e.to_string()))?;
+    super::identify::print_messages(&messages);
     if spec.is_some() {
         print_summary(&crate::report::spec::summary(&checks));
     }

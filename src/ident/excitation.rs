@@ -44,18 +44,23 @@ pub const UNDETERMINED: f64 = 0.1;
 /// 3e-5 to 5e-5 (above); the weakest run identified right gave 3.8e-4.
 pub const HELD_STILL: f64 = 1e-4;
 
-/// What moves the input axis `axis` (the refusal's advice): a gyro input is a stand axis's
-/// rate; a specific force varies with the tilt of gravity into it (`fx` by pitch, `fz` by roll)
-/// and with the lever arm's accelerations, the vertical `fy` only with the latter (to first
-/// order), so a zero lever arm, declared or a missing sidecar's, leaves it flat.
+/// What moves the input axis `axis` (the refusal's advice): a gyro input is the rate about a
+/// stand axis (`wx` roll, `wy` yaw, `wz` pitch, near level); a specific force varies with the
+/// tilt of gravity into it (`fx` by pitch, `fz` by roll) and with the lever arm's accelerations,
+/// the vertical `fy` to first order only with the latter (tilt moves it by `g (1 - cos)`), so a
+/// zero lever arm, declared or a missing sidecar's, leaves it nearly flat.
 #[must_use]
 pub fn advice(axis: &str) -> &'static str {
     match axis {
+        "wx" => "move the stand in roll",
+        "wy" => "move the stand in yaw",
+        "wz" => "move the stand in pitch",
         "fx" => "tilt the stand in pitch (gravity along x) or move it more at the declared lever arm",
         "fz" => "tilt the stand in roll (gravity along z) or move it more at the declared lever arm",
         "fy" => {
-            "the vertical specific force varies only with the lever arm's accelerations: check the \
-             sidecar's accel_lever_arm_m (zero leaves fy flat) and move the stand more"
+            "the vertical specific force varies, to first order, only with the lever arm's \
+             accelerations: check the sidecar's accel_lever_arm_m (zero leaves fy nearly flat) and \
+             move the stand more"
         }
         _ => "move that stand axis",
     }

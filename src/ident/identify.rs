@@ -323,6 +323,12 @@ fn identify_excited(
             change_s: st.tau_trend * duration,
         });
     }
+    if let Some(st) = stationarity.as_deref().filter(|st| !st.no_delay_s.is_empty()) {
+        warnings.push(IdentWarning::StretchesWithoutDelay {
+            spans_s: st.no_delay_s.clone(),
+            fitted: st.stretches.len(),
+        });
+    }
     if let BandSetting::Fixed(given) = settings.band_hz {
         let ranges = untrusted_ranges(&spectra, given);
         if !ranges.is_empty() {

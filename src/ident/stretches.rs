@@ -161,6 +161,11 @@ pub struct Stationarity {
     /// Its standard deviation: from the residuals about the line, never below what the stretches'
     /// own delay deviations give the slope (`line_slope`).
     pub tau_trend_std: f64,
+    /// The spans (s) of the stretches left out because no delay was found for them inside the
+    /// scan (`+-0.3 s`) nor inside the record's own range: there the block's response is not the
+    /// record's (a fault, a clock jump, motion folded about Nyquist). Said as a warning.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub no_delay_s: Vec<[f64; 2]>,
 }
 
 impl Stationarity {
@@ -195,10 +200,10 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
     let (stretches, segment_len) = if spectra.stretches.len() >= MIN_STRETCHES {
         let native = native_bins(spectra, band_hz);
         let centres: Vec<f64> = native.iter().map(|&k| spectra.frequency_hz[k]).collect();
-        let fits: Vec<StretchFit> = spectra
+        let fits: Vec<Outcome> = spectra
             .stretches
             .iter()
-            .filter_map(|s| {
+            .map(|s| {
                 let (frequency_hz, offsets) = compared_at(spectra, s, &native, &centres);
                 let at = At {
                     frequency_hz: &frequency_hz,
@@ -223,12 +228,46 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
         let fits = finer
             .stretches
             .iter()
-            .filter_map(|s| fit_stretch(s, &native, 1, at))
+            .map(|s| fit_stretch(s, &native, 1, at))
             .collect();
         (fits, Some(finer.segment_len))
     };
+    summarise(stretches, segment_len)
+}
+
+/// What the fit of one stretch gave.
+#[derive(Debug)]
+enum Outcome {
+    /// Fitted.
+    Fitted(StretchFit),
+    /// No delay found inside the scan nor inside the record's own range: the stretch's response
+    /// is not the record's (its span, s).
+    NoDelay([f64; 2]),
+    /// The fit failed (a singular input spectrum, too few bins).
+    Failed,
+}
+
+/// The summary of the stretches' outcomes ([`stationarity`]): `None` with fewer than
+/// [`MIN_STRETCHES`] fitted, or one fewer when stretches with no delay were left out (the check
+/// is then made on the others and the warning names them: an independent simulator's run lost it
+/// to one stretch of four).
+fn summarise(outcomes: Vec<Outcome>, segment_len: Option<usize>) -> Option<Stationarity> {
+    let mut stretches = Vec::with_capacity(outcomes.len());
+    let mut no_delay_s = Vec::new();
+    for outcome in outcomes {
+        match outcome {
+            Outcome::Fitted(fit) => stretches.push(fit),
+            Outcome::NoDelay(span) => no_delay_s.push(span),
+            Outcome::Failed => {}
+        }
+    }
     let m = stretches.len();
-    if m < MIN_STRETCHES {
+    let fewest = if no_delay_s.is_empty() {
+        MIN_STRETCHES
+    } else {
+        MIN_STRETCHES - 1
+    };
+    if m < fewest {
         return None;
     }
     let spread = |values: &dyn Fn(&StretchFit) -> f64| {
@@ -252,6 +291,7 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
         segment_len,
         tau_trend,
         tau_trend_std,
+        no_delay_s,
     })
 }
 
@@ -328,8 +368,10 @@ struct At<'a> {
 
 /// The order-0 fit of one stretch over the native band bins (`native` indexes the padded grid,
 /// `step` apart; the stretch holds every native bin).
-fn fit_stretch(s: &StretchSpectra, native: &[usize], step: usize, at: At) -> Option<StretchFit> {
-    let (response, weights) = h1_estimate(s, native, step)?;
+fn fit_stretch(s: &StretchSpectra, native: &[usize], step: usize, at: At) -> Outcome {
+    let Some((response, weights)) = h1_estimate(s, native, step) else {
+        return Outcome::Failed;
+    };
     let input = ResponseEstimate {
         frequency_hz: at.frequency_hz,
         response: &response,
@@ -338,22 +380,34 @@ fn fit_stretch(s: &StretchSpectra, native: &[usize], step: usize, at: At) -> Opt
     };
     // The stretches' deviations floor the record's and judge its drift: their weights stay as
     // given (`structural::scatter` would narrow them to each stretch's own scatter).
-    let settings = StructuralSettings {
+    let reach = StructuralSettings {
         tau_min_s: -STRETCH_DELAY_REACH_S,
         tau_max_s: STRETCH_DELAY_REACH_S,
         narrow_to_scatter: false,
         ..StructuralSettings::default()
     };
-    let fit = fit_structure(&input, OrderChoice::Fixed(0), &settings).ok()?;
+    let at_end = |tau: f64, s: &StructuralSettings| tau <= s.tau_min_s + 1e-12 || tau >= s.tau_max_s - 1e-12;
+    let Ok(mut fit) = fit_structure(&input, OrderChoice::Fixed(0), &reach) else {
+        return Outcome::Failed;
+    };
     // A delay at the scan's end is no maximum of the fit's objective, only the best the range
-    // allowed: not a measurement of this stretch's delay (an independent simulator's run whose
-    // motion folds about Nyquist gave one stretch of four tau = -0.3 s and K = -0.8 times a
-    // rotation, beside three at 3.000 ms, and its spread put K's deviations at 0.45 with a
-    // false "too little motion"; left out, as a failed fit is).
-    if fit.tau_s.abs() >= STRETCH_DELAY_REACH_S * (1.0 - 1e-9) {
-        return None;
+    // allowed. An independent simulator's run whose motion folds about Nyquist gave one stretch
+    // of four tau = -0.3 s and K = -0.8 times a rotation beside three at 3.000 ms, and its spread
+    // put K's deviations at 0.45 with a false "too little motion". Such a stretch is fitted again
+    // over the whole record's own delay range (the order-0 scan's); a stretch with no maximum
+    // there either is left out and named (`Stationarity::no_delay_s`).
+    if at_end(fit.tau_s, &reach) {
+        let own = StructuralSettings {
+            narrow_to_scatter: false,
+            ..StructuralSettings::default()
+        };
+        fit = match fit_structure(&input, OrderChoice::Fixed(0), &own) {
+            Ok(fit) if !at_end(fit.tau_s, &own) => fit,
+            Ok(_) => return Outcome::NoDelay(s.span_s),
+            Err(_) => return Outcome::Failed,
+        };
     }
-    Some(StretchFit {
+    Outcome::Fitted(StretchFit {
         span_s: s.span_s,
         k: fit.k,
         tau_s: fit.tau_s,
@@ -443,6 +497,7 @@ mod tests {
             segment_len: None,
             tau_trend,
             tau_trend_std,
+            no_delay_s: Vec::new(),
         }
     }
 
@@ -486,9 +541,9 @@ mod tests {
         assert!((std - 0.1 / 10.0_f64.sqrt()).abs() < 1e-12, "{std}");
     }
 
-    /// A stretch of exact data `K e^(-tau s)` (`K` a small misalignment), 0.1-40 Hz, with a white
-    /// residual of `1e-4` of the gain per bin.
-    fn exact_stretch(tau_s: f64) -> (StretchSpectra, Vec<f64>) {
+    /// A stretch of exact data, the sum of `(gain, delay)` terms each `K gain e^(-delay s)` (`K` a
+    /// small misalignment), 0.1-40 Hz, with a white residual of `1e-4` of the gain per bin.
+    fn exact_stretch(terms: &[(f64, f64)]) -> (StretchSpectra, Vec<f64>) {
         let frequency_hz: Vec<f64> = (1..=400).map(|k| 0.1 * f64::from(k)).collect();
         let k = Matrix3::new(1.0, 2e-3, 0.0, -1e-3, 1.0, 1e-3, 0.0, 0.0, 1.0).map(Complex64::from);
         let mut s = StretchSpectra {
@@ -500,7 +555,8 @@ mod tests {
             moments: None,
         };
         for f in &frequency_hz {
-            let w = k * Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * f * tau_s);
+            let phase = |tau: f64| Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * f * tau);
+            let w = k * terms.iter().map(|&(g, tau)| phase(tau) * g).sum::<Complex64>();
             s.s_uu.push(Matrix3::identity());
             s.s_xx
                 .push(w * w.adjoint() + Matrix3::identity() * Complex64::from(1e-8));
@@ -509,22 +565,88 @@ mod tests {
         (s, frequency_hz)
     }
 
-    /// A delay inside the scan is found to a microsecond; one just beyond its end leaves the best
-    /// of the range at the end, which is no measurement: the stretch is left out.
+    /// A delay inside the scan is found to a microsecond. A stretch whose best over the scan
+    /// lies at its end (a stronger term just beyond it) is fitted again over the record's own
+    /// delay range, where its own term lies: found there, not at the end (0.3 s without the
+    /// refit, no stretch with the first version's rule of leaving it out).
     #[test]
-    fn a_stretch_whose_delay_ends_at_the_scan_s_end_is_left_out() {
-        for (tau, found) in [(0.003, true), (-0.25, true), (0.31, false), (-0.32, false)] {
-            let (s, frequency_hz) = exact_stretch(tau);
+    fn a_stretch_whose_best_delay_is_the_scan_s_end_is_fitted_in_the_record_s_range() {
+        // The stronger term's side lobes move the weaker one's delay by 0.2 ms in the third case.
+        type Case<'a> = (&'a [(f64, f64)], f64, f64);
+        let cases: [Case; 3] = [
+            (&[(1.0, 0.003)], 0.003, 1e-6),
+            (&[(1.0, -0.25)], -0.25, 1e-6),
+            (&[(1.0, 0.003), (-1.5, 0.305)], 0.003, 5e-4),
+        ];
+        for (terms, expected, tolerance) in cases {
+            let (s, frequency_hz) = exact_stretch(terms);
             let native: Vec<usize> = (0..frequency_hz.len()).collect();
             let at = At {
                 frequency_hz: &frequency_hz,
                 offset_hz: None,
             };
-            let fit = fit_stretch(&s, &native, 1, at);
-            assert_eq!(fit.is_some(), found, "{tau}: {fit:?}");
-            if let Some(fit) = fit {
-                assert!((fit.tau_s - tau).abs() < 1e-6, "{tau}: {}", fit.tau_s);
-            }
+            let Outcome::Fitted(fit) = fit_stretch(&s, &native, 1, at) else {
+                panic!("{terms:?}: not fitted")
+            };
+            assert!(
+                (fit.tau_s - expected).abs() < tolerance,
+                "{terms:?}: {}",
+                fit.tau_s
+            );
         }
+    }
+
+    /// Four stretches fitted give a summary; three fitted beside one with no delay give one on
+    /// the three that names the fourth; three fitted beside a failed one, or two beside one with
+    /// no delay, give none.
+    #[test]
+    fn a_stretch_with_no_delay_is_named_and_the_others_summarised() {
+        let fitted = |k: usize| {
+            Outcome::Fitted(StretchFit {
+                span_s: [30.0 * k as f64, 30.0 * (k + 1) as f64],
+                k: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                tau_s: 0.004 + 1e-6 * k as f64,
+                tau_std_s: 1e-6,
+            })
+        };
+        let all = summarise((0..4).map(fitted).collect(), None).expect("four");
+        assert!(all.no_delay_s.is_empty());
+        let mut outcomes: Vec<Outcome> = (0..3).map(fitted).collect();
+        outcomes.push(Outcome::NoDelay([90.0, 120.0]));
+        let three = summarise(outcomes, None).expect("three and one named");
+        assert_eq!(three.stretches.len(), 3);
+        assert_eq!(three.no_delay_s, vec![[90.0, 120.0]]);
+        assert!(
+            (three.tau_spread_std_s - 1e-6 / 3f64.sqrt()).abs() < 1e-12,
+            "{}",
+            three.tau_spread_std_s
+        );
+        let mut failed: Vec<Outcome> = (0..3).map(fitted).collect();
+        failed.push(Outcome::Failed);
+        assert!(summarise(failed, None).is_none());
+        let mut two: Vec<Outcome> = (0..2).map(fitted).collect();
+        two.extend([Outcome::NoDelay([60.0, 90.0]), Outcome::NoDelay([90.0, 120.0])]);
+        assert!(summarise(two, None).is_none());
+    }
+
+    /// The warning names each stretch left out and what the check rests on.
+    #[test]
+    fn the_warning_names_the_stretches_without_a_delay() {
+        let one = super::super::warnings::IdentWarning::StretchesWithoutDelay {
+            spans_s: vec![[57.344, 90.112]],
+            fitted: 3,
+        }
+        .to_string();
+        assert!(one.contains("a stretch of the record (57.3-90.1 s)"), "{one}");
+        assert!(one.contains("rest on the other 3 stretches"), "{one}");
+        let two = super::super::warnings::IdentWarning::StretchesWithoutDelay {
+            spans_s: vec![[0.0, 30.0], [60.0, 90.0]],
+            fitted: 4,
+        }
+        .to_string();
+        assert!(
+            two.contains("2 stretches of the record (0.0-30.0 s, 60.0-90.0 s)"),
+            "{two}"
+        );
     }
 }

@@ -178,6 +178,15 @@ pub enum IdentWarning {
         /// Change of the delay over the record, s.
         change_s: f64,
     },
+    /// Stretches of the record for which no delay was found inside the stationarity check's scan
+    /// nor inside the record's own range (`super::stretches`): there the block's response is not
+    /// the record's. They are left out of the check, which rests on the others.
+    StretchesWithoutDelay {
+        /// Their spans, s from the first sample.
+        spans_s: Vec<[f64; 2]>,
+        /// The stretches the check rests on.
+        fitted: usize,
+    },
     /// The fixed order asked for breaks an admissibility rule.
     InadmissibleOrder {
         /// The order.
@@ -426,6 +435,9 @@ impl fmt::Display for IdentWarning {
                 trend * 1e6,
                 trend_std * 1e6
             ),
+            IdentWarning::StretchesWithoutDelay { spans_s, fitted } => {
+                write_stretches_without_delay(f, spans_s, *fitted)
+            }
             IdentWarning::InadmissibleOrder { order, reason } => {
                 write!(f, "order {order} as asked is not supported by the data: {reason}")
             }
@@ -563,4 +575,26 @@ pub fn block_warnings(
         }
     }
     warnings
+}
+
+/// [`IdentWarning::StretchesWithoutDelay`]'s sentence.
+fn write_stretches_without_delay(
+    f: &mut fmt::Formatter<'_>,
+    spans_s: &[[f64; 2]],
+    fitted: usize,
+) -> fmt::Result {
+    let spans: Vec<String> = spans_s.iter().map(|[a, b]| format!("{a:.1}-{b:.1} s")).collect();
+    let which = if spans.len() == 1 {
+        "a stretch".to_owned()
+    } else {
+        format!("{} stretches", spans.len())
+    };
+    write!(
+        f,
+        "no delay fits {which} of the record ({}) within +-0.3 s nor the record's own range: there \
+         the block's response is not the record's (a recording fault, a clock jump, motion folded \
+         about Nyquist); the stationarity check and the deviations' floor rest on the other \
+         {fitted} stretches",
+        spans.join(", ")
+    )
 }

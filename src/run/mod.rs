@@ -24,8 +24,9 @@
 //!
 //! Accepted: a UTF-8 byte-order mark (removed, with a notice), CRLF line endings, a missing final
 //! newline, blank trailing lines, exponents (`-8.5e-05`), a leading `+`, spaces around cells, any
-//! column order, unknown columns (kept in [`Run::extra`] with a notice). Header names are
-//! case-sensitive.
+//! column order, unknown columns (kept in [`Run::extra`] with a notice), names and cells in double
+//! quotes (one pair around the field). Header names are case-sensitive; a missing one present in
+//! another case is named in the error.
 
 mod csv;
 mod error;

@@ -22,13 +22,14 @@
 //! outputs in platform axes; otherwise the outputs as they are (every run mounted as the
 //! contract says keeps its witness bit for bit).
 //!
-//! Units: the outputs' own (only `Q`, dimensionless, is used); rad, Hz. Empty or non-finite
-//! input, a gain with a singular value below [`MIN_CONDITION`] of its largest (a dead channel,
-//! a still axis): no mounting is read, the outputs are used as they are.
+//! Units: the outputs' own (only `Q`, dimensionless, is used); rad, Hz. Fewer than eight blocks,
+//! non-finite sums, a gain element with a standard error above [`MAX_GAIN_ERROR`] (a weak axis),
+//! a gain with a singular value below [`MIN_CONDITION`] of its largest (a dead channel, a still
+//! axis): no mounting is read, the outputs are used as they are.
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-use super::inputs::differentiate;
+use super::kinematics::{EulerState, body_rate};
 
 /// `||Q - I||_F` above which the mounting is taken out: 0.17, a turn of 7 degrees (`||Q - I||_F
 /// = 2 sqrt(2) sin(angle / 2)`; a reversed axis gives at least 2). Well above the rough gain's
@@ -38,6 +39,10 @@ pub const TURNED: f64 = 0.17;
 
 /// Blocks per second the record is averaged into before the regression (20 ms each).
 const BLOCKS_PER_S: f64 = 50.0;
+
+/// The largest standard error of a rough gain's element, relative to its largest singular value,
+/// for which its mounting is read: 0.05, a turn of about three degrees, well inside [`TURNED`].
+const MAX_GAIN_ERROR: f64 = 0.05;
 
 /// Smallest ratio of the rough gain's singular values for which its orthogonal factor means
 /// anything.
@@ -51,58 +56,43 @@ pub fn turned_mounting(
     outputs: [&[f64]; 3],
     sample_rate_hz: f64,
 ) -> Option<Matrix3<f64>> {
-    let n = angles[0].len();
-    if n < 3 || outputs.iter().any(|c| c.len() != n) {
-        return None;
-    }
-    // Means over blocks of 20 ms: the motion's strong low-frequency part, not the angle noise
-    // that differentiation raises at high frequency (errors in variables turned the gain).
-    let width = ((sample_rate_hz / BLOCKS_PER_S).round() as usize).max(1);
-    let n = n / width;
-    if n < 3 {
-        return None;
-    }
-    let block_means = |x: &[f64]| -> Vec<f64> {
-        x.chunks_exact(width)
-            .map(|c| c.iter().sum::<f64>() / width as f64)
-            .collect()
-    };
-    let rates = differentiate(angles, sample_rate_hz)
-        .body_rates()
-        .map(|c| block_means(&c));
-    let outputs = outputs.map(block_means);
-    let outputs = outputs.each_ref().map(Vec::as_slice);
-    let block_rate = sample_rate_hz / width as f64;
+    let (rates, outputs, block_rate) = block_means(angles, outputs, sample_rate_hz)?;
+    let n = rates[0].len();
     // Regressors: the body rates and their rates of change, which take up the delay (`K w(t - tau)
     // = K w(t) - tau K w'(t) + ...`: with the axes' motions in quadrature, as a Dutch roll's are,
-    // a fit without them turned the gain by a degree and a half).
-    let step = |x: &[f64], i: usize| 0.5 * (x[(i + 1).min(n - 1)] - x[i.saturating_sub(1)]) * block_rate;
-    let regressors = |i: usize| -> [f64; 6] {
-        std::array::from_fn(|c| {
-            if c < 3 {
-                rates[c][i]
-            } else {
-                step(&rates[c - 3], i)
-            }
-        })
+    // a fit without them turned the gain by a degree and a half). Central differences, one-sided
+    // at the ends.
+    let change = |x: &[f64], i: usize| {
+        let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+        (x[hi] - x[lo]) * block_rate / (hi - lo) as f64
     };
-    let mean = |x: &[f64]| x.iter().sum::<f64>() / n as f64;
-    let output_mean = outputs.map(mean);
-    let mut regressor_mean = [0.0; 6];
-    for i in 0..n {
-        regressor_mean
-            .iter_mut()
-            .zip(regressors(i))
-            .for_each(|(m, v)| *m += v / n as f64);
-    }
-    let (mut yw, mut ww) = (SMatrix::<f64, 3, 6>::zeros(), SMatrix::<f64, 6, 6>::zeros());
-    for i in 0..n {
-        let w = SVector::<f64, 6>::from_fn(|c, _| regressors(i)[c] - regressor_mean[c]);
-        let y = Vector3::from_fn(|r, _| outputs[r][i] - output_mean[r]);
+    let regressors: Vec<SVector<f64, 6>> = (0..n)
+        .map(|i| {
+            SVector::<f64, 6>::from_fn(|c, _| {
+                if c < 3 {
+                    rates[c][i]
+                } else {
+                    change(&rates[c - 3], i)
+                }
+            })
+        })
+        .collect();
+    let regressor_mean = regressors.iter().sum::<SVector<f64, 6>>() / n as f64;
+    let output_mean = Vector3::from_fn(|r, _| outputs[r].iter().sum::<f64>() / n as f64);
+    let (mut yw, mut ww, mut yy) = (
+        SMatrix::<f64, 3, 6>::zeros(),
+        SMatrix::<f64, 6, 6>::zeros(),
+        Vector3::<f64>::zeros(),
+    );
+    for (i, regressor) in regressors.iter().enumerate() {
+        let w = regressor - regressor_mean;
+        let y = Vector3::from_fn(|r, _| outputs[r][i]) - output_mean;
         yw += y * w.transpose();
         ww += w * w.transpose();
+        yy += y.component_mul(&y);
     }
-    let coefficients = yw * ww.try_inverse()?;
+    let ww_inverse = ww.try_inverse()?;
+    let coefficients = yw * ww_inverse;
     let gain: Matrix3<f64> = coefficients.fixed_columns::<3>(0).into_owned();
     if !gain.iter().all(|v| v.is_finite()) {
         return None;
@@ -112,8 +102,66 @@ pub fn turned_mounting(
     if !(largest > 0.0 && svd.singular_values.min() >= MIN_CONDITION * largest) {
         return None;
     }
+    // Each row's residual variance and each gain's standard error: a direction the motion
+    // barely drives (a weak axis) leaves its column to the noise, which could turn `Q` by
+    // itself; such a gain is not read.
+    let dof = n.checked_sub(7)?.max(1) as f64;
+    for r in 0..3 {
+        let explained = (coefficients.row(r) * yw.row(r).transpose())[0];
+        let variance = (yy[r] - explained).max(0.0) / dof;
+        for c in 0..3 {
+            let error = (variance * ww_inverse[(c, c)]).sqrt();
+            if error.is_nan() || error > MAX_GAIN_ERROR * largest {
+                return None;
+            }
+        }
+    }
     let q = svd.u? * svd.v_t?;
     ((q - Matrix3::identity()).norm() > TURNED).then_some(q)
+}
+
+/// Three body-rate columns, three output columns, per block, and the blocks' rate, Hz.
+type BlockMeans = ([Vec<f64>; 3], [Vec<f64>; 3], f64);
+
+/// Block means of 20 ms ([`BLOCKS_PER_S`]), and the blocks' rate, Hz: the body rates of the angles (central
+/// differences, one-sided at the ends) and the outputs, in one pass without a full-length copy
+/// (a 30-minute run at 1 kHz would otherwise hold 170 MB of temporaries). `None` for fewer than
+/// eight blocks or unequal lengths.
+fn block_means(angles: [&[f64]; 3], outputs: [&[f64]; 3], sample_rate_hz: f64) -> Option<BlockMeans> {
+    let len = angles[0].len();
+    if len < 3 || angles.iter().chain(&outputs).any(|c| c.len() != len) {
+        return None;
+    }
+    let width = ((sample_rate_hz / BLOCKS_PER_S).round() as usize).max(1);
+    let n = len / width;
+    if n < 8 {
+        return None;
+    }
+    let mut rates: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
+    let mut means: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
+    for block in 0..n {
+        let (mut rate_sum, mut output_sum) = ([0.0; 3], [0.0; 3]);
+        for i in block * width..(block + 1) * width {
+            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(len - 1));
+            let state = EulerState {
+                angle: [angles[0][i], angles[1][i], angles[2][i]],
+                rate: std::array::from_fn(|a| {
+                    (angles[a][hi] - angles[a][lo]) * sample_rate_hz / (hi - lo) as f64
+                }),
+                accel: [0.0; 3],
+            };
+            let w = body_rate(&state);
+            for a in 0..3 {
+                rate_sum[a] += w[a];
+                output_sum[a] += outputs[a][i];
+            }
+        }
+        for a in 0..3 {
+            rates[a].push(rate_sum[a] / width as f64);
+            means[a].push(output_sum[a] / width as f64);
+        }
+    }
+    Some((rates, means, sample_rate_hz / width as f64))
 }
 
 /// The outputs in platform axes, `Q^T y` per sample.

@@ -60,6 +60,31 @@ fn a_turned_gyro_s_mounting_is_read_and_a_mounting_as_the_contract_says_is_left(
     }
 }
 
+/// Exact body rates of `angles` (central differences) plus white noise of `noise` rad/s.
+fn noisy_rates(angles: &[Vec<f64>; 3], noise: f64, seed: u64) -> [Vec<f64>; 3] {
+    let mut rng = crate::rng::Rng::new(seed);
+    let rates = crate::stand::inputs::differentiate(views(angles), RATE).body_rates();
+    rates.map(|c| c.iter().map(|v| v + noise * rng.normal()).collect())
+}
+
+/// A yaw a thousand times weaker than the other axes (its rates below the gyro's noise) leaves
+/// the rough gain's yaw column to the noise: no mounting is read, turned or not, where the same
+/// motion with yaw as strong as the others reads the turn.
+#[test]
+fn a_weak_axis_reads_no_mounting() {
+    let r = sim(4);
+    let turn = Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0);
+    let mut weak = r.angles.clone();
+    let mean = weak[1].iter().sum::<f64>() / weak[1].len() as f64;
+    weak[1].iter_mut().for_each(|v| *v = mean + 1e-3 * (*v - mean));
+    for (angles, readable) in [(&r.angles, true), (&weak, false)] {
+        let outputs = noisy_rates(angles, 0.02, 9);
+        let q = turned_mounting(views(angles), views(&turned(&turn, &outputs)), RATE);
+        assert_eq!(q.is_some(), readable, "{q:?}");
+        assert!(turned_mounting(views(angles), views(&outputs), RATE).is_none());
+    }
+}
+
 /// A dead channel, a still record, empty or unequal columns: no mounting, no panic.
 #[test]
 fn degenerate_outputs_read_no_mounting() {

@@ -232,7 +232,8 @@ pub fn observe(
 
 /// [`observe`], with the angle noise's colour estimated from `witness` when one is given: the
 /// gyro block's outputs (body rates, rad/s, columns `gx, gy, gz`), the angles' length (module
-/// [`super::colour`]). A witness of another length or with a non-finite value is not used.
+/// [`super::colour`]; a gyro mounted turned is turned back first, [`super::mount`]). A witness of
+/// another length or with a non-finite value is not used.
 ///
 /// # Errors
 /// As [`observe`].

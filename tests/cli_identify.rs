@@ -447,3 +447,22 @@ fn notices_are_printed_and_join_a_refusal_they_explain() {
     }
     assert!(!out.exists());
 }
+
+/// A refusal on a single-block run does not offer to leave its only block out: the first 4.4 s
+/// of a real recording are the rest before the motion (no usable band).
+#[test]
+fn a_single_block_refusal_does_not_offer_to_leave_the_block_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad07_fast_rotation.csv.gz");
+    let settings = dir.path().join("rest.json");
+    std::fs::write(&settings, r#"{"span_s": [21.6, 26.0]}"#).unwrap();
+    let out = dir.path().join("m.json");
+    let o = identify_with(&run, &settings, &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("gyro block: no usable band"), "{stderr}");
+    assert!(stderr.trim_end().ends_with("or give band_hz"), "{stderr}");
+    assert!(!stderr.contains("leave this block out"), "{stderr}");
+    assert!(!out.exists());
+}

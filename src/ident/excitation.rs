@@ -129,6 +129,7 @@ pub fn check_excitation(spectra: &BlockSpectra, block: Block, band_hz: [f64; 2])
             low_hz: band_hz[0],
             high_hz: band_hz[1],
             relative_power: e.ratio,
+            others: true,
         }),
         _ => Ok(()),
     }

@@ -379,6 +379,7 @@ pub fn resolve_band(spectra: &BlockSpectra, block: Block, band: BandSetting) -> 
                 best_coherence: best_coherence(spectra, limits),
                 min: MIN_COHERENCE,
                 bins: MIN_BAND_BINS,
+                others: true,
             })
         }
     }

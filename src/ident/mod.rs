@@ -61,8 +61,9 @@ pub enum IdentError {
     #[error(
         "{block} block: no usable band between {low_hz} and {high_hz} Hz: the outputs are nowhere \
          coherent with the inputs computed from the angles (best multiple coherence {best_coherence:.2}, \
-         at least {min:.2} needed over {bins} bins); check the angle columns and the block's outputs, \
-         give band_hz, or leave this block out (settings \"blocks\")"
+         at least {min:.2} needed over {bins} bins); check the angle columns and the block's outputs\
+         {}",
+        or_leave_out(*others, "give band_hz")
     )]
     NoUsableBand {
         /// The block.
@@ -77,14 +78,17 @@ pub enum IdentError {
         min: f64,
         /// Bins needed ([`band::MIN_BAND_BINS`]).
         bins: usize,
+        /// Whether the run has other blocks to identify without this one (the advice to leave
+        /// it out means nothing on a single-block run; [`IdentError::alone`]).
+        others: bool,
     },
     /// An input direction of a block carries (almost) no power in the band: a stand axis held
     /// still. Its response cannot be identified from this run.
     #[error(
         "{block} block: axis {axis} not excited between {low_hz} and {high_hz} Hz (weakest input \
-         direction has {relative_power:.1e} of the strongest's power): {}, identify from a run \
-         that does, or leave this block out (settings \"blocks\")",
-        excitation::advice(axis)
+         direction has {relative_power:.1e} of the strongest's power): {}{}",
+        excitation::advice(axis),
+        or_leave_out(*others, "identify from a run that does")
     )]
     NotExcited {
         /// The block (`"gyro"` or `"accel"`).
@@ -97,6 +101,8 @@ pub enum IdentError {
         high_hz: f64,
         /// Weakest over strongest principal input power over the band.
         relative_power: f64,
+        /// Whether the run has other blocks to identify without this one.
+        others: bool,
     },
     /// A matrix that must be inverted is singular.
     #[error("{0} is singular")]
@@ -123,7 +129,27 @@ pub enum FactorStageError {
     NoCausalStage,
 }
 
+/// The end of a refusal's advice: `, {alternative}, or leave this block out (settings "blocks")`
+/// when the run has other blocks, else `, or {alternative}`.
+fn or_leave_out(others: bool, alternative: &str) -> String {
+    if others {
+        format!(", {alternative}, or leave this block out (settings \"blocks\")")
+    } else {
+        format!(", or {alternative}")
+    }
+}
+
 impl IdentError {
+    /// The refusal of a block that is the only one its run has: its advice no longer offers to
+    /// leave it out (nothing would be left).
+    #[must_use]
+    pub fn alone(mut self) -> Self {
+        if let IdentError::NoUsableBand { others, .. } | IdentError::NotExcited { others, .. } = &mut self {
+            *others = false;
+        }
+        self
+    }
+
     /// Whether the error is the user's input (the run, or settings that do not fit it): exit
     /// status 2 and an error panel, where anything else is our fault (exit status 1).
     #[must_use]

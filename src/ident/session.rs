@@ -338,7 +338,11 @@ impl Session {
             })
             .collect();
         // The first block's error in the settings' order, whichever thread failed first.
-        let mut identified: Vec<BlockIdentification> = identified.into_iter().collect::<Result<_, _>>()?;
+        let alone = blocks.len() == 1;
+        let mut identified: Vec<BlockIdentification> = identified
+            .into_iter()
+            .collect::<Result<_, _>>()
+            .map_err(|e: IdentError| if alone { e.alone() } else { e })?;
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
             for b in &mut identified {

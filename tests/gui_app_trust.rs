@@ -50,6 +50,13 @@ fn results_show_the_band_the_warnings_and_the_rejected_orders_of_a_real_run() {
     let run = &harness.state().runs()[0];
     let id = run.identification.as_ref().expect("identified");
     let m = id.model.blocks.get("gyro").expect("gyro");
+    // The settings ask for both blocks; the gyro-only run says it has no accelerometer.
+    assert_eq!(
+        harness
+            .query_all_by_label(imu_attest::gui::view::controls::NOT_IN_THIS_RUN)
+            .count(),
+        1
+    );
     // The band found from the data, shown as such.
     assert!(m.band_hz[1] < 20.0, "{:?}", m.band_hz);
     harness.get_by_label(&band_label("gyro", m, true));
@@ -162,6 +169,13 @@ fn the_app_exports_the_model_file_identify_writes() {
         .enumerate()
     {
         let mut harness = app(vec![path.clone()]);
+        // The sample has both blocks; the real run only a gyro.
+        assert_eq!(
+            harness
+                .query_all_by_label(imu_attest::gui::view::controls::NOT_IN_THIS_RUN)
+                .count(),
+            k
+        );
         let exported = dir.path().join(format!("app{k}.json"));
         harness
             .state_mut()

@@ -19,6 +19,9 @@ const WINDOWS: [Window; 4] = [
 ];
 const DETRENDS: [Detrend; 3] = [Detrend::None, Detrend::Mean, Detrend::Linear];
 
+/// Beside a block's box when the run shown has no such block.
+pub const NOT_IN_THIS_RUN: &str = "(not in this run)";
+
 /// Draws the panel for `settings`, validated against `run` (its span's samples) when one is
 /// selected.
 pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, commands: &mut Vec<Command>) {
@@ -78,7 +81,16 @@ pub fn show(ui: &mut egui::Ui, settings: &Settings, run: Option<&RunSummary>, co
         for block in Block::BOTH {
             // An empty list means every block the run has.
             let mut on = s.blocks.is_empty() || s.blocks.contains(&block);
-            if ui.checkbox(&mut on, block.name()).changed() {
+            let checkbox = ui.checkbox(&mut on, block.name());
+            // The settings are every run's: a block this run lacks stays asked for the others.
+            if let Some(run) = run.filter(|r| !r.blocks.contains(&block)) {
+                ui.weak(NOT_IN_THIS_RUN).on_hover_text(format!(
+                    "{} has no {} columns: the setting applies to the runs that have them",
+                    run.file_name,
+                    block.name()
+                ));
+            }
+            if checkbox.changed() {
                 if s.blocks.is_empty() {
                     s.blocks = Block::BOTH.to_vec();
                 }

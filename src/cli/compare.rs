@@ -43,7 +43,15 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         let mut session = Session::new(Arc::new(super::progress::load_run(r)?));
         let (model, lines) = identify_in(r, &mut session, &settings, &[])?;
         models.push(model);
-        messages.extend(lines);
+        // Printed together at the end, each warning names its run (the notes already do).
+        let run = super::progress::display_name(r);
+        messages.extend(lines.into_iter().map(|l| {
+            l.replacen(
+                "imu-attest: warning: ",
+                &format!("imu-attest: warning: {run}: "),
+                1,
+            )
+        }));
         if diagnose {
             let report =
                 diagnose_session(&mut session, &settings, &DiagnoseOptions::default()).map_err(|e| {

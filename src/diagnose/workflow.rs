@@ -2,6 +2,7 @@
 //! effect while the criterion gains, and write the report.
 
 use crate::ident::band::BandSetting;
+use crate::ident::stretches::MIN_STRETCHES;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -130,13 +131,14 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         let dof = 3.0 * design.dof_per_channel();
         let mut base =
             State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
-        // Only stretches on the settings' own segment: on a record too short for them the
-        // stationarity comes from a few stretches of a shorter segment (a floor on the
-        // deviations), whose trend is too weak a test to skip the re-timing search on.
+        // Only stretches on the settings' own segment, and all of them fitted: on a record too
+        // short for them the stationarity comes from a few stretches of a shorter segment (a
+        // floor on the deviations), and with a stretch named without a delay from three, whose
+        // trend is too weak a test to skip the re-timing search on.
         base.drift_hint = b
             .stationarity
             .as_deref()
-            .filter(|st| st.segment_len.is_none())
+            .filter(|st| st.segment_len.is_none() && st.stretches.len() >= MIN_STRETCHES)
             .map(|st| [st.tau_trend, st.tau_trend_std]);
         if let Some(upper) = upper {
             base.set_upper(upper);

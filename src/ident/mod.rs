@@ -78,8 +78,9 @@ pub enum IdentError {
         min: f64,
         /// Bins needed ([`band::MIN_BAND_BINS`]).
         bins: usize,
-        /// Whether the run has other blocks to identify without this one (the advice to leave
-        /// it out means nothing on a single-block run; [`IdentError::alone`]).
+        /// Whether other blocks are identified beside this one (the advice to leave it out means
+        /// nothing when it is the only block of the run, or the only one asked for;
+        /// [`IdentError::alone`]).
         others: bool,
     },
     /// An input direction of a block carries (almost) no power in the band: a stand axis held
@@ -101,7 +102,7 @@ pub enum IdentError {
         high_hz: f64,
         /// Weakest over strongest principal input power over the band.
         relative_power: f64,
-        /// Whether the run has other blocks to identify without this one.
+        /// Whether other blocks are identified beside this one ([`IdentError::alone`]).
         others: bool,
     },
     /// A matrix that must be inverted is singular.

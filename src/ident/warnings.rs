@@ -591,10 +591,11 @@ fn write_stretches_without_delay(
     };
     write!(
         f,
-        "no delay fits {which} of the record ({}) within +-0.3 s nor the record's own range: there \
-         the block's response is not the record's (a recording fault, a clock jump, motion folded \
-         about Nyquist); the stationarity check and the deviations' floor rest on the other \
-         {fitted} stretches",
-        spans.join(", ")
+        "no delay fits {which} of the record ({}) within the stationarity check's reach \
+         (+-{} s: the best is its end): there the block's response is not the record's (a \
+         recording fault, a clock jump, motion folded about Nyquist); the stationarity check and \
+         the deviations' floor rest on the other {fitted} stretches",
+        spans.join(", "),
+        super::stretches::STRETCH_DELAY_REACH_S
     )
 }

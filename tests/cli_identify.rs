@@ -38,6 +38,20 @@ fn identify_with(run: &Path, settings: &Path, out: &Path) -> std::process::Outpu
     ])
 }
 
+/// `identify RUN --out OUT` with the default settings.
+fn identify_default(run: &Path, out: &Path) -> std::process::Output {
+    imu_attest(&["identify", run.to_str().unwrap(), "--out", out.to_str().unwrap()])
+}
+
+/// The stderr of a refusal: exit status 2, one line, nothing written to `out`.
+fn one_line_refusal(o: &std::process::Output, out: &Path) -> String {
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(!out.exists(), "nothing written: {stderr}");
+    stderr
+}
+
 fn keys(v: &serde_json::Value) -> Vec<String> {
     let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
     k.sort();
@@ -374,19 +388,10 @@ fn a_dead_block_is_refused_with_how_to_keep_the_other() {
     std::fs::write(&dead_run, dead).unwrap();
     std::fs::copy(run.with_extension("json"), dead_run.with_extension("json")).unwrap();
     let out = dir.path().join("m.json");
-    let o = imu_attest(&[
-        "identify",
-        dead_run.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let stderr = one_line_refusal(&identify_default(&dead_run, &out), &out);
     for part in ["dead_accel.csv", "accel block", "no usable band", "\"blocks\""] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }
-    assert!(!out.exists());
     let settings = dir.path().join("gyro.json");
     std::fs::write(&settings, r#"{"blocks": ["gyro"]}"#).unwrap();
     let o = identify_with(&dead_run, &settings, &out);
@@ -412,12 +417,7 @@ fn notices_are_printed_and_join_a_refusal_they_explain() {
     std::fs::write(&extra, with_extra).unwrap();
     std::fs::copy(run.with_extension("json"), extra.with_extension("json")).unwrap();
     let out = dir.path().join("m.json");
-    let o = imu_attest(&[
-        "identify",
-        extra.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = identify_default(&extra, &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(
@@ -428,15 +428,7 @@ fn notices_are_printed_and_join_a_refusal_they_explain() {
 
     std::fs::remove_file(extra.with_extension("json")).unwrap();
     std::fs::remove_file(&out).unwrap();
-    let o = imu_attest(&[
-        "identify",
-        extra.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let stderr = one_line_refusal(&identify_default(&extra, &out), &out);
     for part in [
         "axis fy not excited",
         "accel_lever_arm_m",
@@ -445,7 +437,6 @@ fn notices_are_printed_and_join_a_refusal_they_explain() {
     ] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }
-    assert!(!out.exists());
 }
 
 /// A refusal on a single-block run does not offer to leave its only block out: the first 4.4 s
@@ -457,12 +448,8 @@ fn a_single_block_refusal_does_not_offer_to_leave_the_block_out() {
     let settings = dir.path().join("rest.json");
     std::fs::write(&settings, r#"{"span_s": [21.6, 26.0]}"#).unwrap();
     let out = dir.path().join("m.json");
-    let o = identify_with(&run, &settings, &out);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let stderr = one_line_refusal(&identify_with(&run, &settings, &out), &out);
     assert!(stderr.contains("gyro block: no usable band"), "{stderr}");
     assert!(stderr.trim_end().ends_with("or give band_hz"), "{stderr}");
     assert!(!stderr.contains("leave this block out"), "{stderr}");
-    assert!(!out.exists());
 }

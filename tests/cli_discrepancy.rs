@@ -118,3 +118,37 @@ fn bad_input_exits_2_with_one_line_and_writes_nothing() {
     one_line_error(&imu_attest(&["discrepancy", "--out", out_s]));
     assert!(!out.exists(), "a failed command left an output file");
 }
+
+/// A real run whose optical reference is noise above its slow motion (`tests/data/real`, BROAD,
+/// CC BY 4.0): the diagnosis's band ends where its inputs are not the motion, the report holds
+/// the limit and the band searched, and the command line says so once the report is written.
+#[test]
+fn the_band_ended_below_the_reference_s_noise_is_said_and_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad11_slow_translation.csv.gz");
+    let out = dir.path().join("report.json");
+    let o = imu_attest(&[
+        "discrepancy",
+        run.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with("imu-attest: note: gyro block: the diagnosis searched 0.10-"))
+        .collect();
+    assert_eq!(said.len(), 1, "{err}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let gyro = &report["blocks"]["gyro"];
+    let top = gyro["band_hz"][1].as_f64().unwrap();
+    let limit = &gyro["input_limit"];
+    assert_eq!(limit["band_ended"], serde_json::json!(true), "{gyro}");
+    assert!(top < limit["untrusted_hz"][0].as_f64().unwrap(), "{gyro}");
+    assert!(
+        said[0].contains(&format!("{top:.2} Hz, not up to 40.0 Hz")),
+        "{}",
+        said[0]
+    );
+}

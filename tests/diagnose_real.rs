@@ -1,12 +1,14 @@
 //! Issue 15 on the three real recordings (`tests/data/real`, BROAD, CC BY 4.0; see the README
 //! there), default settings: every finding the diagnosis reports closes part of its block's
-//! worst-channel gap, none is a resonance at the band's edge or damped beyond a peak, the two
-//! runs without disturbances (fast rotation, slow translation) reach the same verdict, and
-//! where both name the same effect its sizes agree within their standard deviations (the same
+//! worst-channel gap, none is a resonance at the band's edge or damped beyond a peak, the
+//! paper's model the search starts from is the unit's (K within 2 % of the identity, the delay
+//! 3.9-4.5 ms: the slow run's band ends where the reference's noise takes over, and the report
+//! says so), and where the two runs without disturbances (fast rotation, slow translation) name
+//! the same effect its sizes agree within their standard deviations (the same
 //! gyro on both; before the sandwich widening of `diagnose::uncertainty` the slow run's `k2` z
 //! lay 3.7 of its standard deviations from the fast run's), and no run's quadratic scale factor
 //! is presented as a size to certify without a caveat (undetermined, or not reproduced by the
-//! record's halves: `diagnose::halves`). The tapping run (finger taps the reference does not
+//! record's halves or quarters: `diagnose::halves`). The tapping run (finger taps the reference does not
 //! see) is compared too, and the comparison printed, not asserted.
 
 use std::path::Path;
@@ -82,11 +84,46 @@ fn findings_on_real_runs_close_the_gap_stay_inside_the_band_and_agree_between_ru
                 assert!(zeta <= 0.6, "{name}: a resonance damped {zeta}");
             }
         }
+        // The paper's model the search starts from is the unit's (README there: K close to the
+        // identity, the delay about 4.2 ms). Fitted over 0.1-40 Hz, where the optical
+        // reference's noise takes over from about 11 Hz, the slow run's read 0.88 / 1.00 / 0.85
+        // and every cell of its disagreement map was a misfit: the band now ends where its
+        // inputs are not the motion, and the report says so.
+        let gyro = &report.blocks["gyro"];
+        let k = gyro.k_base;
+        let off = (0..9)
+            .map(|e| (k[e / 3][e % 3] - f64::from(u8::from(e / 3 == e % 3))).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / 3f64.sqrt();
+        eprintln!(
+            "{name}: searched {:?} Hz, K_base {off:.4} off identity, tau {:.3} ms",
+            gyro.band_hz,
+            gyro.tau_base_s * 1e3
+        );
+        assert!(
+            off < 0.02,
+            "{name}: the diagnosis's K_base is {off:.3} off identity: {k:?}"
+        );
+        assert!(
+            (3.9e-3..4.5e-3).contains(&gyro.tau_base_s),
+            "{name}: the diagnosis's delay {} s",
+            gyro.tau_base_s
+        );
+        if let Some(limit) = &gyro.input_limit {
+            assert!(limit.band_ended, "{name}: the auto band's limit not applied");
+            assert!(
+                gyro.band_hz[1] < limit.untrusted_hz[0] && limit.untrusted_hz[1] <= limit.searched_hz[1],
+                "{name}: searched {:?}, the inputs untrusted over {:?}",
+                gyro.band_hz,
+                limit.untrusted_hz
+            );
+        }
         reports.push(report);
     }
-    assert_eq!(
-        reports[0].verdict, reports[1].verdict,
-        "the two undisturbed runs of the same gyro reach different verdicts"
+    assert!(
+        reports[1].blocks["gyro"].input_limit.is_some(),
+        "the slow run's reference noise above its motion not said"
     );
     let findings: Vec<&[Finding]> = reports.iter().map(|r| r.findings.as_slice()).collect();
     let names: Vec<String> = RUNS.iter().map(|s| (*s).to_owned()).collect();

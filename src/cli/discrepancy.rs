@@ -92,6 +92,22 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         w.write_all(b"\n")
     })
     .map_err(|e| CliError::Input(e.to_string()))?;
-    super::identify::print_messages(&super::progress::note_lines(run_path, &notices));
+    let mut lines = super::progress::note_lines(run_path, &notices);
+    lines.extend(input_limit_lines(&report));
+    super::identify::print_messages(&lines);
     Ok(())
+}
+
+/// Each block's input limit ([`crate::diagnose::input_limit`]): a note where the band was ended
+/// below it, a warning where the user's band was kept over it.
+pub(super) fn input_limit_lines(report: &crate::diagnose::Report) -> Vec<String> {
+    report
+        .blocks
+        .iter()
+        .filter_map(|(name, b)| {
+            let limit = b.input_limit.as_ref()?;
+            let kind = if limit.band_ended { "note" } else { "warning" };
+            Some(format!("imu-attest: {kind}: {}", limit.words(name)))
+        })
+        .collect()
 }

@@ -26,6 +26,7 @@ pub mod extend;
 pub mod fit;
 pub mod gate;
 pub mod halves;
+pub mod input_limit;
 pub mod map;
 pub mod profile;
 pub mod report;

@@ -130,6 +130,13 @@ pub struct BlockReport {
     pub residual_psd: [ResidualPsd; 2],
     /// The disturbance density the model expects.
     pub expected_psd: ResidualPsd,
+    /// The band searched, Hz.
+    #[serde(default)]
+    pub band_hz: [f64; 2],
+    /// Where the inputs from the angles are not the motion, at the top of the band asked for
+    /// (the band then ended below it, or the user's band kept: [`super::input_limit`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_limit: Option<super::input_limit::InputLimit>,
     /// Per-channel gap of the model given with `--model`, as it is (no refit), dB.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub given_model_gap_db: Option<[f64; 3]>,

@@ -10,6 +10,7 @@ use super::DiagnoseError;
 use super::candidates::{Candidate, Extension, candidates};
 use super::design::{Design, DesignSignals};
 use super::halves::{HalvesSource, compare_halves};
+use super::input_limit::{InputLimit, input_limit};
 use super::map::{disagreement_map, power, psd_cells};
 use super::report::{
     BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
@@ -93,6 +94,9 @@ pub struct PreparedBlock {
     pub block: Block,
     /// The diagnosis's band, Hz.
     pub band_hz: [f64; 2],
+    /// Where the inputs from the angles are not the motion, at the top of the band asked for
+    /// ([`super::input_limit`]).
+    pub input_limit: Option<InputLimit>,
     /// The paper's model `K e^(-tau s)` fitted on the whole-record design (with the stretches'
     /// delay trend as the clock-drift hint).
     pub base: State,
@@ -110,6 +114,9 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     // The diagnosis searches the whole band asked for (with "auto", the auto band's search
     // limits): a missing effect lowers the coherence, so the usable band of the identification
     // would hide the very misfit the diagnosis looks for.
+    // Only where the inputs are not the motion does an auto band end below the search limits
+    // ([`super::input_limit`]).
+    let given = matches!(settings.band_hz, BandSetting::Fixed(_));
     let band_hz = BandSetting::Fixed(settings.band_hz.search_limits(run.sample_rate_hz));
     let settings = Settings {
         order: OrderSetting::Fixed(0).into(),
@@ -120,14 +127,30 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     let span = session.span(&settings)?;
     let mut blocks = Vec::new();
     for b in &id.blocks {
-        let band = b.band_hz;
         let name = b.block.name();
-        let (design, upper) =
-            block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
-                block: name,
-                low: band[0],
-                high: band[1],
-            })?;
+        let mut input_limit = input_limit(b, b.band_hz, given);
+        let ended = input_limit.as_ref().filter(|l| l.band_ended).and_then(|l| {
+            Some((
+                l.band_hz(),
+                block_design(run, &id.motion.euler, b, l.band_hz(), &span)?,
+            ))
+        });
+        let (band, (design, upper)) = if let Some(found) = ended {
+            found
+        } else {
+            // Too few bins below the inputs' limit: the band asked for, with the limit said.
+            if let Some(l) = input_limit.as_mut() {
+                l.band_ended = false;
+            }
+            let band = b.band_hz;
+            let found =
+                block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
+                    block: name,
+                    low: band[0],
+                    high: band[1],
+                })?;
+            (band, found)
+        };
         let dof = 3.0 * design.dof_per_channel();
         let mut base =
             State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
@@ -146,6 +169,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,
+            input_limit,
             base,
             dof,
         });
@@ -427,6 +451,8 @@ fn diagnose_block(
     }
     let findings = accepted.into_iter().map(|(_, _, finding)| finding).collect();
     let mut report = block_report(base, &state, first_round, dof);
+    report.band_hz = band;
+    report.input_limit.clone_from(&pb.input_limit);
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     (report, findings)
 }
@@ -539,6 +565,8 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
             psd_cells(d, &power(&last.residual), PSD_CELLS),
         ],
         expected_psd: psd_cells(d, &d.expected, PSD_CELLS),
+        band_hz: [0.0; 2],
+        input_limit: None,
         given_model_gap_db: None,
     }
 }

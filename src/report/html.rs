@@ -482,6 +482,19 @@ fn diagnosis(h: &mut String, run: &RunReport) {
             h.push_str("</ol>");
         }
     }
+    if let Ok(report) = &run.diagnosis {
+        // Where the search's band ended below the band asked for, or the user's band reaches
+        // where the inputs are not the motion.
+        for (name, b) in &report.blocks {
+            let range = format!("{}&ndash;{} Hz", sig(b.band_hz[0], 3), sig(b.band_hz[1], 3));
+            let _ = write!(h, "<p>{} block: searched {range}.", esc(name));
+            if let Some(limit) = &b.input_limit {
+                let class = if limit.band_ended { "" } else { " class=\"warn\"" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words(name)));
+            }
+            h.push_str("</p>");
+        }
+    }
 }
 
 fn spec_table(h: &mut String, checks: &[&Check]) {

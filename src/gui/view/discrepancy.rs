@@ -96,12 +96,22 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
 
 fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
     ui.label(format!(
-        "{name}: worst-channel gap {:.2} dB -> {:.2} dB; chi2/dof {:.3} -> {:.3}",
+        "{name}: searched {:.2}-{:.2} Hz; worst-channel gap {:.2} dB -> {:.2} dB; chi2/dof {:.3} -> {:.3}",
+        b.band_hz[0],
+        b.band_hz[1],
         b.gap_db[0].iter().copied().fold(f64::NEG_INFINITY, f64::max),
         b.gap_db[1].iter().copied().fold(f64::NEG_INFINITY, f64::max),
         b.chi2_per_dof[0],
         b.chi2_per_dof[1],
     ));
+    if let Some(limit) = &b.input_limit {
+        let words = limit.words(name);
+        if limit.band_ended {
+            ui.label(words);
+        } else {
+            ui.colored_label(ui.visuals().error_fg_color, words);
+        }
+    }
     ui.horizontal(|ui| {
         ui.vertical(|ui| {
             ui.weak("disagreement before");

@@ -33,6 +33,30 @@ fn diagnose(harness: &mut Harness<'static, App>) {
     harness.run_steps(4);
 }
 
+/// The band searched is shown for each block; where the search ended below the band asked for
+/// (a real run whose optical reference is noise above its slow motion), the words say why, and
+/// on the clean sample nothing is said.
+#[test]
+fn the_band_searched_and_where_the_inputs_are_not_the_motion_are_shown() {
+    let real =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad11_slow_translation.csv.gz");
+    let mut harness = app(vec![real]);
+    diagnose(&mut harness);
+    harness.get_by_label_contains("gyro: searched 0.10-");
+    harness.get_by_label_contains("gyro block: the diagnosis searched 0.10-");
+    harness.get_by_label_contains("verdict: no missing effect (searched only gyro 0.10-");
+    let mut harness = app(vec![sample_run_path().unwrap()]);
+    diagnose(&mut harness);
+    harness.get_by_label_contains("gyro: searched 0.10-40.00 Hz");
+    assert!(
+        harness
+            .query_all_by_label_contains("the diagnosis searched")
+            .next()
+            .is_none(),
+        "a limit said on the clean sample"
+    );
+}
+
 #[test]
 fn the_clean_sample_run_has_no_missing_effect() {
     let mut harness = app(vec![sample_run_path().unwrap()]);

@@ -99,14 +99,14 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 }
 
 /// Each block's input limit ([`crate::diagnose::input_limit`]): a note where the band was ended
-/// below it, a warning where the user's band was kept over it.
+/// below it, a warning where the band searched reaches into it.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report) -> Vec<String> {
     report
         .blocks
         .iter()
         .filter_map(|(name, b)| {
             let limit = b.input_limit.as_ref()?;
-            let kind = if limit.band_ended { "note" } else { "warning" };
+            let kind = if limit.is_warning() { "warning" } else { "note" };
             Some(format!("imu-attest: {kind}: {}", limit.words(name)))
         })
         .collect()

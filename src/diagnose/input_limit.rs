@@ -12,23 +12,33 @@
 //!
 //! The two causes are told apart by the gain. Input noise attenuates the regression's gain where
 //! it dominates (errors in variables); a reference smoothed or interpolated from a slower rate
-//! raises it; neither turns the phase. No effect of the catalogue changes the gain across the
-//! band without a phase of its own: a lag, a resonance, a clock drift or a skew turn the phase,
-//! a vibration tone is not coherent with the input, and a memoryless nonlinearity's linear part
-//! is one gain at every frequency for Gaussian motion (Bussgang). So when the order-0 fit over
-//! the search band finds an even gain change (the identifier's `gain_changes_across_band`, its
-//! rise beyond its own deviation and moving `K` by more than `K`'s deviation) **and** the usable
-//! band ends below the band's top, the loss of coherence at the top is the inputs': with
-//! `band_hz: "auto"` the diagnosis's band ends at the usable band's top, and the report says so
-//! ([`InputLimit`]). A band the user gives is kept as given, and the report says where inside it
-//! the inputs are not the motion. The band's bottom is kept: the outputs' own low-frequency
-//! noise (a gyro's `1/f`) lowers the coherence there too, and it is the block's.
+//! raises it; neither turns the phase. A block's own dynamics bend the gain too (below its
+//! corner a first-order lag is a delay, which `tau` takes, and an even droop `-(f/f_c)^2 / 2`),
+//! but with a phase that the identifier's order selection sees: fitted again over the even gain
+//! (`ident::even_gain`), a lag still needs its pole. No other catalogue effect changes the gain
+//! across the band (a tone is not coherent with the input; a memoryless nonlinearity's linear
+//! part is one gain at every frequency for Gaussian motion, Bussgang). So the inputs' loss is
+//! taken to be the angles' when three things hold: the order-0 fit over the band finds an even
+//! gain change (the identifier's `gain_changes_across_band`: its rise beyond its own deviation and
+//! moving `K` by more than `K`'s deviation), the identifier under the user's order keeps order 0
+//! over the band (no dynamics of the block's own: `dynamics` below), and the outputs' coherence
+//! with the inputs is below the usable band's threshold from some bin up to the band's top
+//! ([`crate::ident::band::untrusted_ranges`]). With `band_hz: "auto"` the diagnosis's band then
+//! ends below that range, and the report says so ([`InputLimit`]); too few bins below it leave the
+//! band as it was, and that is said too. A band the user gives is kept as given, and the report
+//! says where inside it the inputs are not the motion. The band's bottom is kept: the outputs'
+//! own low-frequency noise (a gyro's `1/f`) lowers the coherence there too, and it is the
+//! block's.
+//!
+//! What an ended band cannot test is said with it: a clock drift's phase, a resonance, a lag's
+//! corner or a tone above it (no line is searched above an ended band: the residual there is
+//! the model driven by the angles' noise, `super::workflow`).
 //!
 //! Units: Hz; the gain change is relative (`-0.9`: the gain falls by 90 % across the band).
 
 use serde::{Deserialize, Serialize};
 
-use crate::ident::band::{native_bins, usable_band};
+use crate::ident::band::{native_bins, untrusted_ranges};
 use crate::ident::identify::BlockIdentification;
 use crate::ident::warnings::IdentWarning;
 
@@ -38,47 +48,62 @@ use crate::ident::warnings::IdentWarning;
 pub struct InputLimit {
     /// The band asked for, Hz (the auto band's search limits, or the user's band).
     pub searched_hz: [f64; 2],
-    /// The usable band's top inside it, Hz: the last bin whose coherence says the inputs are
-    /// the motion's.
+    /// The last bin below the untrusted range, Hz.
     pub usable_top_hz: f64,
-    /// `[first, last]` bin frequency above the usable band's top, up to the band's top, Hz: the
-    /// outputs' coherence with the inputs below the usable band's threshold there.
+    /// `[first, last]` bin frequency of the range that reaches the band's top with the outputs'
+    /// coherence with the inputs below the usable band's threshold, Hz.
     pub untrusted_hz: [f64; 2],
     /// The gain's relative change across the searched band with no phase of its own (the even
-    /// gain of the order-0 fit), and its standard deviation.
+    /// gain of the order-0 fit).
     pub gain_change: f64,
     /// Standard deviation of `gain_change`.
     pub gain_change_std: f64,
-    /// Whether the diagnosis's band was ended below `untrusted_hz` (the auto band); `false`: the
-    /// user's band was kept as given.
+    /// Whether the diagnosis's band was ended at `usable_top_hz`; `false`: the band asked for was
+    /// searched (the user's, or too few bins below the range).
     pub band_ended: bool,
+    /// Whether the band was the user's (kept as given).
+    #[serde(default)]
+    pub given: bool,
 }
 
 /// The input limit of `b`, identified (order 0) over `searched_hz`; `given`: the band is the
-/// user's (kept as given). `None` when the order-0 fit shows no even gain change, when the
-/// usable band reaches the band's top, or when no band is usable at all (nothing then tells the
-/// inputs' loss from the block's).
+/// user's (kept as given); `dynamics`: the identifier under the user's order chose poles over
+/// that band (the gain's change may be the block's own: nothing is said). `None` as well when the
+/// order-0 fit shows no even gain change, or no untrusted range reaches the band's top, or
+/// nothing below it is trusted.
 #[must_use]
-pub fn input_limit(b: &BlockIdentification, searched_hz: [f64; 2], given: bool) -> Option<InputLimit> {
+pub fn input_limit(
+    b: &BlockIdentification,
+    searched_hz: [f64; 2],
+    given: bool,
+    dynamics: bool,
+) -> Option<InputLimit> {
+    if dynamics {
+        return None;
+    }
     let (gain_change, gain_change_std) = b.warnings.iter().find_map(|w| match w {
         IdentWarning::GainChangesAcrossBand { rise, rise_std, .. } => Some((*rise, *rise_std)),
         _ => None,
     })?;
-    let top = usable_band(&b.spectra, searched_hz)?[1];
     let f = &b.spectra.frequency_hz;
-    let above: Vec<f64> = native_bins(&b.spectra, searched_hz)
+    let bins: Vec<f64> = native_bins(&b.spectra, searched_hz)
         .into_iter()
         .map(|k| f[k])
-        .filter(|&x| x > top)
         .collect();
-    let (&first, &last) = (above.first()?, above.last()?);
+    let untrusted = *untrusted_ranges(&b.spectra, searched_hz).last()?;
+    if untrusted[1] < *bins.last()? {
+        return None;
+    }
+    let first = bins.iter().position(|&x| x >= untrusted[0])?;
+    let usable_top_hz = *bins.get(first.checked_sub(1)?)?;
     Some(InputLimit {
         searched_hz,
-        usable_top_hz: top,
-        untrusted_hz: [first, last],
+        usable_top_hz,
+        untrusted_hz: untrusted,
         gain_change,
         gain_change_std,
         band_ended: !given,
+        given,
     })
 }
 
@@ -94,6 +119,13 @@ impl InputLimit {
         }
     }
 
+    /// Whether the line is a warning (the band searched reaches where the inputs are not the
+    /// motion) rather than a note (it was ended below).
+    #[must_use]
+    pub fn is_warning(&self) -> bool {
+        !self.band_ended
+    }
+
     /// The limit in the lab's words, for the command line, the app and the certificate.
     #[must_use]
     pub fn words(&self, block_name: &str) -> String {
@@ -107,19 +139,85 @@ impl InputLimit {
         };
         let why = format!(
             "the outputs are not coherent with the inputs from the angles, and across the band the gain {gain} \
-             with no phase of its own, the mark of the angles' noise or band limit (the reference's), not of the block"
+             with no phase of its own (the block's identified model has no dynamics), the mark of the angles' \
+             noise or band limit (the reference's), not of the block"
         );
         if self.band_ended {
             format!(
                 "{block_name} block: the diagnosis searched {:.2}-{:.2} Hz, not up to {:.1} Hz: above, {why}; a \
-                 comparison there says nothing about the block (give band_hz to search there anyway)",
-                self.searched_hz[0], self.usable_top_hz, self.searched_hz[1]
+                 comparison there says nothing about the block, and a clock drift, or a lag, resonance or tone \
+                 above {:.1} Hz, cannot be tested on this run (give band_hz to search there anyway)",
+                self.searched_hz[0], self.usable_top_hz, self.searched_hz[1], self.usable_top_hz
             )
-        } else {
+        } else if self.given {
             format!(
                 "{block_name} block: in {lo:.2}-{hi:.2} Hz of the given band {why}; findings there may be the \
                  reference's (band_hz \"auto\" leaves that part out)"
             )
+        } else {
+            format!(
+                "{block_name} block: in {lo:.2}-{hi:.2} Hz {why}, but too few bins lie below it for a diagnosis: \
+                 the whole band was searched, and findings there may be the reference's"
+            )
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::InputLimit;
+
+    fn limit(band_ended: bool, given: bool) -> InputLimit {
+        InputLimit {
+            searched_hz: [0.1, 40.0],
+            usable_top_hz: 11.16,
+            untrusted_hz: [11.23, 39.97],
+            gain_change: -0.93,
+            gain_change_std: 0.01,
+            band_ended,
+            given,
+        }
+    }
+
+    #[test]
+    #[expect(
+        clippy::float_cmp,
+        reason = "the bands are copied, not computed: equal exactly"
+    )]
+    fn each_case_has_its_words_and_its_band() {
+        let ended = limit(true, false);
+        assert_eq!(ended.band_hz(), [0.1, 11.16]);
+        assert!(!ended.is_warning());
+        let w = ended.words("gyro");
+        assert!(
+            w.starts_with("gyro block: the diagnosis searched 0.10-11.16 Hz, not up to 40.0 Hz"),
+            "{w}"
+        );
+        assert!(
+            w.contains("falls by 93 %") && w.contains("cannot be tested"),
+            "{w}"
+        );
+        let given = limit(false, true);
+        assert_eq!(given.band_hz(), [0.1, 40.0]);
+        assert!(given.is_warning());
+        let w = given.words("gyro");
+        assert!(
+            w.contains("in 11.23-39.97 Hz of the given band") && w.contains("\"auto\""),
+            "{w}"
+        );
+        // The auto band too short below the range: searched whole, and not called the user's.
+        let whole = limit(false, false);
+        assert_eq!(whole.band_hz(), [0.1, 40.0]);
+        assert!(whole.is_warning());
+        let w = whole.words("gyro");
+        assert!(
+            w.contains("the whole band was searched") && !w.contains("given band"),
+            "{w}"
+        );
+        let rising = InputLimit {
+            gain_change: 0.2,
+            ..limit(true, false)
+        };
+        assert!(rising.words("accel").contains("rises by 20 %"));
     }
 }

@@ -40,12 +40,28 @@ pub struct Report {
     pub findings: Vec<Finding>,
     /// The run.
     pub source: Source,
-    /// The identifier settings used (order forced to 0: effects extend `K e^(-tau s)`).
+    /// The identifier settings used (order forced to 0: effects extend `K e^(-tau s)`), the band
+    /// as asked (each block's band searched is its `band_hz`).
     pub settings: Settings,
     /// How significance is decided.
     pub criterion: Criterion,
     /// Per block details.
     pub blocks: BTreeMap<String, BlockReport>,
+}
+
+impl Report {
+    /// Where a block's band was ended below the band asked for (its inputs not the motion
+    /// above: [`super::input_limit`]), `"gyro 0.10-11.16 Hz"`, joined: what the verdict covers.
+    /// Empty when every band is the one asked for.
+    #[must_use]
+    pub fn ended_bands(&self) -> String {
+        self.blocks
+            .iter()
+            .filter(|(_, b)| b.input_limit.as_ref().is_some_and(|l| l.band_ended))
+            .map(|(name, b)| format!("{name} {:.2}-{:.2} Hz", b.band_hz[0], b.band_hz[1]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 /// The decision rule.

@@ -117,6 +117,8 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     // Only where the inputs are not the motion does an auto band end below the search limits
     // ([`super::input_limit`]).
     let given = matches!(settings.band_hz, BandSetting::Fixed(_));
+    let asked = settings.band_hz;
+    let order = settings.order;
     let band_hz = BandSetting::Fixed(settings.band_hz.search_limits(run.sample_rate_hz));
     let settings = Settings {
         order: OrderSetting::Fixed(0).into(),
@@ -125,32 +127,50 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     };
     let id = session.identify_aside(&settings)?;
     let span = session.span(&settings)?;
+    // Where the order-0 fit sees the gain change evenly, the identifier's own fit under the
+    // user's order tells the angles' even gain from the block's dynamics.
+    let user = id
+        .blocks
+        .iter()
+        .any(gain_changes)
+        .then(|| {
+            session
+                .identify_aside(&Settings {
+                    order,
+                    ..settings.clone()
+                })
+                .ok()
+        })
+        .flatten();
     let mut blocks = Vec::new();
     for b in &id.blocks {
         let name = b.block.name();
-        let mut input_limit = input_limit(b, b.band_hz, given);
-        let ended = input_limit.as_ref().filter(|l| l.band_ended).and_then(|l| {
-            Some((
-                l.band_hz(),
-                block_design(run, &id.motion.euler, b, l.band_hz(), &span)?,
-            ))
-        });
-        let (band, (design, upper)) = if let Some(found) = ended {
-            found
-        } else {
-            // Too few bins below the inputs' limit: the band asked for, with the limit said.
-            if let Some(l) = input_limit.as_mut() {
+        let dynamics = user
+            .as_ref()
+            .and_then(|u| u.blocks.iter().find(|o| o.block == b.block))
+            .is_some_and(|o| o.structural.order > 0);
+        let mut input_limit = input_limit(b, b.band_hz, given, dynamics);
+        let mut band = b.band_hz;
+        let mut design = None;
+        if let Some(ended) = input_limit
+            .as_ref()
+            .filter(|l| l.band_ended)
+            .map(InputLimit::band_hz)
+        {
+            design = block_design(run, &id.motion.euler, b, (ended, false), &span);
+            if design.is_some() {
+                band = ended;
+            } else if let Some(l) = input_limit.as_mut() {
+                // Too few bins below the inputs' limit: the band asked for, with the limit said.
                 l.band_ended = false;
             }
-            let band = b.band_hz;
-            let found =
-                block_design(run, &id.motion.euler, b, band, &span).ok_or(DiagnoseError::TooShort {
-                    block: name,
-                    low: band[0],
-                    high: band[1],
-                })?;
-            (band, found)
-        };
+        }
+        let design = design.or_else(|| block_design(run, &id.motion.euler, b, (band, true), &span));
+        let (design, upper) = design.ok_or(DiagnoseError::TooShort {
+            block: name,
+            low: band[0],
+            high: band[1],
+        })?;
         let dof = 3.0 * design.dof_per_channel();
         let mut base =
             State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
@@ -175,7 +195,11 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         });
     }
     Ok(Prepared {
-        settings,
+        // The band as asked: each block's band searched is in its report.
+        settings: Settings {
+            band_hz: asked,
+            ..settings
+        },
         source: Source::of(run),
         blocks,
         halves: Some(HalvesSource {
@@ -183,6 +207,16 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             identification: id,
             span,
         }),
+    })
+}
+
+/// Whether the order-0 fit over the band sees the gain change across it with no phase of its own.
+fn gain_changes(b: &BlockIdentification) -> bool {
+    b.warnings.iter().any(|w| {
+        matches!(
+            w,
+            crate::ident::warnings::IdentWarning::GainChangesAcrossBand { .. }
+        )
     })
 }
 
@@ -247,7 +281,7 @@ pub(super) fn block_design(
     run: &Run,
     motion: &EulerSeries,
     b: &BlockIdentification,
-    band: [f64; 2],
+    (band, lines_above): ([f64; 2], bool),
     span: &std::ops::Range<usize>,
 ) -> Option<(Design, Option<Design>)> {
     let signals = block_signals(run, motion, b.block)?;
@@ -302,7 +336,13 @@ pub(super) fn block_design(
     let margin =
         2.0 * super::tone::EDGE_MARGIN_BINS as f64 * run.sample_rate_hz / output[0].len().max(1) as f64;
     let from = (band[1] - margin).max(band[0]);
-    let upper = Design::line_search(b.block, &output, &input, run.sample_rate_hz, [from, top]);
+    // Not above a band ended where the inputs stop being the motion: the residual there is the
+    // model driven by the angles' noise, and its roll-off passed for tones (on a `--stand real`
+    // run with a mount resonance, two to four "tones" at 27-38 Hz above a band ended at 26-28
+    // Hz, against none over the whole band).
+    let upper = lines_above
+        .then(|| Design::line_search(b.block, &output, &input, run.sample_rate_hz, [from, top]))
+        .flatten();
     Some((design, upper))
 }
 

@@ -464,10 +464,14 @@ fn diagnosis(h: &mut String, run: &RunReport) {
             );
         }
         Ok(report) if report.findings.is_empty() => {
-            h.push_str("<p>Verdict: no missing effect. The model explains the measurement to its noise.</p>");
+            h.push_str("<p>Verdict: no missing effect. The model explains the measurement to its noise");
+            only_searched(h, report);
+            h.push_str(".</p>");
         }
         Ok(report) => {
-            h.push_str("<p>Verdict: effect found.</p><ol>");
+            h.push_str("<p>Verdict: effect found");
+            only_searched(h, report);
+            h.push_str(".</p><ol>");
             for f in &report.findings {
                 let _ = write!(
                     h,
@@ -489,11 +493,23 @@ fn diagnosis(h: &mut String, run: &RunReport) {
             let range = format!("{}&ndash;{} Hz", sig(b.band_hz[0], 3), sig(b.band_hz[1], 3));
             let _ = write!(h, "<p>{} block: searched {range}.", esc(name));
             if let Some(limit) = &b.input_limit {
-                let class = if limit.band_ended { "" } else { " class=\"warn\"" };
+                let class = if limit.is_warning() { " class=\"warn\"" } else { "" };
                 let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words(name)));
             }
             h.push_str("</p>");
         }
+    }
+}
+
+/// What the verdict covers where a band was ended below the band asked for.
+fn only_searched(h: &mut String, report: &crate::diagnose::Report) {
+    let ended = report.ended_bands();
+    if !ended.is_empty() {
+        let _ = write!(
+            h,
+            " (searched only {}: the inputs above are not the motion)",
+            esc(&ended)
+        );
     }
 }
 

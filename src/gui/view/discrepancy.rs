@@ -59,6 +59,12 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         Verdict::EffectFound => "verdict: effect found",
         Verdict::NoMissingEffect => "verdict: no missing effect",
     };
+    let ended = report.ended_bands();
+    let verdict = if ended.is_empty() {
+        verdict.to_owned()
+    } else {
+        format!("{verdict} (searched only {ended}: the inputs above are not the motion)")
+    };
     ui.label(egui::RichText::new(verdict).strong());
     for f in &report.findings {
         ui.group(|ui| {
@@ -106,10 +112,10 @@ fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
     ));
     if let Some(limit) = &b.input_limit {
         let words = limit.words(name);
-        if limit.band_ended {
-            ui.label(words);
-        } else {
+        if limit.is_warning() {
             ui.colored_label(ui.visuals().error_fg_color, words);
+        } else {
+            ui.label(words);
         }
     }
     ui.horizontal(|ui| {

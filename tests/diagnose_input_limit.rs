@@ -17,6 +17,7 @@
 )]
 
 use imu_attest::diagnose::{DiagnoseOptions, Report, diagnose_run};
+use imu_attest::effect::Effect;
 use imu_attest::ident::band::BandSetting;
 use imu_attest::ident::settings::Settings;
 use imu_attest::sim::regime::Regime;
@@ -140,23 +141,50 @@ fn a_true_lag_keeps_the_whole_band_and_is_named() {
             ..StandImperfections::default()
         };
         let (_, run) = sim_common::simulated_run(&config);
-        let report =
-            diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
-        let accel = &report.blocks["accel"];
-        assert_eq!(accel.band_hz, SEARCHED, "seed {seed}: {:?}", accel.input_limit);
-        assert!(
-            report
-                .findings
-                .iter()
-                .any(|f| f.block.name() == "accel" && f.effect == imu_attest::effect::Effect::SensorLag),
-            "seed {seed}: the lag not named: {:?}",
-            report
-                .findings
-                .iter()
-                .map(|f| (f.block, f.effect))
-                .collect::<Vec<_>>()
-        );
+        // With the order selection on (the default) and with the order fixed at 0 (the
+        // identifier's order selection is still asked: without it the lag was lost).
+        for settings in [r#"{}"#, r#"{"order": 0}"#] {
+            let settings: Settings = serde_json::from_str(settings).expect("settings");
+            named_on_whole_band(&run, &settings, "accel", Effect::SensorLag, seed);
+        }
     }
+}
+
+/// A mount resonance just above the stand's 30 Hz band limit (`--stand real`): below it the
+/// resonance raises the gyro's gain with little phase and the coherence falls above the band
+/// limit, but a rising gain is not the inputs' noise: the band is kept and the resonance named.
+/// (Before the sign was asked, seed 20's band ended at 28.4 Hz and a g-sensitivity was named
+/// instead of the resonance at 31.2 Hz.)
+#[test]
+fn a_resonance_above_the_stand_s_band_limit_keeps_the_whole_band() {
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.seed = 20;
+    config.duration_s = 120.0;
+    config.rate_hz = 500.0;
+    config.effects = vec!["platform_resonance:gyro".parse().expect("effect spec")];
+    config.stand = StandImperfections::real();
+    let (_, run) = sim_common::simulated_run(&config);
+    named_on_whole_band(&run, &Settings::default(), "gyro", Effect::PlatformResonance, 20);
+}
+
+fn named_on_whole_band(
+    run: &imu_attest::run::Run,
+    settings: &Settings,
+    block: &str,
+    effect: Effect,
+    seed: u64,
+) {
+    let report = diagnose_run(run, settings, &DiagnoseOptions::default()).expect("diagnosed");
+    let b = &report.blocks[block];
+    assert_eq!(b.band_hz, SEARCHED, "seed {seed}: {:?}", b.input_limit);
+    let named: Vec<_> = report.findings.iter().map(|f| (f.block, f.effect)).collect();
+    assert!(
+        report
+            .findings
+            .iter()
+            .any(|f| f.block.name() == block && f.effect == effect),
+        "seed {seed}: {effect} not named: {named:?}"
+    );
 }
 
 #[test]

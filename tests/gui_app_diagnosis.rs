@@ -44,7 +44,7 @@ fn the_band_searched_and_where_the_inputs_are_not_the_motion_are_shown() {
     diagnose(&mut harness);
     harness.get_by_label_contains("gyro: searched 0.10-");
     harness.get_by_label_contains("gyro block: the diagnosis searched 0.10-");
-    harness.get_by_label_contains("verdict: no missing effect (searched only gyro 0.10-");
+    harness.get_by_label_contains("verdict: no missing effect (gyro only up to 11.");
     let mut harness = app(vec![sample_run_path().unwrap()]);
     diagnose(&mut harness);
     harness.get_by_label_contains("gyro: searched 0.10-40.00 Hz");

@@ -61,17 +61,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                         CliError::Internal(anyhow::anyhow!("{}: {e}", r.display()))
                     }
                 })?;
-            messages.extend(
-                super::discrepancy::input_limit_lines(&report)
-                    .into_iter()
-                    .map(|l| {
-                        l.replacen(": note: ", &format!(": note: {run}: "), 1).replacen(
-                            ": warning: ",
-                            &format!(": warning: {run}: "),
-                            1,
-                        )
-                    }),
-            );
+            messages.extend(super::discrepancy::input_limit_lines(&report, Some(&run)));
             reports.push(report);
         }
     }

@@ -93,21 +93,23 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     })
     .map_err(|e| CliError::Input(e.to_string()))?;
     let mut lines = super::progress::note_lines(run_path, &notices);
-    lines.extend(input_limit_lines(&report));
+    lines.extend(input_limit_lines(&report, None));
     super::identify::print_messages(&lines);
     Ok(())
 }
 
 /// Each block's input limit ([`crate::diagnose::input_limit`]): a note where the band was ended
-/// below it, a warning where the band searched reaches into it.
-pub(super) fn input_limit_lines(report: &crate::diagnose::Report) -> Vec<String> {
+/// below it, a warning where the band searched reaches into it; after `run: ` when the lines of
+/// several runs are printed together.
+pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
+    let run = run.map_or_else(String::new, |r| format!("{r}: "));
     report
         .blocks
         .iter()
         .filter_map(|(name, b)| {
             let limit = b.input_limit.as_ref()?;
             let kind = if limit.is_warning() { "warning" } else { "note" };
-            Some(format!("imu-attest: {kind}: {}", limit.words(name)))
+            Some(format!("imu-attest: {kind}: {run}{}", limit.words(name)))
         })
         .collect()
 }

@@ -89,6 +89,12 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                 ));
             }
         }
+        if let Ok(diagnosis) = &report.diagnosis {
+            messages.extend(super::discrepancy::input_limit_lines(
+                diagnosis,
+                Some(&path.display().to_string()),
+            ));
+        }
         reports.push(report);
     }
     let (page, checks) = render(&reports, spec.as_ref(), &utc_now());

@@ -18,10 +18,12 @@
 //! (`ident::even_gain`), a lag still needs its pole. No other catalogue effect changes the gain
 //! across the band (a tone is not coherent with the input; a memoryless nonlinearity's linear
 //! part is one gain at every frequency for Gaussian motion, Bussgang). So the inputs' loss is
-//! taken to be the angles' when three things hold: the order-0 fit over the band finds an even
-//! gain change (the identifier's `gain_changes_across_band`: its rise beyond its own deviation and
-//! moving `K` by more than `K`'s deviation), the identifier under the user's order keeps order 0
-//! over the band (no dynamics of the block's own: `dynamics` below), and the outputs' coherence
+//! taken to be the angles' when three things hold: the order-0 fit over the band finds the gain
+//! falling evenly (the identifier's `gain_changes_across_band`, its rise negative, beyond its own
+//! deviation and moving `K` by more than `K`'s deviation: input noise attenuates; a resonance
+//! above the band, or a smoothed reference, raises the gain instead), the identifier with its
+//! order selection on keeps order 0 over the band (no dynamics of the block's own: `dynamics`
+//! below), and the outputs' coherence
 //! with the inputs is below the usable band's threshold from some bin up to the band's top
 //! ([`crate::ident::band::untrusted_ranges`]). With `band_hz: "auto"` the diagnosis's band then
 //! ends below that range, and the report says so ([`InputLimit`]); too few bins below it leave the
@@ -30,9 +32,9 @@
 //! own low-frequency noise (a gyro's `1/f`) lowers the coherence there too, and it is the
 //! block's.
 //!
-//! What an ended band cannot test is said with it: a clock drift's phase, a resonance, a lag's
-//! corner or a tone above it (no line is searched above an ended band: the residual there is
-//! the model driven by the angles' noise, `super::workflow`).
+//! What an ended band cannot test is said with it: a lag's corner, a resonance or a tone above
+//! it (no line is searched above an ended band: the residual there is the model driven by the
+//! angles' noise, `super::workflow`); a clock drift is tested on less of its phase.
 //!
 //! Units: Hz; the gain change is relative (`-0.9`: the gain falls by 90 % across the band).
 
@@ -82,7 +84,7 @@ pub fn input_limit(
         return None;
     }
     let (gain_change, gain_change_std) = b.warnings.iter().find_map(|w| match w {
-        IdentWarning::GainChangesAcrossBand { rise, rise_std, .. } => Some((*rise, *rise_std)),
+        IdentWarning::GainChangesAcrossBand { rise, rise_std, .. } if *rise < 0.0 => Some((*rise, *rise_std)),
         _ => None,
     })?;
     let f = &b.spectra.frequency_hz;
@@ -139,20 +141,20 @@ impl InputLimit {
         };
         let why = format!(
             "the outputs are not coherent with the inputs from the angles, and across the band the gain {gain} \
-             with no phase of its own (the block's identified model has no dynamics), the mark of the angles' \
-             noise or band limit (the reference's), not of the block"
+             with no phase of its own, the mark of the angles' noise where the motion is weak (the reference's)"
         );
         if self.band_ended {
             format!(
-                "{block_name} block: the diagnosis searched {:.2}-{:.2} Hz, not up to {:.1} Hz: above, {why}; a \
-                 comparison there says nothing about the block, and a clock drift, or a lag, resonance or tone \
-                 above {:.1} Hz, cannot be tested on this run (give band_hz to search there anyway)",
+                "{block_name} block: the diagnosis searched {:.2}-{:.2} Hz, not up to {:.1} Hz: above, {why}, and the \
+                 identifier, its order selection on, gives the block no dynamics of its own; a comparison there \
+                 says nothing about the block: a lag, resonance or tone above {:.1} Hz cannot be tested on this \
+                 run, and a clock drift only on less of its phase (give band_hz to search there anyway)",
                 self.searched_hz[0], self.usable_top_hz, self.searched_hz[1], self.usable_top_hz
             )
         } else if self.given {
             format!(
                 "{block_name} block: in {lo:.2}-{hi:.2} Hz of the given band {why}; findings there may be the \
-                 reference's (band_hz \"auto\" leaves that part out)"
+                 reference's (band_hz \"auto\" leaves that part out where the block has no dynamics of its own)"
             )
         } else {
             format!(
@@ -214,10 +216,10 @@ mod tests {
             w.contains("the whole band was searched") && !w.contains("given band"),
             "{w}"
         );
-        let rising = InputLimit {
-            gain_change: 0.2,
+        let away = InputLimit {
+            gain_change: -1.4,
             ..limit(true, false)
         };
-        assert!(rising.words("accel").contains("rises by 20 %"));
+        assert!(away.words("accel").contains("the gain falls away"));
     }
 }

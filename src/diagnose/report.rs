@@ -51,16 +51,25 @@ pub struct Report {
 
 impl Report {
     /// Where a block's band was ended below the band asked for (its inputs not the motion
-    /// above: [`super::input_limit`]), `"gyro 0.10-11.16 Hz"`, joined: what the verdict covers.
-    /// Empty when every band is the one asked for.
+    /// above: [`super::input_limit`]), `"gyro only up to 11.16 Hz"`, joined, with the other
+    /// blocks' bands said whole: what the verdict covers. Empty when every band is the one asked
+    /// for.
     #[must_use]
     pub fn ended_bands(&self) -> String {
-        self.blocks
+        let ended = |b: &BlockReport| b.input_limit.as_ref().is_some_and(|l| l.band_ended);
+        let mut parts: Vec<String> = self
+            .blocks
             .iter()
-            .filter(|(_, b)| b.input_limit.as_ref().is_some_and(|l| l.band_ended))
-            .map(|(name, b)| format!("{name} {:.2}-{:.2} Hz", b.band_hz[0], b.band_hz[1]))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .filter(|(_, b)| ended(b))
+            .map(|(name, b)| format!("{name} only up to {:.2} Hz", b.band_hz[1]))
+            .collect();
+        if parts.is_empty() {
+            return String::new();
+        }
+        if self.blocks.values().any(|b| !ended(b)) {
+            parts.push("the other blocks over their whole band".to_owned());
+        }
+        parts.join("; ")
     }
 }
 

@@ -127,28 +127,27 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     };
     let id = session.identify_aside(&settings)?;
     let span = session.span(&settings)?;
-    // Where the order-0 fit sees the gain change evenly, the identifier's own fit under the
-    // user's order tells the angles' even gain from the block's dynamics.
-    let user = id
-        .blocks
-        .iter()
-        .any(gain_changes)
-        .then(|| {
-            session
-                .identify_aside(&Settings {
-                    order,
-                    ..settings.clone()
-                })
-                .ok()
-        })
-        .flatten();
     let mut blocks = Vec::new();
     for b in &id.blocks {
         let name = b.block.name();
-        let dynamics = user
-            .as_ref()
-            .and_then(|u| u.blocks.iter().find(|o| o.block == b.block))
-            .is_some_and(|o| o.structural.order > 0);
+        // Only an auto band is ended, and only where the order-0 fit sees the gain fall evenly;
+        // then the identifier, its order selection on, tells the inputs' noise from the block's
+        // own dynamics (a lag's droop): a user's fixed order above 0 is dynamics as given, and
+        // an identification that fails ends nothing.
+        let dynamics = !given
+            && gain_falls(b)
+            && match order.of(b.block) {
+                OrderSetting::Fixed(n) if n > 0 => true,
+                _ => session
+                    .identify_aside(&Settings {
+                        order: OrderSetting::Auto.into(),
+                        blocks: vec![b.block],
+                        ..settings.clone()
+                    })
+                    .ok()
+                    .and_then(|own| own.blocks.first().map(|o| o.structural.order > 0))
+                    .unwrap_or(true),
+            };
         let mut input_limit = input_limit(b, b.band_hz, given, dynamics);
         let mut band = b.band_hz;
         let mut design = None;
@@ -210,14 +209,11 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     })
 }
 
-/// Whether the order-0 fit over the band sees the gain change across it with no phase of its own.
-fn gain_changes(b: &BlockIdentification) -> bool {
-    b.warnings.iter().any(|w| {
-        matches!(
-            w,
-            crate::ident::warnings::IdentWarning::GainChangesAcrossBand { .. }
-        )
-    })
+/// Whether the order-0 fit over the band sees the gain fall across it with no phase of its own.
+fn gain_falls(b: &BlockIdentification) -> bool {
+    b.warnings.iter().any(
+        |w| matches!(w, crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, .. } if *rise < 0.0),
+    )
 }
 
 /// The diagnosis from a [`Prepared`] run: only the rounds of the search are done here.

@@ -505,11 +505,7 @@ fn diagnosis(h: &mut String, run: &RunReport) {
 fn only_searched(h: &mut String, report: &crate::diagnose::Report) {
     let ended = report.ended_bands();
     if !ended.is_empty() {
-        let _ = write!(
-            h,
-            " (searched only {}: the inputs above are not the motion)",
-            esc(&ended)
-        );
+        let _ = write!(h, " ({}: the inputs above are not the motion)", esc(&ended));
     }
 }
 

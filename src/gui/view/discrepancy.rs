@@ -63,7 +63,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     let verdict = if ended.is_empty() {
         verdict.to_owned()
     } else {
-        format!("{verdict} (searched only {ended}: the inputs above are not the motion)")
+        format!("{verdict} ({ended}: the inputs above are not the motion)")
     };
     ui.label(egui::RichText::new(verdict).strong());
     for f in &report.findings {

@@ -143,7 +143,7 @@ fn a_true_lag_keeps_the_whole_band_and_is_named() {
         let (_, run) = sim_common::simulated_run(&config);
         // With the order selection on (the default) and with the order fixed at 0 (the
         // identifier's order selection is still asked: without it the lag was lost).
-        for settings in [r#"{}"#, r#"{"order": 0}"#] {
+        for settings in [r"{}", r#"{"order": 0}"#] {
             let settings: Settings = serde_json::from_str(settings).expect("settings");
             named_on_whole_band(&run, &settings, "accel", Effect::SensorLag, seed);
         }

@@ -204,3 +204,38 @@ fn a_clean_run_is_searched_over_the_whole_band_and_nothing_is_said() {
         }
     }
 }
+
+/// An accelerometer mount resonance at 23.6 Hz on a `--stand real` run (30 Hz band limit): the
+/// accelerometer's band ends below the limit, the resonance inside it is named, and no line is
+/// searched above the ended band, where the residual is the model driven by the angles' noise
+/// (searched there, its roll-off passed for tones at 27-38 Hz).
+#[test]
+fn above_an_ended_band_no_tone_is_named() {
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.seed = 3;
+    config.duration_s = 120.0;
+    config.rate_hz = 500.0;
+    config.effects = vec!["platform_resonance:accel".parse().expect("effect spec")];
+    config.stand = StandImperfections::real();
+    let (_, run) = sim_common::simulated_run(&config);
+    let report = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
+    let accel = &report.blocks["accel"];
+    assert!(
+        accel.band_hz[1] < SEARCHED[1],
+        "the band not ended: {:?}",
+        accel.band_hz
+    );
+    let named: Vec<_> = report.findings.iter().map(|f| (f.block, f.effect)).collect();
+    assert!(
+        named
+            .iter()
+            .any(|&(b, e)| b.name() == "accel" && e == Effect::PlatformResonance),
+        "{named:?}"
+    );
+    assert!(
+        !named
+            .iter()
+            .any(|&(b, e)| b.name() == "accel" && e == Effect::VibrationTone),
+        "{named:?}"
+    );
+}

@@ -29,18 +29,30 @@ mod sim_common;
 
 const SEARCHED: [f64; 2] = [0.1, 40.0];
 
-fn noisy_slow_reference(seed: u64) -> (SimulatedRun, imu_attest::run::Run) {
+/// A 120 s cruise run at 500 Hz of `seed`, with `effects` hidden and the stand's angle
+/// measurement as `stand` says.
+fn cruise_run(
+    seed: u64,
+    effects: &[&str],
+    stand: StandImperfections,
+) -> (SimulatedRun, imu_attest::run::Run) {
     let mut config = SimConfig::new(Regime::Cruise);
     config.seed = seed;
     config.duration_s = 120.0;
     config.rate_hz = 500.0;
-    config.stand = StandImperfections {
+    config.effects = effects.iter().map(|e| e.parse().expect("effect spec")).collect();
+    config.stand = stand;
+    sim_common::simulated_run(&config)
+}
+
+/// A slower, noisier reference: 120 Hz linearly interpolated, 0.2 mrad of coloured noise.
+fn slow_noisy() -> StandImperfections {
+    StandImperfections {
         coloured_noise_rad: 2e-4,
         coloured_corner_hz: StandImperfections::real().coloured_corner_hz,
         reference_rate_hz: Some(120.0),
         ..StandImperfections::default()
-    };
-    sim_common::simulated_run(&config)
+    }
 }
 
 /// `||K_base - K_true||_F / ||K_true||_F` of `block` in `report`.
@@ -71,7 +83,7 @@ fn a_noisy_slower_reference_ends_the_band_and_the_base_model_is_nearer_the_truth
     };
     let (mut ended_sum, mut given_sum) = (0.0, 0.0);
     for seed in [5_u64, 6, 7, 8] {
-        let (sim, run) = noisy_slow_reference(seed);
+        let (sim, run) = cruise_run(seed, &[], slow_noisy());
         let auto = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
         let whole = diagnose_run(&run, &given, &DiagnoseOptions::default()).expect("diagnosed");
         let accel = &auto.blocks["accel"];
@@ -129,18 +141,7 @@ fn a_noisy_slower_reference_ends_the_band_and_the_base_model_is_nearer_the_truth
 #[test]
 fn a_true_lag_keeps_the_whole_band_and_is_named() {
     for seed in [3_u64, 5] {
-        let mut config = SimConfig::new(Regime::Cruise);
-        config.seed = seed;
-        config.duration_s = 120.0;
-        config.rate_hz = 500.0;
-        config.effects = vec!["sensor_lag:accel".parse().expect("effect spec")];
-        config.stand = StandImperfections {
-            coloured_noise_rad: 2e-4,
-            coloured_corner_hz: StandImperfections::real().coloured_corner_hz,
-            reference_rate_hz: Some(120.0),
-            ..StandImperfections::default()
-        };
-        let (_, run) = sim_common::simulated_run(&config);
+        let (_, run) = cruise_run(seed, &["sensor_lag:accel"], slow_noisy());
         // With the order selection on (the default) and with the order fixed at 0 (the
         // identifier's order selection is still asked: without it the lag was lost).
         for settings in [r"{}", r#"{"order": 0}"#] {
@@ -157,13 +158,7 @@ fn a_true_lag_keeps_the_whole_band_and_is_named() {
 /// instead of the resonance at 31.2 Hz.)
 #[test]
 fn a_resonance_above_the_stand_s_band_limit_keeps_the_whole_band() {
-    let mut config = SimConfig::new(Regime::Cruise);
-    config.seed = 20;
-    config.duration_s = 120.0;
-    config.rate_hz = 500.0;
-    config.effects = vec!["platform_resonance:gyro".parse().expect("effect spec")];
-    config.stand = StandImperfections::real();
-    let (_, run) = sim_common::simulated_run(&config);
+    let (_, run) = cruise_run(20, &["platform_resonance:gyro"], StandImperfections::real());
     named_on_whole_band(&run, &Settings::default(), "gyro", Effect::PlatformResonance, 20);
 }
 
@@ -211,13 +206,7 @@ fn a_clean_run_is_searched_over_the_whole_band_and_nothing_is_said() {
 /// (searched there, its roll-off passed for tones at 27-38 Hz).
 #[test]
 fn above_an_ended_band_no_tone_is_named() {
-    let mut config = SimConfig::new(Regime::Cruise);
-    config.seed = 3;
-    config.duration_s = 120.0;
-    config.rate_hz = 500.0;
-    config.effects = vec!["platform_resonance:accel".parse().expect("effect spec")];
-    config.stand = StandImperfections::real();
-    let (_, run) = sim_common::simulated_run(&config);
+    let (_, run) = cruise_run(3, &["platform_resonance:accel"], StandImperfections::real());
     let report = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
     let accel = &report.blocks["accel"];
     assert!(

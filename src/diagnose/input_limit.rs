@@ -68,8 +68,19 @@ pub struct InputLimit {
     pub given: bool,
 }
 
+/// The gain's fall across the band with no phase of its own that the order-0 fit of `b` found
+/// (`gain_changes_across_band` with a negative rise), and its standard deviation; `None` when
+/// it found none, or a rise.
+#[must_use]
+pub fn falling_gain(b: &BlockIdentification) -> Option<(f64, f64)> {
+    b.warnings.iter().find_map(|w| match w {
+        IdentWarning::GainChangesAcrossBand { rise, rise_std, .. } if *rise < 0.0 => Some((*rise, *rise_std)),
+        _ => None,
+    })
+}
+
 /// The input limit of `b`, identified (order 0) over `searched_hz`; `given`: the band is the
-/// user's (kept as given); `dynamics`: the identifier under the user's order chose poles over
+/// user's (kept as given); `dynamics`: the identifier, its order selection on, chose poles over
 /// that band (the gain's change may be the block's own: nothing is said). `None` as well when the
 /// order-0 fit shows no even gain change, or no untrusted range reaches the band's top, or
 /// nothing below it is trusted.
@@ -83,10 +94,7 @@ pub fn input_limit(
     if dynamics {
         return None;
     }
-    let (gain_change, gain_change_std) = b.warnings.iter().find_map(|w| match w {
-        IdentWarning::GainChangesAcrossBand { rise, rise_std, .. } if *rise < 0.0 => Some((*rise, *rise_std)),
-        _ => None,
-    })?;
+    let (gain_change, gain_change_std) = falling_gain(b)?;
     let f = &b.spectra.frequency_hz;
     let bins: Vec<f64> = native_bins(&b.spectra, searched_hz)
         .into_iter()

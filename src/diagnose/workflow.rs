@@ -10,7 +10,7 @@ use super::DiagnoseError;
 use super::candidates::{Candidate, Extension, candidates};
 use super::design::{Design, DesignSignals};
 use super::halves::{HalvesSource, compare_halves};
-use super::input_limit::{InputLimit, input_limit};
+use super::input_limit::{InputLimit, falling_gain, input_limit};
 use super::map::{disagreement_map, power, psd_cells};
 use super::report::{
     BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
@@ -135,7 +135,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         // own dynamics (a lag's droop): a user's fixed order above 0 is dynamics as given, and
         // an identification that fails ends nothing.
         let dynamics = !given
-            && gain_falls(b)
+            && falling_gain(b).is_some()
             && match order.of(b.block) {
                 OrderSetting::Fixed(n) if n > 0 => true,
                 _ => session
@@ -207,13 +207,6 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             span,
         }),
     })
-}
-
-/// Whether the order-0 fit over the band sees the gain fall across it with no phase of its own.
-fn gain_falls(b: &BlockIdentification) -> bool {
-    b.warnings.iter().any(
-        |w| matches!(w, crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, .. } if *rise < 0.0),
-    )
 }
 
 /// The diagnosis from a [`Prepared`] run: only the rounds of the search are done here.

@@ -51,7 +51,7 @@ usage:
   imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel]
                       [--stand real] [--angle-latency S] [--angle-band-hz HZ] [--angle-rate-hz HZ]
-                      [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
+                      [--angle-filter-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
                       [--sensor-noise default|white] [--random-walk K]
                       [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]
                       [--sine roll|yaw|pitch:HZ:DEG]...

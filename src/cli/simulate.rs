@@ -1,6 +1,6 @@
 //! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
-//! [--angle-band-hz HZ] [--angle-rate-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
+//! [--angle-band-hz HZ] [--angle-filter-hz HZ] [--angle-rate-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
 //! [--sensor-noise default|white] [--random-walk K] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
 //! [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF] [--sine roll|yaw|pitch:HZ:DEG]...
 //! --out RUN.csv`
@@ -16,6 +16,18 @@ use crate::sim::stand::StandImperfections;
 use crate::sim::truth::ToneGate;
 use crate::sim::write::write_run_with_progress;
 use crate::sim::{SimConfig, simulate};
+
+/// The option `name` as a positive, finite number of Hz (`None` when absent).
+fn positive_hz(args: &Args, name: &str) -> Result<Option<f64>, CliError> {
+    args.get(name)
+        .map(|text| {
+            text.parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v > 0.0)
+                .ok_or_else(|| CliError::Input(format!("--{name}: '{text}' is not a positive number of Hz")))
+        })
+        .transpose()
+}
 
 pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let regime: Regime = args
@@ -58,19 +70,15 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         config.stand = StandImperfections::real();
     } else if let Some(other) = args.get("stand") {
         return Err(CliError::Input(format!(
-            "--stand: unknown stand '{other}' (known: real; or give --angle-latency, --angle-band-hz, --angle-rate-hz, --coloured-angle-noise)"
+            "--stand: unknown stand '{other}' (known: real; or give --angle-latency, --angle-band-hz, --angle-filter-hz, --angle-rate-hz, --coloured-angle-noise)"
         )));
     }
     config.stand.latency_s = args.parsed_or("angle-latency", config.stand.latency_s)?;
-    if let Some(fb) = args.get("angle-band-hz") {
-        let fb: f64 = fb
-            .parse()
-            .ok()
-            .filter(|v: &f64| v.is_finite() && *v > 0.0)
-            .ok_or_else(|| {
-                CliError::Input(format!("--angle-band-hz: '{fb}' is not a positive number of Hz"))
-            })?;
+    if let Some(fb) = positive_hz(args, "angle-band-hz")? {
         config.stand.band_limit_hz = Some(fb);
+    }
+    if let Some(fc) = positive_hz(args, "angle-filter-hz")? {
+        config.stand.filter_hz = Some(fc);
     }
     if let Some(fr) = args.get("angle-rate-hz") {
         let fr: f64 = fr

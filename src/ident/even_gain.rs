@@ -7,8 +7,11 @@
 //!
 //! [`over_even_gain`] reads the even gain off the delay-only model's residual (the same check
 //! that says `gain_changes_across_band`), fits every order again to `W_u / g`, and keeps that
-//! fit when it is delay-only: its `K` is then the gain at low frequency, its model `g K e^(-tau
-//! s)`, and its deviations widened in quadrature by what `g`'s own uncertainty moves `K` by, and
+//! fit when it is delay-only and the first fit's poles do not explain the data better (the
+//! information criterion of both on the same data, `g`'s two coefficients counted: a sensor's lag
+//! bends the gain and the phase together, and `g` then takes the gain's bend while the delay
+//! takes its phase, a worse fit; [`poles_explain_better`]): its `K` is then the gain at low
+//! frequency, its model `g K e^(-tau s)`, and its deviations widened in quadrature by what `g`'s own uncertainty moves `K` by, and
 //! never below the delay-only fit's (widened by that fit's misfit: `g`'s two-term shape is an
 //! assumption, and on simulated runs with a 120 Hz linearly interpolated reference the
 //! accelerometer's `K` kept a third of its bias, 2.1 of the narrower deviations rms). When
@@ -122,8 +125,9 @@ pub fn over_even_gain(
     ) else {
         return Ok(unchanged(fit, said));
     };
-    if over.order > 0 {
-        // Poles over the even gain too: the block's own dynamics, its fit as fitted.
+    if over.order > 0 || poles_explain_better(&fit, &over, spectra.bin_correlation) {
+        // Poles over the even gain too, or poles that explain the gain's change better than the
+        // even gain does (with its phase): the block's own dynamics, its fit as fitted.
         return Ok(unchanged(fit, said));
     }
     let mut over = widened(&over);
@@ -178,4 +182,32 @@ pub fn over_even_gain(
         first: Some(fit),
         warning: Some(warning),
     })
+}
+
+/// The parameters of `g` ([`EvenGain::coefficients`]).
+const EVEN_GAIN_PARAMETERS: usize = 2;
+
+/// Whether `first`, a fit with poles, explains the block's estimate better than `over`, the
+/// delay-only fit over an even gain: the information criterion of the selection (BIC, the bins'
+/// correlation and the overdispersion of the better of the two discounted as there) with `g`'s
+/// coefficients counted among `over`'s parameters. Both chi2 are of the same data with the same
+/// weights (`over`'s is `|W_u - g M|^2` weighted as `first`'s). A delay-only `first` never is.
+fn poles_explain_better(first: &StructuralFit, over: &StructuralFit, bin_correlation: f64) -> bool {
+    let chosen = |fit: &StructuralFit| fit.candidates.iter().find(|c| c.order == fit.order).cloned();
+    let (Some(a), Some(b)) = (chosen(first), chosen(over)) else {
+        return false;
+    };
+    if first.order == 0 || !(a.chi2.is_finite() && b.chi2.is_finite()) {
+        return false;
+    }
+    let b_parameters = b.parameters + EVEN_GAIN_PARAMETERS;
+    let real_data = first.dof + a.parameters;
+    let per_dof = |chi2: f64, p: usize| chi2 / real_data.saturating_sub(p).max(1) as f64;
+    let scale = per_dof(a.chi2, a.parameters)
+        .min(per_dof(b.chi2, b_parameters))
+        .max(1.0)
+        * bin_correlation.max(1.0);
+    let penalty = (real_data as f64 / bin_correlation.max(1.0)).max(1.0).ln();
+    let criterion = |chi2: f64, p: usize| chi2 / scale + penalty * p as f64;
+    criterion(a.chi2, a.parameters) < criterion(b.chi2, b_parameters)
 }

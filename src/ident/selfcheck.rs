@@ -23,6 +23,11 @@
 //!   order-0 candidate's is positive, the two more than 2 sigma apart (the poles' lag replaces part of the delay; a band-limited
 //!   reference's gain rise is fitted that way: measured on a real run's 64 s stretch, order 2 with
 //!   -4.8 ms for the delay-only model's +4.2 ms, before a short record got a segment fitted to it).
+//! - **Zeros lead**: a chosen order of 2 or more whose numerator's zeros lead at low frequency
+//!   beyond two of their deviations' bound. A sensor's filters do not lead; angles that lag the
+//!   motion do (an independent simulator's gyro behind angles low-passed at 20 Hz: order 3, zeros
+//!   leading by 11.28 ms where the filter's group delay is 11.25 ms, the delay and poles giving
+//!   the sensor's 3 ms).
 //! - **Inadmissible order**: a fixed order that breaks a rule of [`super::structural::admissible`].
 //! - **Few segments**: fewer Welch segments or equivalent averages than [`leaves_enough`] asks (a
 //!   segment or overlap given by the user on a short record): weights on few averages, maybe no
@@ -241,6 +246,7 @@ pub fn self_check(
             delay_only_tau_s,
         });
     }
+    out.extend(zeros_lead(fit));
     if let OrderSetting::Fixed(n) = settings.order.of(block)
         && let Some(reason) = fit
             .candidates
@@ -251,4 +257,18 @@ pub fn self_check(
         out.push(IdentWarning::InadmissibleOrder { order: n, reason });
     }
     out
+}
+
+/// `zeros_lead` when the chosen model's zeros lead at low frequency beyond two of their
+/// deviations' bound ([`StructuralFit::zeros_lag_s`], a bound as if every parameter were fully
+/// correlated, so the test is conservative).
+fn zeros_lead(fit: &StructuralFit) -> Option<IdentWarning> {
+    let [lag, std] = fit.zeros_lag_s?;
+    (-lag > 2.0 * std).then(|| IdentWarning::ZerosLead {
+        order: fit.order,
+        lead_s: -lag,
+        lead_std_s: std,
+        tau_s: fit.tau_s,
+        pole_lag_s: fit.denominator.first().copied().unwrap_or(0.0),
+    })
 }

@@ -168,6 +168,23 @@ pub enum IdentWarning {
         /// The delay of the order-0 candidate, s.
         delay_only_tau_s: f64,
     },
+    /// The chosen model's zeros lead at low frequency, beyond two of their deviations' bound: a
+    /// sensor's filters do not lead, an angle measurement that lags the motion (filtered or
+    /// band-limited angle sensors) makes the block seem to. The model is then the block relative
+    /// to those angles; its delay and poles alone are the block's only if the zeros are the
+    /// angles' lag inverted.
+    ZerosLead {
+        /// The chosen order.
+        order: usize,
+        /// The zeros' lead at low frequency (a third of the trace of `N_0^-1 N_1`), s.
+        lead_s: f64,
+        /// The bound on its standard deviation, s.
+        lead_std_s: f64,
+        /// The model's delay, s.
+        tau_s: f64,
+        /// The poles' lag at low frequency (`d_1`), s.
+        pole_lag_s: f64,
+    },
     /// The delay drifts through the record (the stretches' delays have a significant trend): the
     /// block and the stand may log on separate clocks.
     DelayDrift {
@@ -412,16 +429,14 @@ impl fmt::Display for IdentWarning {
                 tau_s,
                 tau_std_s,
                 delay_only_tau_s,
-            } => write!(
-                f,
-                "the order-{order} model's delay is negative ({:.3} +- {:.3} ms) where the \
-                 delay-only model gives {:.3} ms: its poles' lag stands in for the delay; this is \
-                 the block's model only if the stand's angles lag the block (angle latency), \
-                 otherwise it fits the reference's own response too: compare with order 0",
-                tau_s * 1e3,
-                tau_std_s * 1e3,
-                delay_only_tau_s * 1e3
-            ),
+            } => delay_absorbed_words(f, *order, *tau_s, *tau_std_s, *delay_only_tau_s),
+            IdentWarning::ZerosLead {
+                order,
+                lead_s,
+                lead_std_s,
+                tau_s,
+                pole_lag_s,
+            } => zeros_lead_words(f, *order, *lead_s, *lead_std_s, tau_s + pole_lag_s),
             IdentWarning::DelayDrift {
                 trend,
                 trend_std,
@@ -597,5 +612,48 @@ fn write_stretches_without_delay(
          the deviations' floor rest on the other {fitted} stretches",
         spans.join(", "),
         super::stretches::STRETCH_DELAY_REACH_S
+    )
+}
+
+/// The words of [`IdentWarning::ZerosLead`]; `lag_s` is the delay plus the poles' lag.
+fn zeros_lead_words(
+    f: &mut fmt::Formatter<'_>,
+    order: usize,
+    lead_s: f64,
+    lead_std_s: f64,
+    lag_s: f64,
+) -> fmt::Result {
+    write!(
+        f,
+        "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency: a sensor's \
+         filters do not lead, so the stand's angles probably lag the motion by about that much \
+         (filtered or band-limited angle sensors). The model is the block relative to those angles: \
+         its net delay at low frequency is {:.3} ms, and its delay and poles alone ({:.3} ms at low \
+         frequency) are the block's only if the zeros are the angles' lag; check the angle sensors' \
+         filters and latency",
+        lead_s * 1e3,
+        lead_std_s * 1e3,
+        (lag_s - lead_s) * 1e3,
+        lag_s * 1e3
+    )
+}
+
+/// The words of [`IdentWarning::DelayAbsorbedByPoles`].
+fn delay_absorbed_words(
+    f: &mut fmt::Formatter<'_>,
+    order: usize,
+    tau_s: f64,
+    tau_std_s: f64,
+    delay_only_tau_s: f64,
+) -> fmt::Result {
+    write!(
+        f,
+        "the order-{order} model's delay is negative ({:.3} +- {:.3} ms) where the delay-only model \
+         gives {:.3} ms: its poles' lag stands in for the delay; this is the block's model only if \
+         the stand's angles lag the block (angle latency), otherwise it fits the reference's own \
+         response too: compare with order 0",
+        tau_s * 1e3,
+        tau_std_s * 1e3,
+        delay_only_tau_s * 1e3
     )
 }

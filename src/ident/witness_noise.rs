@@ -171,6 +171,7 @@ mod tests {
             misalignment_mrad: [[0.0; 3]; 3],
             misalignment_std_mrad: [[std * 1e3; 3]; 3],
             even_gain: None,
+            zeros_lag_s: None,
             fitted: crate::ident::structural::FittedOrders::default(),
         }
     }

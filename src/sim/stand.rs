@@ -9,6 +9,11 @@
 //! - **band limit**: the measured angle carries nothing above `band_limit_hz` (a zero-phase
 //!   eighth-order Butterworth magnitude, as a reference resampled by symmetric interpolation).
 //!   Above it the angles are noise, and a fit there is errors in variables;
+//! - **a causal filter**: the measured angle through a second-order Butterworth low-pass at
+//!   `filter_hz` (an encoder's or a tracker's own filter). Unlike the band limit it has phase: the
+//!   angles lag the motion by its group delay (`sqrt(2) / (2 pi filter_hz)` at low frequency) and
+//!   more towards the band's top, so the block's response to them has zeros that lead (the
+//!   identifier says so, `zeros_lead`);
 //! - **a slower reference**: the measured angle sampled at `reference_rate_hz` and interpolated
 //!   linearly onto the run's samples, as a motion-capture reference is resampled onto an IMU's
 //!   (the real recordings' dataset did so from 120 Hz). Zero phase, no delay: on average it weighs
@@ -45,6 +50,10 @@ pub struct StandImperfections {
     /// measured angle is sampled at this rate and interpolated linearly onto the run's samples.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_rate_hz: Option<f64>,
+    /// Corner of a causal second-order Butterworth filter on the angle measurement, Hz (`None`:
+    /// none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub filter_hz: Option<f64>,
 }
 
 impl StandImperfections {
@@ -58,6 +67,7 @@ impl StandImperfections {
             latency_s: 1.5e-3,
             band_limit_hz: Some(30.0),
             reference_rate_hz: None,
+            filter_hz: None,
         }
     }
 
@@ -68,6 +78,7 @@ impl StandImperfections {
             || self.latency_s != 0.0
             || self.band_limit_hz.is_some()
             || self.reference_rate_hz.is_some()
+            || self.filter_hz.is_some()
     }
 }
 
@@ -89,6 +100,9 @@ pub(super) fn measured_angle(
             Complex64::from(1.0 / (1.0 + (f / fb).powi(16)).sqrt())
         });
     }
+    if let Some(fc) = imperfect.filter_hz {
+        spectrum = grid.shape(&spectrum, |f| butterworth2(f, fc));
+    }
     if imperfect.coloured_noise_rad > 0.0 {
         let corner = imperfect.coloured_corner_hz.max(1e-3);
         let noise = grid.shape(&grid.white(rng), |f| first_order_lowpass(f, corner));
@@ -100,6 +114,12 @@ pub(super) fn measured_angle(
         Some(rate) => through_slower_reference(&measured, grid.fft.sample_rate_hz(), rate),
         None => measured,
     }
+}
+
+/// A causal second-order Butterworth low-pass at `fc`, Hz: `1 / (1 + sqrt(2) j f/fc - (f/fc)^2)`.
+fn butterworth2(f: f64, fc: f64) -> Complex64 {
+    let r = f / fc;
+    Complex64::new(1.0 - r * r, std::f64::consts::SQRT_2 * r).inv()
 }
 
 /// `x`, sampled at `fs`, as a reference at `reference_hz` sees it (module docs): read at the

@@ -384,7 +384,7 @@ fn physical_rejection(data: &Prepared, model: &Model, inflation: f64) -> Option<
 /// trade with the one delay, so they move together), which no correlation can exceed; the rule's
 /// "two deviations" is then at least two. `None` without a first-order numerator coefficient
 /// (orders 0 and 1) or when `N_0` is singular.
-fn numerator_lag(model: &Model, std: &[f64], w_ref: f64) -> Option<(f64, f64)> {
+pub(super) fn numerator_lag(model: &Model, std: &[f64], w_ref: f64) -> Option<(f64, f64)> {
     let matrix = |c: &[f64; ELEMENTS]| Matrix3::from_fn(|i, j| c[3 * i + j]);
     let (n0, n1) = (matrix(model.num.first()?), matrix(model.num.get(1)?));
     let a = n0.try_inverse()?;

@@ -305,6 +305,11 @@ pub struct StructuralFit {
     /// at low frequency ([`Self::carry_even_gain`], `ident::even_gain`). Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub even_gain: Option<EvenGain>,
+    /// The lag the numerator's zeros add at low frequency and a bound on its standard deviation,
+    /// s (`[lag, std]`; negative: the zeros lead): minus a third of the trace of `N_0^-1 N_1`.
+    /// Absent below order 2 (no `N_1`) or when `N_0` is singular.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zeros_lag_s: Option<[f64; 2]>,
     /// Every order's model as fitted, kept for [`refit_structure`] (not serialised).
     #[serde(skip)]
     pub fitted: FittedOrders,

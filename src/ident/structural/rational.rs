@@ -20,9 +20,12 @@
 //! denominator times a far pole `1 + sigma / 10`, whose projected residual cannot exceed the
 //! previous order's from order 2 on, since the numerator space then holds the previous numerator
 //! times the same factor); the smallest residual wins, stable or not: an unstable best fit is
-//! returned and flagged as such by the caller, never swapped silently for a worse stable one. At
-//! order 1 the best is also refined once more from its mirror image `1 - T s` (same magnitude
-//! response): a right-half-plane pole plus delay is otherwise easy to confuse with a stable pole.
+//! returned and flagged as such by the caller, never swapped silently for a worse stable one. The
+//! best is also refined once more from its mirror image (same magnitude response), the delay moved
+//! to keep the phase slope: at order 1 always (`1 - T s`), from order 2 when it has poles in the
+//! right half plane. A right-half-plane pole plus a longer delay is otherwise easy to confuse with
+//! a stable pole: a gyro behind a 100 Hz second-order filter (an independent simulator's run) was
+//! fitted at order 2 with an unstable pair and a delay of 6.75 ms, its true 3 ms never tried.
 
 use faer::prelude::SolveLstsq;
 use nalgebra::{DMatrix, DVector};
@@ -78,13 +81,18 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
     for candidate in refined.into_iter().flatten() {
         keep_best(candidate, &mut best);
     }
-    // Order 1: the mirror image of the best, 1 - T s, with the delay moved by 2 T to keep the
-    // phase slope: a pole and its mirror have the same magnitude response, so each is a local
-    // optimum the other start can miss.
-    let mirror = best.as_ref().filter(|_| order == 1).map(|(m, _)| {
-        let den = m.den.iter().enumerate();
-        let den: Vec<f64> = den.map(|(i, c)| if i % 2 == 0 { -c } else { *c }).collect();
-        (den, m.tau + 2.0 * m.den[0] / data.omega_ref)
+    // The mirror image of the best: at order 1 always (`1 - T s`), from order 2 when the best has
+    // poles in the right half plane (those reflected into the left). A pole and its mirror have
+    // the same magnitude response, so each is a local optimum the other start can miss; the delay
+    // moves to keep the low-frequency phase slope (`d_1 / omega_ref`, the poles' lag).
+    let mirror = best.as_ref().and_then(|(m, _)| {
+        let den = if order == 1 {
+            vec![-m.den[0]]
+        } else {
+            Some(reflect_unstable(&m.den)).filter(|r| *r != m.den)?
+        };
+        let tau = m.tau + (m.den[0] - den[0]) / data.omega_ref;
+        Some((den, tau))
     });
     if let Some((den, tau)) = mirror {
         consider(data, den, tau, max_iter, &mut best);

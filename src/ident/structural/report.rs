@@ -82,6 +82,7 @@ pub(super) fn assemble(
         .map(|r| [r.re * w_ref, r.im * w_ref])
         .collect();
     let ieee = ieee_units(&k, &k_std);
+    let zeros_lag_s = super::admissible::numerator_lag(model, &std, w_ref).map(|(lag, std)| [lag, std]);
     StructuralFit {
         order,
         k,
@@ -102,6 +103,7 @@ pub(super) fn assemble(
         misalignment_mrad: ieee.mrad,
         misalignment_std_mrad: ieee.mrad_std,
         even_gain: None,
+        zeros_lag_s,
         fitted: super::FittedOrders::default(),
     }
 }

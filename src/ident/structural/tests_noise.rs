@@ -1,5 +1,7 @@
 //! Noisy data: honest uncertainties and order selection, over seeded replicates.
 
+use std::f64::consts::PI;
+
 use nalgebra::Matrix3;
 
 use super::tests::{Truth, fit, random_gain, synthesise};
@@ -160,6 +162,40 @@ fn bic_finds_the_sensor_pole() {
                 assert!(rel < 0.1, "T = {t}: fitted {}", fit.denominator[0]);
             }
         }
+    }
+}
+
+/// A sensor behind a second-order low-pass above the band (Butterworth, 100 Hz; the band ends at
+/// 40 Hz, where it bends the gain by 1.3 %): the order-2 fit's best start is often its mirror, a
+/// pair in the right half plane with a longer delay (same magnitude response). The mirror of an
+/// unstable best is refined too, so the stable pair is found and chosen, at the filter's natural
+/// frequency, the delay within a millisecond. Checked: without that mirror the first seed is
+/// fitted at order 4, the filter's pair with a spurious one at 33 Hz (damping 0.001).
+#[test]
+fn bic_finds_a_second_order_filter_above_the_band() {
+    let mut rng = Rng::new(450);
+    let w = 2.0 * PI * 100.0;
+    let zeta = std::f64::consts::FRAC_1_SQRT_2;
+    for seed in 0..8 {
+        let tau = rng.uniform_in(0.002, 0.006);
+        let truth = Truth {
+            num: vec![random_gain(&mut rng)],
+            den: vec![2.0 * zeta / w, 1.0 / (w * w)],
+            tau,
+        };
+        let fit = auto_fit(&truth, 2500 + seed, InformationCriterion::Bic);
+        eprintln!(
+            "seed {seed}: order {}, poles {:?}, tau {:.6} +- {:.6} (true {tau:.6})",
+            fit.order, fit.poles, fit.tau_s, fit.tau_std_s
+        );
+        assert_eq!(fit.order, 2, "seed {seed}: {:?}", fit.candidates);
+        assert!(fit.stable, "seed {seed}");
+        // From order 2 the delay trades with the numerator's first coefficient (`admissible`,
+        // rule 4): its stated deviation is not calibrated here (2.8 and 3.6 of them off on two of
+        // eight seeds, measured), so only its size is checked.
+        assert!((fit.tau_s - tau).abs() < 1e-3, "seed {seed}: tau {}", fit.tau_s);
+        let natural_hz = fit.poles[0][0].hypot(fit.poles[0][1]) / (2.0 * PI);
+        assert!((natural_hz - 100.0).abs() < 15.0, "seed {seed}: {natural_hz} Hz");
     }
 }
 

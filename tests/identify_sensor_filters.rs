@@ -1,0 +1,150 @@
+//! A sensor's own filters above the band, and angles behind a causal filter. The identifier never
+//! sees the truth; the test compares with what the simulator kept.
+//!
+//! - A first-order lag whose pole lies above the band (`sensor_lag@0.5`: time constants of
+//!   1.6-2.5 ms, poles at 64-100 Hz, the band ending at 40 Hz) bends the gain by 5-10 % at the
+//!   band's top *with* phase. It is the block's own dynamics: order 1 is chosen with its time
+//!   constant and the delay without its lag, not a delay-only model over an even gain (which takes
+//!   the gain's bend and leaves the phase to the delay: an independent simulator's 2 ms lag gave
+//!   the delay 41 us off, 12.6 of its deviations, before the fit over the even gain had to beat
+//!   the poles' on the information criterion; checked here: without that comparison the first
+//!   block is order 0, its delay 1.83 ms long at a deviation of 3 us).
+//! - Angles measured through a causal 20 Hz second-order filter (`simulate --angle-filter-hz`):
+//!   the block's response to them leads, so a model with zeros fits, whose delay and poles are
+//!   not the block's alone. Such a model says so (`zeros_lead`) with the lead, near the filter's
+//!   group delay (11.25 ms); a block fitted at order 0 says its negative delay. Neither is silent.
+
+use std::f64::consts::{PI, SQRT_2};
+
+use imu_attest::block::Block;
+use imu_attest::ident::band::BandSetting;
+use imu_attest::ident::identify::identify_run;
+use imu_attest::ident::settings::Settings;
+use imu_attest::ident::warnings::IdentWarning;
+use imu_attest::sim::regime::Regime;
+use imu_attest::sim::stand::StandImperfections;
+use imu_attest::sim::truth::EffectTruth;
+use imu_attest::sim::{SimConfig, SimulatedRun};
+
+#[path = "common/sim.rs"]
+mod sim_common;
+
+fn truth_of(sim: &SimulatedRun, block: Block) -> &imu_attest::sim::truth::BlockTruth {
+    match block {
+        Block::Gyro => sim.sidecar.truth.gyro.as_ref(),
+        Block::Accel => sim.sidecar.truth.accel.as_ref(),
+    }
+    .expect("truth")
+}
+
+fn zeros_lead(warnings: &[IdentWarning]) -> Option<f64> {
+    warnings.iter().find_map(|w| match w {
+        IdentWarning::ZerosLead { lead_s, .. } => Some(*lead_s),
+        _ => None,
+    })
+}
+
+#[test]
+fn a_lag_above_the_band_is_fitted_as_a_pole_not_an_even_gain() {
+    for seed in 1..=3 {
+        let (sim, run) = sim_common::simulated_run_of(120.0, Regime::Cruise, seed, &["sensor_lag@0.5"]);
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        for b in &id.blocks {
+            let truth = truth_of(&sim, b.block);
+            let lag = truth
+                .effects
+                .iter()
+                .find_map(|e| match e {
+                    EffectTruth::SensorLag { time_constant_s } => Some(*time_constant_s),
+                    _ => None,
+                })
+                .expect("the lag's truth");
+            let s = &b.structural;
+            let fitted = s.denominator.first().copied().unwrap_or(0.0);
+            eprintln!(
+                "seed {seed} {:?}: order {}, T {fitted:.6} (true {lag:.6}), tau {:.6} +- {:.6} (true {:.6})",
+                b.block, s.order, s.tau_s, s.tau_std_s, truth.tau_s
+            );
+            assert_eq!(s.order, 1, "seed {seed} {:?}: {:?}", b.block, s.candidates);
+            assert!(
+                (fitted - lag).abs() < 0.1 * lag,
+                "seed {seed} {:?}: T {fitted}",
+                b.block
+            );
+            assert!(
+                (s.tau_s - truth.tau_s).abs() < 4.0 * s.tau_std_s,
+                "seed {seed} {:?}: tau {} against {}",
+                b.block,
+                s.tau_s,
+                truth.tau_s
+            );
+            assert!(s.even_gain.is_none(), "seed {seed} {:?}", b.block);
+            assert_eq!(zeros_lead(&b.warnings), None, "seed {seed} {:?}", b.block);
+        }
+    }
+}
+
+#[test]
+fn angles_behind_a_causal_filter_are_said_never_silent() {
+    let filter_hz = 20.0;
+    let group_delay_s = SQRT_2 / (2.0 * PI * filter_hz);
+    let settings = Settings {
+        band_hz: BandSetting::Fixed([0.1, 35.0]),
+        ..Settings::default()
+    };
+    let mut leads = 0;
+    for seed in 1..=2 {
+        let mut config = SimConfig::new(Regime::Cruise);
+        config.seed = seed;
+        config.duration_s = 120.0;
+        config.stand = StandImperfections {
+            filter_hz: Some(filter_hz),
+            ..StandImperfections::default()
+        };
+        let (_, run) = sim_common::simulated_run(&config);
+        let id = identify_run(&run, &settings).expect("identified");
+        for b in &id.blocks {
+            let s = &b.structural;
+            let lead = zeros_lead(&b.warnings);
+            let negative = b
+                .warnings
+                .iter()
+                .any(|w| matches!(w, IdentWarning::NegativeDelay { .. }));
+            eprintln!(
+                "seed {seed} {:?}: order {}, tau {:.6}, lead {lead:?}, negative delay said {negative}",
+                b.block, s.order, s.tau_s
+            );
+            if s.order >= 2 {
+                let lead = lead.expect("a model with leading zeros says so");
+                assert!(
+                    (lead - group_delay_s).abs() < 0.1 * group_delay_s,
+                    "seed {seed} {:?}: lead {lead} against the filter's {group_delay_s}",
+                    b.block
+                );
+                leads += 1;
+            } else {
+                assert!(
+                    negative,
+                    "seed {seed} {:?}: order {} said nothing",
+                    b.block, s.order
+                );
+            }
+        }
+    }
+    // Measured: two of the four blocks at order 3, both saying it.
+    assert!(
+        leads >= 1,
+        "no block was fitted with zeros: the test no longer tests the warning"
+    );
+}
+
+#[test]
+fn clean_runs_and_sensor_filters_without_zeros_do_not_say_zeros_lead() {
+    for (seed, effects) in [(4, &[][..]), (5, &["sensor_lag"][..])] {
+        let (_, run) = sim_common::simulated_run_of(120.0, Regime::Approach, seed, effects);
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        for b in &id.blocks {
+            assert_eq!(zeros_lead(&b.warnings), None, "seed {seed} {:?}", b.block);
+        }
+    }
+}

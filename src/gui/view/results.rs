@@ -250,6 +250,23 @@ fn figures(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
 
 fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     ui.label("order candidates");
+    // A wide table (a far pole's delay, a large chi2) scrolls instead of widening the panel over
+    // the central view's controls.
+    egui::ScrollArea::horizontal()
+        .id_salt(("candidates-scroll", name))
+        .show(ui, |ui| candidate_table(ui, name, m));
+    // The reasons are sentences: wrapped under the table, so they do not widen the panel.
+    for c in &m.fit.candidates {
+        if let Some(reason) = &c.rejected {
+            ui.horizontal_wrapped(|ui| {
+                ui.monospace(format!("order {}:", c.order));
+                ui.add(egui::Label::new(format!("no: {reason}")).wrap());
+            });
+        }
+    }
+}
+
+fn candidate_table(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     egui::Grid::new(("candidates", name))
         .striped(true)
         .show(ui, |ui| {
@@ -283,15 +300,6 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 ui.end_row();
             }
         });
-    // The reasons are sentences: wrapped under the table, so they do not widen the panel.
-    for c in &m.fit.candidates {
-        if let Some(reason) = &c.rejected {
-            ui.horizontal_wrapped(|ui| {
-                ui.monospace(format!("order {}:", c.order));
-                ui.add(egui::Label::new(format!("no: {reason}")).wrap());
-            });
-        }
-    }
 }
 
 fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {

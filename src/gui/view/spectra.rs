@@ -100,7 +100,8 @@ fn controls(
     blocks: Vec<crate::block::Block>,
     block: &BlockSpectra,
 ) {
-    ui.horizontal(|ui| {
+    // Wrapped at the central view's width: a wide results panel must not hide these controls.
+    ui.horizontal_wrapped(|ui| {
         for b in blocks {
             ui.selectable_value(&mut view.spectra_block, b, b.name());
         }

@@ -245,6 +245,12 @@ fn the_real_unit_s_runs_agree_on_the_delay_and_a_rotation_of_its_axes_is_told_ap
         stderr.contains("broad25_tapping.csv.gz - broad11_slow_translation.csv.gz: the axes are rotated by"),
         "{stderr}"
     );
+    // Printed together, each identification warning names its run (broad07's gain rise).
+    assert!(
+        stderr.contains("imu-attest: warning: broad07_fast_rotation.csv.gz: gyro block: the gain rises by"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("imu-attest: warning: gyro block"), "{stderr}");
 }
 
 /// A first run identified with notices (no sidecar) and warnings, then a bad second run: exit

@@ -41,17 +41,10 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     let mut reports = Vec::new();
     for r in &runs {
         let mut session = Session::new(Arc::new(super::progress::load_run(r)?));
-        let (model, lines) = identify_in(r, &mut session, &settings, &[])?;
-        models.push(model);
         // Printed together at the end, each warning names its run (the notes already do).
-        let run = super::progress::display_name(r);
-        messages.extend(lines.into_iter().map(|l| {
-            l.replacen(
-                "imu-attest: warning: ",
-                &format!("imu-attest: warning: {run}: "),
-                1,
-            )
-        }));
+        let (model, lines) = identify_in(r, &mut session, &settings, &[], true)?;
+        models.push(model);
+        messages.extend(lines);
         if diagnose {
             let report =
                 diagnose_session(&mut session, &settings, &DiagnoseOptions::default()).map_err(|e| {
@@ -61,6 +54,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                         CliError::Internal(anyhow::anyhow!("{}: {e}", r.display()))
                     }
                 })?;
+            let run = super::progress::display_name(r);
             messages.extend(super::discrepancy::input_limit_lines(&report, Some(&run)));
             reports.push(report);
         }

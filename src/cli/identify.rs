@@ -85,18 +85,20 @@ pub(super) fn identify_model(
     accepted: &[(Block, Effect)],
 ) -> Result<(Model, Vec<String>), CliError> {
     let run = Arc::new(super::progress::load_run(run_path)?);
-    identify_in(run_path, &mut Session::new(run), settings, accepted)
+    identify_in(run_path, &mut Session::new(run), settings, accepted, false)
 }
 
 /// Identifies the run of `session` (loaded from `run_path`) into its checked model, with the
 /// lines to print on stderr once the command's output is written: the loader's notices, the
-/// fit's warnings, recording faults (a refusal carries the notices on its one line instead). The
+/// fit's warnings, recording faults (a refusal carries the notices on its one line instead), each
+/// warning naming the run with `name_run` (commands over several runs print them together). The
 /// session keeps its stages for what comes next (`compare --diagnose`).
 pub(super) fn identify_in(
     run_path: &Path,
     session: &mut Session,
     settings: &Settings,
     accepted: &[(Block, Effect)],
+    name_run: bool,
 ) -> Result<(Model, Vec<String>), CliError> {
     let settings = settings.for_run(session.run());
     let notices = session.run().notices.clone();
@@ -122,13 +124,21 @@ pub(super) fn identify_in(
         }
     })?;
     let mut messages = super::progress::note_lines(run_path, &notices);
+    let warning = if name_run {
+        format!(
+            "imu-attest: warning: {}: ",
+            super::progress::display_name(run_path)
+        )
+    } else {
+        "imu-attest: warning: ".to_owned()
+    };
     for (name, block) in &model.blocks {
-        for warning in &block.fit.warnings {
-            messages.push(format!("imu-attest: warning: {name} block: {warning}"));
+        for w in &block.fit.warnings {
+            messages.push(format!("{warning}{name} block: {w}"));
         }
         for n in block.effects.iter().flat_map(|e| &e.not_added) {
             messages.push(format!(
-                "imu-attest: warning: {name} block: {} not added: {}",
+                "{warning}{name} block: {} not added: {}",
                 n.effect, n.reason
             ));
         }
@@ -136,13 +146,13 @@ pub(super) fn identify_in(
     for (block, effect) in accepted {
         if !model.blocks.contains_key(block.name()) {
             messages.push(format!(
-                "imu-attest: warning: {effect} not added: the run has no {} block",
+                "{warning}{effect} not added: the run has no {} block",
                 block.name()
             ));
         }
     }
     for fault in &model.recording_faults {
-        messages.push(format!("imu-attest: warning: {fault}"));
+        messages.push(format!("{warning}{fault}"));
     }
     model
         .check_finite()

@@ -23,8 +23,10 @@
 //!   order-0 candidate's is positive, the two more than 2 sigma apart (the poles' lag replaces part of the delay; a band-limited
 //!   reference's gain rise is fitted that way: measured on a real run's 64 s stretch, order 2 with
 //!   -4.8 ms for the delay-only model's +4.2 ms, before a short record got a segment fitted to it).
-//! - **Zeros lead**: a chosen order of 2 or more whose numerator's zeros lead at low frequency
-//!   beyond two of their deviations' bound. A sensor's filters do not lead; angles that lag the
+//! - **Zeros lead**: a chosen order of 2 or more, admissible, whose numerator's zeros lead at low
+//!   frequency beyond three of their deviations' bound (a fixed order the rules reject says
+//!   `inadmissible_order` instead: a clean run forced to order 3 has zeros that lead or lag at
+//!   random). A sensor's filters do not lead; angles that lag the
 //!   motion do (an independent simulator's gyro behind angles low-passed at 20 Hz: order 3, zeros
 //!   leading by 11.28 ms where the filter's group delay is 11.25 ms, the delay and poles giving
 //!   the sensor's 3 ms).
@@ -259,12 +261,24 @@ pub fn self_check(
     out
 }
 
-/// `zeros_lead` when the chosen model's zeros lead at low frequency beyond two of their
-/// deviations' bound ([`StructuralFit::zeros_lag_s`], a bound as if every parameter were fully
+/// How many of their deviations' bound the zeros' lead must exceed for `zeros_lead`. Three, as
+/// for a negative delay: at order 2 the delay trades with the numerator's first coefficient and
+/// their deviations run short (an all-pole filter on synthetic data, one seed of eight: the delay
+/// 2.8 of its deviations long and the zeros leading by 2.06 of theirs); angles behind a 20 Hz
+/// filter gave leads of over 100.
+pub const ZEROS_LEAD_DEVIATIONS: f64 = 3.0;
+
+/// `zeros_lead` when the chosen model, admissible, has zeros that lead at low frequency beyond
+/// [`ZEROS_LEAD_DEVIATIONS`] of their deviations' bound ([`StructuralFit::zeros_lag_s`], a bound as if every parameter were fully
 /// correlated, so the test is conservative).
 fn zeros_lead(fit: &StructuralFit) -> Option<IdentWarning> {
-    let [lag, std] = fit.zeros_lag_s?;
-    (-lag > 2.0 * std).then(|| IdentWarning::ZerosLead {
+    // A fixed order the rules reject says so (`inadmissible_order`); its zeros are not evidence.
+    let admissible = fit
+        .candidates
+        .iter()
+        .any(|c| c.order == fit.order && c.rejected.is_none());
+    let [lag, std] = fit.zeros_lag_s.filter(|_| admissible)?;
+    (-lag > ZEROS_LEAD_DEVIATIONS * std).then(|| IdentWarning::ZerosLead {
         order: fit.order,
         lead_s: -lag,
         lead_std_s: std,

@@ -168,7 +168,7 @@ pub enum IdentWarning {
         /// The delay of the order-0 candidate, s.
         delay_only_tau_s: f64,
     },
-    /// The chosen model's zeros lead at low frequency, beyond two of their deviations' bound: a
+    /// The chosen model's zeros lead at low frequency, beyond three of their deviations' bound: a
     /// sensor's filters do not lead, an angle measurement that lags the motion (filtered or
     /// band-limited angle sensors) makes the block seem to. The model is then the block relative
     /// to those angles; its delay and poles alone are the block's only if the zeros are the
@@ -627,7 +627,7 @@ fn zeros_lead_words(
         f,
         "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency: a sensor's \
          filters do not lead, so the stand's angles probably lag the motion by about that much \
-         (filtered or band-limited angle sensors). The model is the block relative to those angles: \
+         (a filter with phase in the angle measurement, not a zero-phase band limit). The model is the block relative to those angles: \
          its net delay at low frequency is {:.3} ms, and its delay and poles alone ({:.3} ms at low \
          frequency) are the block's only if the zeros are the angles' lag; check the angle sensors' \
          filters and latency",

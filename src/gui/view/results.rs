@@ -296,7 +296,7 @@ fn candidate_table(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                         .map_or_else(|| "–".to_owned(), |h| format!("{h:.1}")),
                 );
                 ui.monospace(format!("{:.3}", c.tau_s * 1e3));
-                ui.monospace(if c.rejected.is_some() { "no (below)" } else { "yes" });
+                ui.monospace(if c.rejected.is_some() { "no" } else { "yes" });
                 ui.end_row();
             }
         });

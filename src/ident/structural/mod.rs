@@ -90,6 +90,7 @@ mod weights;
 
 pub use align::rational_slope;
 pub use holdout::held_out_chi2;
+pub use order::criterion_value;
 pub use warm::{FittedOrders, refit_structure};
 
 use nalgebra::Matrix3;

@@ -19,7 +19,8 @@ pub(super) fn required_bins(order: usize) -> usize {
 }
 
 /// The criterion's value for `chi2` with `parameters` parameters on `real_data` real data.
-pub(super) fn criterion_value(
+#[must_use]
+pub fn criterion_value(
     criterion: InformationCriterion,
     chi2: f64,
     parameters: usize,

@@ -26,10 +26,9 @@
 //! - **Zeros lead**: a chosen order of 2 or more, admissible, whose numerator's zeros lead at low
 //!   frequency beyond three of their deviations' bound (a fixed order the rules reject says
 //!   `inadmissible_order` instead: a clean run forced to order 3 has zeros that lead or lag at
-//!   random). A sensor's filters do not lead; angles that lag the
-//!   motion do (an independent simulator's gyro behind angles low-passed at 20 Hz: order 3, zeros
-//!   leading by 11.28 ms where the filter's group delay is 11.25 ms, the delay and poles giving
-//!   the sensor's 3 ms).
+//!   random). A sensor's filters do not lead; angles that lag the motion do (an independent
+//!   simulator's gyro behind angles low-passed at 20 Hz: order 3, zeros leading by 11.28 ms
+//!   where the filter's group delay is 11.25 ms, the delay and poles giving the sensor's 3 ms).
 //! - **Inadmissible order**: a fixed order that breaks a rule of [`super::structural::admissible`].
 //! - **Few segments**: fewer Welch segments or equivalent averages than [`leaves_enough`] asks (a
 //!   segment or overlap given by the user on a short record): weights on few averages, maybe no
@@ -269,8 +268,8 @@ pub fn self_check(
 pub const ZEROS_LEAD_DEVIATIONS: f64 = 3.0;
 
 /// `zeros_lead` when the chosen model, admissible, has zeros that lead at low frequency beyond
-/// [`ZEROS_LEAD_DEVIATIONS`] of their deviations' bound ([`StructuralFit::zeros_lag_s`], a bound as if every parameter were fully
-/// correlated, so the test is conservative).
+/// [`ZEROS_LEAD_DEVIATIONS`] of their deviations' bound ([`StructuralFit::zeros_lag_s`]: as if
+/// every parameter were fully correlated; the parameters' own deviations run short at order 2).
 fn zeros_lead(fit: &StructuralFit) -> Option<IdentWarning> {
     // A fixed order the rules reject says so (`inadmissible_order`); its zeros are not evidence.
     let admissible = fit

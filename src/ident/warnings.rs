@@ -627,10 +627,10 @@ fn zeros_lead_words(
         f,
         "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency: a sensor's \
          filters do not lead, so the stand's angles probably lag the motion by about that much \
-         (a filter with phase in the angle measurement, not a zero-phase band limit). The model is the block relative to those angles: \
-         its net delay at low frequency is {:.3} ms, and its delay and poles alone ({:.3} ms at low \
-         frequency) are the block's only if the zeros are the angles' lag; check the angle sensors' \
-         filters and latency",
+         (a filter with phase in the angle measurement, not a zero-phase band limit). The model \
+         is the block relative to those angles: its net delay at low frequency is {:.3} ms, and \
+         its delay and poles alone ({:.3} ms at low frequency) are the block's only if the zeros \
+         are the angles' lag; check the angle sensors' filters and latency",
         lead_s * 1e3,
         lead_std_s * 1e3,
         (lag_s - lead_s) * 1e3,

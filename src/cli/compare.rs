@@ -56,6 +56,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                 })?;
             let run = super::progress::display_name(r);
             messages.extend(super::discrepancy::input_limit_lines(&report, Some(&run)));
+            messages.extend(super::discrepancy::unexplained_lines(&report, Some(&run)));
             reports.push(report);
         }
     }

@@ -94,6 +94,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     .map_err(|e| CliError::Input(e.to_string()))?;
     let mut lines = super::progress::note_lines(run_path, &notices);
     lines.extend(input_limit_lines(&report, None));
+    lines.extend(unexplained_lines(&report, None));
     super::identify::print_messages(&lines);
     Ok(())
 }
@@ -111,5 +112,16 @@ pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&s
             let kind = if limit.is_warning() { "warning" } else { "note" };
             Some(format!("imu-attest: {kind}: {run}{}", limit.words(name)))
         })
+        .collect()
+}
+
+/// What the model with the findings still leaves unexplained ([`crate::diagnose::Report::unexplained`]),
+/// one warning per block; after `run: ` when the lines of several runs are printed together.
+pub(super) fn unexplained_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
+    let run = run.map_or_else(String::new, |r| format!("{r}: "));
+    report
+        .unexplained()
+        .into_iter()
+        .map(|(_, words)| format!("imu-attest: warning: {run}{words}"))
         .collect()
 }

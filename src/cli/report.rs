@@ -90,10 +90,9 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
             }
         }
         if let Ok(diagnosis) = &report.diagnosis {
-            messages.extend(super::discrepancy::input_limit_lines(
-                diagnosis,
-                Some(&path.display().to_string()),
-            ));
+            let shown = path.display().to_string();
+            messages.extend(super::discrepancy::input_limit_lines(diagnosis, Some(&shown)));
+            messages.extend(super::discrepancy::unexplained_lines(diagnosis, Some(&shown)));
         }
         reports.push(report);
     }

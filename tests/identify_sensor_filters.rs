@@ -13,6 +13,9 @@
 //!   the block's response to them leads, so a model with zeros fits, whose delay and poles are
 //!   not the block's alone. Such a model says so (`zeros_lead`) with the lead, near the filter's
 //!   group delay (11.25 ms); a block fitted at order 0 says its negative delay. Neither is silent.
+//! - A clean run forced to an order the rules reject says `inadmissible_order`, not `zeros_lead`
+//!   (its zeros lead or lag at random). The other side, an admissible all-pole fit that does not
+//!   say it, is the unit test `bic_finds_a_second_order_filter_above_the_band`.
 
 use std::f64::consts::{PI, SQRT_2};
 

@@ -122,6 +122,6 @@ pub(super) fn unexplained_lines(report: &crate::diagnose::Report, run: Option<&s
     report
         .unexplained()
         .into_iter()
-        .map(|(_, words)| format!("imu-attest: warning: {run}{words}"))
+        .map(|words| format!("imu-attest: warning: {run}{words}"))
         .collect()
 }

@@ -56,17 +56,17 @@ impl Report {
     /// mostly not one of the catalogue's effects, and any finding there is a partial fit of it
     /// whose size cannot be certified (angles measured through a 20 Hz filter: chi2/dof 5.1-5.3
     /// after five findings that were none of the run's, 55-62 on an independent simulator's run
-    /// after ten). `(block, words)`, empty when every block is explained; the real recordings
-    /// leave 1.13-1.44.
+    /// after ten). One sentence per block, naming it; empty when every block is explained; the
+    /// real recordings leave 1.13-1.44.
     #[must_use]
-    pub fn unexplained(&self) -> Vec<(String, String)> {
+    pub fn unexplained(&self) -> Vec<String> {
         self.blocks
             .iter()
             .filter(|(_, b)| b.chi2_per_dof[1] > POOR_FIT || b.chi2_per_dof[1].is_nan())
             .map(|(name, b)| {
                 let named = self.findings.iter().filter(|f| f.block.name() == name).count();
                 let [before, after] = b.chi2_per_dof;
-                let words = if named == 0 {
+                if named == 0 {
                     format!(
                         "{name}: the paper's model leaves chi2/dof {after:.2} and no effect of the \
                          catalogue explains it: the disagreement is something else (the \
@@ -80,8 +80,7 @@ impl Report {
                          sizes not certifiable (the identifier's warnings and the disturbance \
                          density say where)"
                     )
-                };
-                (name.clone(), words)
+                }
             })
             .collect()
     }

@@ -488,7 +488,7 @@ fn diagnosis(h: &mut String, run: &RunReport) {
     }
     if let Ok(report) = &run.diagnosis {
         // What the findings leave unexplained: their sizes are then not certifiable.
-        for (_, words) in report.unexplained() {
+        for words in report.unexplained() {
             let _ = write!(h, "<p class=\"warn\">{}.</p>", esc(&words));
         }
         // Where the search's band ended below the band asked for, or the user's band reaches

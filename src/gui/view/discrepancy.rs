@@ -66,7 +66,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         format!("{verdict} ({ended}: the inputs above are not the motion)")
     };
     ui.label(egui::RichText::new(verdict).strong());
-    for (_, words) in report.unexplained() {
+    for words in report.unexplained() {
         ui.colored_label(ui.visuals().error_fg_color, words);
     }
     for f in &report.findings {

@@ -19,8 +19,11 @@
 //! Several starts are refined (SK at the previous order's delay; the previous order's
 //! denominator times a far pole `1 + sigma / 10`, whose projected residual cannot exceed the
 //! previous order's from order 2 on, since the numerator space then holds the previous numerator
-//! times the same factor); the smallest residual wins, stable or not: an unstable best fit is
-//! returned and flagged as such by the caller, never swapped silently for a worse stable one. The
+//! times the same factor; at order 2 a sensor's anti-alias pair at 1.5, 3 and 6 times the band's
+//! top). The smallest residual wins unless it is unstable and the data do not prefer it
+//! significantly to the best stable one (Vuong's test, [`Fitted::preferred`]); an unstable fit the
+//! data do prefer is returned and flagged as such by the caller, never swapped silently for a
+//! worse stable one. The
 //! best is also refined once more from its mirror image (same magnitude response), the delay moved
 //! to keep the phase slope: at order 1 always (`1 - T s`), from order 2 when it has poles in the
 //! right half plane. A right-half-plane pole plus a longer delay is otherwise easy to confuse with
@@ -38,6 +41,13 @@ use super::model::{ELEMENTS, Model, Prepared};
 
 /// Sanathanan–Koerner iterations per start.
 const SK_ITERATIONS: usize = 8;
+/// Natural frequencies of the order-2 filter starts, in units of the band's top ([`filter_pairs`]).
+const FILTER_RATIOS: [f64; 3] = [1.5, 3.0, 6.0];
+/// Vuong's statistic beyond which an order's unstable best fit is preferred to its best stable
+/// one ([`Fitted::preferred`]): a one-sided 2.3 % level.
+const PREFERENCE_Z: f64 = 2.0;
+/// Damping of the order-2 filter starts (a Butterworth pair).
+const FILTER_DAMPING: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// When a refinement from scratch stops (see [`refine`]).
 const COLD: Stop = Stop {
     patience: 5,
@@ -61,8 +71,65 @@ struct Stop {
     enough: f64,
 }
 
-/// Fits order `order >= 1` starting from `prev` (the best fit of order `order - 1`).
-pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) -> Option<Model> {
+/// An order's fit: the refined start of smallest chi2, and, when that one is unstable, the best
+/// stable one too (the caller decides between them, [`Fitted::preferred`]).
+pub(super) struct Fitted {
+    /// The smallest chi2 of every refined start, stable or not.
+    pub best: (Model, f64),
+    /// The stable refined start of smallest chi2, when `best` is unstable.
+    pub stable: Option<(Model, f64)>,
+}
+
+impl Fitted {
+    /// `best`, unless it is unstable and the data do not prefer it to `stable` significantly:
+    /// Vuong's test for two models of as many parameters, on the per-bin differences of their
+    /// chi2 terms (`d_k`, bins `correlation` apart counted as one), prefers the unstable fit
+    /// only when `sum d_k` exceeds `PREFERENCE_Z` of its standard deviation. A sensor's dynamics
+    /// are stable: an order judged by (and rejected for) an unstable fit its data do not prefer
+    /// leaves a lower order that is wrong. An independent simulator's gyro behind a 100 Hz
+    /// second-order filter at 1 kHz: the true pair (`omega_n` 630 rad/s, damping 0.71, delay
+    /// 3.02 ms against 3) had a chi2 4 above an unstable fit (poles at +890 and -391 rad/s,
+    /// delay 6.6 ms), and order 0 was kept with its delay 10 deviations off.
+    /// Also returned: the fit not preferred, when there is one (a start of the next order too).
+    pub fn preferred(self, data: &Prepared, correlation: f64) -> (Model, Option<Model>) {
+        let Some((stable, _)) = self.stable else {
+            return (self.best.0, None);
+        };
+        let z = preference_z(data, &self.best.0, &stable, correlation);
+        if z > PREFERENCE_Z {
+            (self.best.0, Some(stable))
+        } else {
+            (stable, Some(self.best.0))
+        }
+    }
+}
+
+/// Vuong's statistic of `a` over `b`: `sum_k d_k / sqrt(correlation n var(d_k))`, `d_k` bin
+/// `k`'s chi2 under `b` less under `a` (positive when `a` fits better); 0 without spread.
+fn preference_z(data: &Prepared, a: &Model, b: &Model, correlation: f64) -> f64 {
+    let d: Vec<f64> = a
+        .chi2_rows(data)
+        .iter()
+        .zip(b.chi2_rows(data))
+        .map(|(ra, rb)| rb.iter().sum::<f64>() - ra.iter().sum::<f64>())
+        .collect();
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    let sd = (correlation.max(1.0) * n * var).sqrt();
+    if sd > 0.0 { mean * n / sd } else { 0.0 }
+}
+
+/// Fits order `order >= 1` starting from `prev` (the fit of order `order - 1`) and from `other`,
+/// that order's fit not preferred ([`Fitted::preferred`]; without it, the next order's fits from
+/// the preferred one alone missed a better optimum the other leads to).
+pub(super) fn fit(
+    data: &Prepared,
+    order: usize,
+    prev: &Model,
+    other: Option<&Model>,
+    max_iter: usize,
+) -> Option<Fitted> {
     let mut starts = Vec::new();
     if let Some(den) = sk_denominator(data, order, prev.tau) {
         let reflected = reflect_unstable(&den);
@@ -72,20 +139,20 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
         starts.push((reflected, prev.tau));
     }
     starts.push((extended(&prev.den), prev.tau));
-    let mut best: Option<(Model, f64)> = None;
-    // The starts are refined in parallel and compared in order, as a sequential loop would.
-    let refined: Vec<Option<(Model, f64)>> = starts
-        .into_par_iter()
-        .map(|(den, tau)| refined(data, den, tau, max_iter))
-        .collect();
-    for candidate in refined.into_iter().flatten() {
-        keep_best(candidate, &mut best);
+    starts.extend(other.map(|m| (extended(&m.den), m.tau)));
+    if order == 2 {
+        starts.extend(filter_pairs(prev, data.omega_ref));
     }
+    // The starts are refined in parallel and compared in order, as a sequential loop would.
+    let mut refined: Vec<(Model, f64)> = starts
+        .into_par_iter()
+        .filter_map(|(den, tau)| refined(data, den, tau, max_iter))
+        .collect();
     // The mirror image of the best: at order 1 always (`1 - T s`), from order 2 when the best has
     // poles in the right half plane (those reflected into the left). A pole and its mirror have
     // the same magnitude response, so each is a local optimum the other start can miss; the delay
     // moves to keep the low-frequency phase slope (`d_1 / omega_ref`, the poles' lag).
-    let mirror = best.as_ref().and_then(|(m, _)| {
+    let mirror = smallest(&refined, |_| true).and_then(|(m, _)| {
         let den = if order == 1 {
             vec![-m.den[0]]
         } else {
@@ -95,9 +162,22 @@ pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) 
         Some((den, tau))
     });
     if let Some((den, tau)) = mirror {
-        consider(data, den, tau, max_iter, &mut best);
+        refined.extend(self::refined(data, den, tau, max_iter));
     }
-    best.map(|b| b.0)
+    let best = smallest(&refined, |_| true)?.clone();
+    let stable = if is_stable(&best.0.den) {
+        None
+    } else {
+        smallest(&refined, |m| is_stable(&m.den)).cloned()
+    };
+    Some(Fitted { best, stable })
+}
+
+/// The fit of smallest finite chi2 among those `keep` accepts (the first of equals).
+fn smallest(fits: &[(Model, f64)], keep: impl Fn(&Model) -> bool) -> Option<&(Model, f64)> {
+    fits.iter()
+        .filter(|(m, chi2)| chi2.is_finite() && keep(m))
+        .reduce(|a, b| if b.1 < a.1 { b } else { a })
 }
 
 /// Refines `start`, a fit of its order to nearby data (a retune), with the looser stopping rules
@@ -120,25 +200,27 @@ fn extended(den: &[f64]) -> Vec<f64> {
     out
 }
 
+/// Order-2 starts from a sensor's own anti-alias filter, the commonest dynamics a block has: a
+/// Butterworth pair (damping `FILTER_DAMPING`) at each of `FILTER_RATIOS` times the band's top,
+/// the delay less the pair's lag at low frequency (`2 zeta / omega_n`) so that the phase slope of
+/// `prev` (its delay plus its poles' lag, `d_1 / omega_ref`) is kept. Without them an order-2 fit
+/// behind a real right-half-plane pole can miss a stable complex pair whose magnitude it cannot
+/// reach by mirroring: an independent simulator's gyro behind a 100 Hz filter at 1 kHz was
+/// fitted with poles at -1603 and +716 rad/s and a delay of 6.5 ms, and kept order 0.
+fn filter_pairs(prev: &Model, omega_ref: f64) -> impl Iterator<Item = (Vec<f64>, f64)> {
+    let lag = prev.tau + prev.den.first().copied().unwrap_or(0.0) / omega_ref;
+    FILTER_RATIOS.iter().map(move |ratio| {
+        let r = 1.0 / ratio;
+        let d1 = 2.0 * FILTER_DAMPING * r;
+        (vec![d1, r * r], lag - d1 / omega_ref)
+    })
+}
+
 /// Refines from `(den, tau)`; the model and its chi2.
 fn refined(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize) -> Option<(Model, f64)> {
     let model = refine(data, den, tau, max_iter, COLD)?;
     let chi2 = model.chi2(data);
     Some((model, chi2))
-}
-
-/// Keeps `candidate` in `best` if its chi2 is finite and smaller.
-fn keep_best(candidate: (Model, f64), best: &mut Option<(Model, f64)>) {
-    if candidate.1.is_finite() && best.as_ref().is_none_or(|b| candidate.1 < b.1) {
-        *best = Some(candidate);
-    }
-}
-
-/// Refines from `(den, tau)` and keeps the result in `best` if its chi2 is smaller.
-fn consider(data: &Prepared, den: Vec<f64>, tau: f64, max_iter: usize, best: &mut Option<(Model, f64)>) {
-    if let Some(candidate) = refined(data, den, tau, max_iter) {
-        keep_best(candidate, best);
-    }
 }
 
 /// Whether every root of `1 + sum den[m-1] sigma^m` has a negative real part.

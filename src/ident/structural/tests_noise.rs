@@ -98,8 +98,18 @@ fn order1_uncertainties_are_honest() {
 }
 
 fn auto_fit(truth: &Truth, seed: u64, criterion: InformationCriterion) -> StructuralFit {
+    auto_fit_with_noise(truth, seed, criterion, 1.0)
+}
+
+/// [`auto_fit`] with the data's noise scaled by `noise_scale` (the stated variance unscaled).
+fn auto_fit_with_noise(
+    truth: &Truth,
+    seed: u64,
+    criterion: InformationCriterion,
+    noise_scale: f64,
+) -> StructuralFit {
     let mut rng = Rng::new(seed);
-    let data = synthesise(truth, &mut rng, 1.0);
+    let data = synthesise(truth, &mut rng, noise_scale);
     let input = ResponseEstimate {
         frequency_hz: &data.0,
         response: &data.1,
@@ -174,28 +184,8 @@ fn bic_finds_the_sensor_pole() {
 #[test]
 fn bic_finds_a_second_order_filter_above_the_band() {
     let mut rng = Rng::new(450);
-    let w = 2.0 * PI * 100.0;
-    let zeta = std::f64::consts::FRAC_1_SQRT_2;
     for seed in 0..8 {
-        let tau = rng.uniform_in(0.002, 0.006);
-        let truth = Truth {
-            num: vec![random_gain(&mut rng)],
-            den: vec![2.0 * zeta / w, 1.0 / (w * w)],
-            tau,
-        };
-        let fit = auto_fit(&truth, 2500 + seed, InformationCriterion::Bic);
-        eprintln!(
-            "seed {seed}: order {}, poles {:?}, tau {:.6} +- {:.6} (true {tau:.6})",
-            fit.order, fit.poles, fit.tau_s, fit.tau_std_s
-        );
-        assert_eq!(fit.order, 2, "seed {seed}: {:?}", fit.candidates);
-        assert!(fit.stable, "seed {seed}");
-        // From order 2 the delay trades with the numerator's first coefficient (`admissible`,
-        // rule 4): its stated deviation is not calibrated here (2.8 and 3.6 of them off on two of
-        // eight seeds, measured), so only its size is checked.
-        assert!((fit.tau_s - tau).abs() < 1e-3, "seed {seed}: tau {}", fit.tau_s);
-        let natural_hz = fit.poles[0][0].hypot(fit.poles[0][1]) / (2.0 * PI);
-        assert!((natural_hz - 100.0).abs() < 15.0, "seed {seed}: {natural_hz} Hz");
+        let fit = assert_filter_pair_found(&mut rng, 2500 + seed);
         // An all-pole filter: its zeros do not lead beyond the self-check's bound (`zeros_lead`
         // stays quiet; measured: seed 4 leads by 2.06 of its deviations, the delay 2.8 long).
         let [lag, std] = fit.zeros_lag_s.expect("order 2 has N_1");
@@ -229,5 +219,71 @@ fn timing_of_order_0_and_auto() {
     eprintln!("order 0: {:.2} ms, auto: {:.2} ms", t0 * 1e3, ta * 1e3);
     if !cfg!(debug_assertions) {
         assert!(t0 < 0.010 && ta < 0.100, "order 0 {t0} s, auto {ta} s");
+    }
+}
+
+/// The same filter on other seeds: on two of sixteen the order-2 fit's best is an unstable pair
+/// (one real pole in each half plane, a longer delay) that fits a little better than the true
+/// stable pair, whose magnitude its mirror image does not reach. The data do not prefer it
+/// significantly (Vuong's test), so the stable pair is the order's fit, and is chosen. Checked:
+/// when the unstable best always wins, seed 2602 keeps order 0 with the filter's lag in its delay
+/// (2.29 ms long).
+#[test]
+fn a_stable_pair_is_kept_when_an_unstable_one_fits_no_better() {
+    let mut rng = Rng::new(451);
+    for seed in 0..16 {
+        assert_filter_pair_found(&mut rng, 2600 + seed);
+    }
+}
+
+/// Fits a gain and delay (drawn from `rng`) behind a 100 Hz Butterworth pair on data of `seed`,
+/// and asserts order 2, stable, the pair at 100 +- 15 Hz and the delay within a millisecond.
+fn assert_filter_pair_found(rng: &mut Rng, seed: u64) -> StructuralFit {
+    let w = 2.0 * PI * 100.0;
+    let zeta = std::f64::consts::FRAC_1_SQRT_2;
+    let tau = rng.uniform_in(0.002, 0.006);
+    let truth = Truth {
+        num: vec![random_gain(rng)],
+        den: vec![2.0 * zeta / w, 1.0 / (w * w)],
+        tau,
+    };
+    let fit = auto_fit(&truth, seed, InformationCriterion::Bic);
+    eprintln!(
+        "seed {seed}: order {}, poles {:?}, tau {:.6} +- {:.6} (true {tau:.6})",
+        fit.order, fit.poles, fit.tau_s, fit.tau_std_s
+    );
+    assert_eq!(fit.order, 2, "seed {seed}: {:?}", fit.candidates);
+    assert!(fit.stable, "seed {seed}");
+    // From order 2 the delay trades with the numerator's first coefficient (`admissible`, rule 4):
+    // its stated deviation is not calibrated here (2.8 and 3.6 of them off on two of eight seeds,
+    // measured), so only its size is checked.
+    assert!((fit.tau_s - tau).abs() < 1e-3, "seed {seed}: tau {}", fit.tau_s);
+    let natural_hz = fit.poles[0][0].hypot(fit.poles[0][1]) / (2.0 * PI);
+    assert!((natural_hz - 100.0).abs() < 15.0, "seed {seed}: {natural_hz} Hz");
+    fit
+}
+
+/// A response with a real right-half-plane pole at 30 Hz (a lead: what angles behind a filter
+/// give): the data prefer the unstable order-1 fit significantly to the best stable one, which
+/// must put the lead into a shorter delay, so the order's candidate stays the unstable fit and is
+/// rejected for it; the stable fit is not swapped in. Checked: when the stable fit always wins,
+/// the first seed's order-1 candidate is stable.
+#[test]
+fn an_unstable_fit_the_data_prefer_is_not_swapped_for_a_stable_one() {
+    let mut rng = Rng::new(452);
+    let p = 2.0 * PI * 30.0;
+    for seed in 0..4 {
+        let truth = Truth {
+            num: vec![random_gain(&mut rng)],
+            den: vec![-1.0 / p],
+            tau: 0.004,
+        };
+        let fit = auto_fit(&truth, 2700 + seed, InformationCriterion::Bic);
+        let first = &fit.candidates[1];
+        eprintln!(
+            "seed {seed}: order {}, candidates {:?}",
+            fit.order, fit.candidates
+        );
+        assert!(!first.stable, "seed {seed}: {first:?}");
     }
 }

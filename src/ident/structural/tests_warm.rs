@@ -109,8 +109,18 @@ fn nearby_data_give_the_cold_answer_on_the_determined_orders() {
     for (r, f) in refit.candidates.iter().zip(&fresh.candidates) {
         // Far below the criterion's penalty per parameter (ln(18 n_bins) ~ 8.7).
         let tolerance = if r.order <= 1 { 0.05 } else { 0.5 };
+        // Above the true order the fits are over-parameterised, their chi2 surface has many
+        // optima close together, and which one a search from scratch reaches depends on its
+        // starts: there the refinement must not end worse (it may end better, as the previous
+        // optimum's neighbourhood holds one the cold starts miss: measured, 6493.3 against 6505.3
+        // at order 3 once order 2's fits compared stable and unstable ones).
+        let excess = if r.order <= refit.order {
+            (r.chi2 - f.chi2).abs()
+        } else {
+            r.chi2 - f.chi2
+        };
         assert!(
-            (r.chi2 - f.chi2).abs() <= tolerance,
+            excess <= tolerance,
             "order {}: chi2 {} from the previous fit, {} cold",
             r.order,
             r.chi2,

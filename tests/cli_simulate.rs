@@ -281,6 +281,18 @@ fn bad_arguments_exit_2_with_one_line() {
                 "simulate",
                 "--regime",
                 "cruise",
+                "--sensor-filter-hz",
+                "0",
+                "--out",
+                out,
+            ],
+            "--sensor-filter-hz: '0' is not a positive number of Hz",
+        ),
+        (
+            vec![
+                "simulate",
+                "--regime",
+                "cruise",
                 "--out",
                 missing_dir.to_str().unwrap(),
             ],

@@ -52,7 +52,7 @@ usage:
                       [--effect ID[:block][@scale]]... [--blocks gyro,accel]
                       [--stand real] [--angle-latency S] [--angle-band-hz HZ] [--angle-rate-hz HZ]
                       [--angle-filter-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
-                      [--sensor-noise default|white] [--random-walk K]
+                      [--sensor-noise default|white] [--random-walk K] [--sensor-filter-hz HZ]
                       [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]
                       [--sine roll|yaw|pitch:HZ:DEG]...
                       [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv

@@ -1,7 +1,7 @@
 //! `imu-attest simulate --regime NAME [--duration S] [--rate HZ] [--seed N]
 //! [--effect ID[:block][@scale]]... [--blocks gyro,accel] [--stand real] [--angle-latency S]
 //! [--angle-band-hz HZ] [--angle-filter-hz HZ] [--angle-rate-hz HZ] [--coloured-angle-noise RAD] [--coloured-angle-corner-hz HZ]
-//! [--sensor-noise default|white] [--random-walk K] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
+//! [--sensor-noise default|white] [--random-walk K] [--sensor-filter-hz HZ] [--fault glitch|hold|clip|wrap[:CHANNEL]]...
 //! [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF] [--sine roll|yaw|pitch:HZ:DEG]...
 //! --out RUN.csv`
 
@@ -80,6 +80,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     if let Some(fc) = positive_hz(args, "angle-filter-hz")? {
         config.stand.filter_hz = Some(fc);
     }
+    config.sensor_filter_hz = positive_hz(args, "sensor-filter-hz")?;
     if let Some(fr) = args.get("angle-rate-hz") {
         let fr: f64 = fr
             .parse()

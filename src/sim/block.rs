@@ -49,6 +49,7 @@ pub fn draw_block(block: Block, rng: &mut Rng) -> BlockTruth {
         bias,
         noise,
         effects: Vec::new(),
+        anti_alias_hz: None,
     }
 }
 
@@ -126,9 +127,12 @@ pub fn block_outputs(
         }
     }
     let lag = |f: f64| {
-        lag_s.map_or(Complex64::from(1.0), |t| {
+        let own = lag_s.map_or(Complex64::from(1.0), |t| {
             first_order_lowpass(f, 1.0 / (2.0 * std::f64::consts::PI * t))
-        })
+        });
+        truth
+            .anti_alias_hz
+            .map_or(own, |fc| own * super::stand::butterworth2(f, fc))
     };
     let mut out: [Vec<f64>; 3] = Default::default();
     for i in 0..3 {

@@ -67,6 +67,9 @@ pub struct SimConfig {
     pub tone: ToneOptions,
     /// Sines added to the programme (none by default).
     pub sines: Vec<sines::ProgramSine>,
+    /// A second-order Butterworth low-pass at this corner (Hz) on both blocks' outputs, a
+    /// sensor's anti-alias filter (none by default).
+    pub sensor_filter_hz: Option<f64>,
 }
 
 /// How a hidden `vibration_tone` is made (`simulate --tone-hz`, `--tone-gate`).
@@ -105,6 +108,7 @@ impl SimConfig {
             sensor_noise: SensorNoiseOptions::default(),
             tone: ToneOptions::default(),
             sines: Vec::new(),
+            sensor_filter_hz: None,
         }
     }
 }
@@ -302,6 +306,7 @@ pub fn simulate(config: &SimConfig) -> Result<SimulatedRun, SimError> {
         }
         let mut rng = root.fork(10 + index as u64);
         let mut truth = draw_block(block, &mut rng);
+        truth.anti_alias_hz = config.sensor_filter_hz;
         if config.sensor_noise.white_only {
             truth.noise.coloured_asd = [0.0; 3];
         }

@@ -117,7 +117,7 @@ pub(super) fn measured_angle(
 }
 
 /// A causal second-order Butterworth low-pass at `fc`, Hz: `1 / (1 + sqrt(2) j f/fc - (f/fc)^2)`.
-fn butterworth2(f: f64, fc: f64) -> Complex64 {
+pub(super) fn butterworth2(f: f64, fc: f64) -> Complex64 {
     let r = f / fc;
     Complex64::new(1.0 - r * r, std::f64::consts::SQRT_2 * r).inv()
 }

@@ -62,6 +62,10 @@ pub struct BlockTruth {
     pub noise: NoiseTruth,
     /// Effects present in this block.
     pub effects: Vec<EffectTruth>,
+    /// A second-order Butterworth low-pass on the outputs (a sensor's anti-alias filter,
+    /// `simulate --sensor-filter-hz`), its corner in Hz; none by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anti_alias_hz: Option<f64>,
 }
 
 /// The disturbance's shaping filter: `psi(f) = D_w L_w xi_w + D_c L_c xi_c / (1 + j f/f_c)`, with

@@ -49,6 +49,7 @@ mod error;
 pub mod factor;
 pub mod grid;
 mod matrix;
+mod offset;
 mod pad;
 pub mod refine;
 mod settings;

@@ -33,11 +33,6 @@ pub fn criterion_value(
     chi2 + penalty * parameters as f64
 }
 
-/// The real data the criterion counts: the bins' correlation makes fewer independent ones.
-fn effective_data(data: &Prepared, settings: &StructuralSettings) -> usize {
-    ((data.real_data() as f64 / settings.bin_correlation.max(1.0)) as usize).max(1)
-}
-
 /// Where the fits of each order start.
 #[derive(Clone, Copy)]
 pub(super) enum Starts<'a> {
@@ -101,27 +96,25 @@ pub(super) fn fit_orders(
             .collect(),
         _ => Vec::new(),
     };
-    // The order below's fit not preferred (`rational::Fitted::preferred`), a start too.
-    let mut other: Option<Model> = None;
     for n in models.len()..=highest {
         // `models` holds orders 0..n here: the loop stops at the first failure.
         let below = &models[n - 1];
         // A refined order is kept unless it ends worse than the order below (which, from order 2
-        // on, nests in it): then it is fitted from scratch, which cannot.
+        // on, nests in it): then it is fitted from scratch, which cannot, but for a stable fit
+        // preferred to a better unstable one (`rational::Fitted::preferred`). A refined order
+        // (a retune, provisional: the app refits from scratch once the settings rest) is not
+        // put through that preference.
         let refined = warm
             .get_mut(n - 1)
             .and_then(Option::take)
             .filter(|(_, chi2)| *chi2 <= below.chi2(data) * (1.0 + NESTED_SLACK));
         let fitted = match refined {
-            Some((model, _)) => Some((model, None)),
-            None => rational::fit(data, n, below, other.as_ref(), settings.max_iterations)
+            Some((model, _)) => Some(model),
+            None => rational::fit(data, n, below, settings.max_iterations)
                 .map(|fitted| fitted.preferred(data, settings.bin_correlation)),
         };
         match fitted {
-            Some((model, not_preferred)) => {
-                models.push(model);
-                other = not_preferred;
-            }
+            Some(model) => models.push(model),
             // Fixed: every order below the requested one is its starting point.
             None if matches!(choice, OrderChoice::Fixed(_)) => {
                 return Err(StructuralError::NumericalFailure { order: n });
@@ -146,7 +139,7 @@ pub(super) fn fit_orders(
         .fold(f64::INFINITY, f64::min)
         .max(1.0);
     let correlation = settings.bin_correlation.max(1.0);
-    let effective_data = effective_data(data, settings);
+    let effective_data = ((data.real_data() as f64 / correlation) as usize).max(1);
     let mut candidates = Vec::with_capacity(considered.len());
     for (i, model) in considered.iter().enumerate() {
         let chi2 = chi2[i];

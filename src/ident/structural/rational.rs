@@ -19,7 +19,7 @@
 //! Several starts are refined (SK at the previous order's delay; the previous order's
 //! denominator times a far pole `1 + sigma / 10`, whose projected residual cannot exceed the
 //! previous order's from order 2 on, since the numerator space then holds the previous numerator
-//! times the same factor; the order below's fit not preferred, times the same pole). The
+//! times the same factor). The
 //! best is also refined once more from its mirror image (same magnitude response), the delay moved
 //! to keep the phase slope: at order 1 always (`1 - T s`), from order 2 when it has poles in the
 //! right half plane. A right-half-plane pole plus a longer delay is otherwise easy to confuse with
@@ -96,22 +96,20 @@ impl Fitted {
     /// second-order filter at 1 kHz: the true pair (`omega_n` 630 rad/s, damping 0.71, delay
     /// 3.02 ms against 3) had a chi2 4 above an unstable fit (poles at +890 and -391 rad/s,
     /// delay 6.6 ms), and order 0 was kept with its delay 10 deviations off.
-    /// Also returned: the fit not preferred, when there is one (a start of the next order too).
-    pub fn preferred(self, data: &Prepared, correlation: f64) -> (Model, Option<Model>) {
+    pub fn preferred(self, data: &Prepared, correlation: f64) -> Model {
         let Some((stable, _)) = self.stable else {
-            return (self.best.0, None);
+            return self.best.0;
         };
-        let z = preference_z(data, &self.best.0, &stable, correlation);
-        if z > PREFERENCE_Z {
-            (self.best.0, Some(stable))
+        if preference_z(data, &self.best.0, &stable, correlation) > PREFERENCE_Z {
+            self.best.0
         } else {
-            (stable, Some(self.best.0))
+            stable
         }
     }
 }
 
-/// Vuong's statistic of `a` over `b`: `sum_k d_k / sqrt(correlation n var(d_k))`, `d_k` bin
-/// `k`'s chi2 under `b` less under `a` (positive when `a` fits better); 0 without spread.
+/// Vuong's statistic of `a` over `b` on `data` ([`vuong_z`] of the per-bin differences of
+/// their chi2 terms, `b`'s less `a`'s: positive when `a` fits better).
 fn preference_z(data: &Prepared, a: &Model, b: &Model, correlation: f64) -> f64 {
     let d: Vec<f64> = a
         .chi2_rows(data)
@@ -119,23 +117,33 @@ fn preference_z(data: &Prepared, a: &Model, b: &Model, correlation: f64) -> f64 
         .zip(b.chi2_rows(data))
         .map(|(ra, rb)| rb.iter().sum::<f64>() - ra.iter().sum::<f64>())
         .collect();
-    let n = d.len() as f64;
-    let mean = d.iter().sum::<f64>() / n;
-    let var = d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    let sd = (correlation.max(1.0) * n * var).sqrt();
-    if sd > 0.0 { mean * n / sd } else { 0.0 }
+    vuong_z(&d, correlation)
 }
 
-/// Fits order `order >= 1` starting from `prev` (the fit of order `order - 1`) and from `other`,
-/// that order's fit not preferred ([`Fitted::preferred`]; without it, the next order's fits from
-/// the preferred one alone missed a better optimum the other leads to).
-pub(super) fn fit(
-    data: &Prepared,
-    order: usize,
-    prev: &Model,
-    other: Option<&Model>,
-    max_iter: usize,
-) -> Option<Fitted> {
+/// `sum d_k / sqrt(correlation n var(d_k))`: the sum of `n` differences over its standard
+/// deviation, neighbouring bins `correlation` apart counted as one (`bin_correlation`, the
+/// variance inflation of the bins' errors). With every difference equal there is no spread: the
+/// evidence is then as large as its sign (`+-inf`, or 0 when they are 0). Any non-finite
+/// difference gives 0: no evidence either way. Fewer than two differences give 0.
+pub(super) fn vuong_z(d: &[f64], correlation: f64) -> f64 {
+    if d.len() < 2 || !d.iter().all(|v| v.is_finite()) {
+        return 0.0;
+    }
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let sd = (correlation.max(1.0) * n * var).sqrt();
+    if sd > 0.0 {
+        mean * n / sd
+    } else if mean == 0.0 {
+        0.0
+    } else {
+        mean.signum() * f64::INFINITY
+    }
+}
+
+/// Fits order `order >= 1` starting from `prev` (the fit of order `order - 1`).
+pub(super) fn fit(data: &Prepared, order: usize, prev: &Model, max_iter: usize) -> Option<Fitted> {
     let mut starts = Vec::new();
     if let Some(den) = sk_denominator(data, order, prev.tau) {
         let reflected = reflect_unstable(&den);
@@ -145,9 +153,8 @@ pub(super) fn fit(
         starts.push((reflected, prev.tau));
     }
     starts.push((extended(&prev.den), prev.tau));
-    starts.extend(other.map(|m| (extended(&m.den), m.tau)));
     // The starts are refined in parallel and compared in order, as a sequential loop would.
-    let mut refined: Vec<(Model, f64)> = starts
+    let mut fits: Vec<(Model, f64)> = starts
         .into_par_iter()
         .filter_map(|(den, tau)| refined(data, den, tau, max_iter))
         .collect();
@@ -155,7 +162,7 @@ pub(super) fn fit(
     // poles in the right half plane (those reflected into the left). A pole and its mirror have
     // the same magnitude response, so each is a local optimum the other start can miss; the delay
     // moves to keep the low-frequency phase slope (`d_1 / omega_ref`, the poles' lag).
-    let mirror = smallest(&refined, |_| true).and_then(|(m, _)| {
+    let mirror = smallest(&fits, |_| true).and_then(|(m, _)| {
         let den = if order == 1 {
             vec![-m.den[0]]
         } else {
@@ -167,21 +174,21 @@ pub(super) fn fit(
     // At order 2 an unstable best may also hide a sensor's anti-alias pair that its mirror does
     // not reach (`filter_pairs`); a stable best needs neither (measured: these starts on every
     // order-2 fit made `identify` 15-19 % slower on the bundled cruise run).
-    let unstable = smallest(&refined, |_| true).is_some_and(|(m, _)| !is_stable(&m.den));
+    let unstable = smallest(&fits, |_| true).is_some_and(|(m, _)| !is_stable(&m.den));
     let mut second: Vec<(Vec<f64>, f64)> = mirror.into_iter().collect();
     if order == 2 && unstable {
         second.extend(filter_pairs(prev, data.omega_ref));
     }
     let more: Vec<(Model, f64)> = second
         .into_par_iter()
-        .filter_map(|(den, tau)| self::refined(data, den, tau, max_iter))
+        .filter_map(|(den, tau)| refined(data, den, tau, max_iter))
         .collect();
-    refined.extend(more);
-    let best = smallest(&refined, |_| true)?.clone();
+    fits.extend(more);
+    let best = smallest(&fits, |_| true)?.clone();
     let stable = if is_stable(&best.0.den) {
         None
     } else {
-        smallest(&refined, |m| is_stable(&m.den)).cloned()
+        smallest(&fits, |m| is_stable(&m.den)).cloned()
     };
     Some(Fitted { best, stable })
 }

@@ -98,18 +98,8 @@ fn order1_uncertainties_are_honest() {
 }
 
 fn auto_fit(truth: &Truth, seed: u64, criterion: InformationCriterion) -> StructuralFit {
-    auto_fit_with_noise(truth, seed, criterion, 1.0)
-}
-
-/// [`auto_fit`] with the data's noise scaled by `noise_scale` (the stated variance unscaled).
-fn auto_fit_with_noise(
-    truth: &Truth,
-    seed: u64,
-    criterion: InformationCriterion,
-    noise_scale: f64,
-) -> StructuralFit {
     let mut rng = Rng::new(seed);
-    let data = synthesise(truth, &mut rng, noise_scale);
+    let data = synthesise(truth, &mut rng, 1.0);
     let input = ResponseEstimate {
         frequency_hz: &data.0,
         response: &data.1,
@@ -285,5 +275,31 @@ fn an_unstable_fit_the_data_prefer_is_not_swapped_for_a_stable_one() {
             fit.order, fit.candidates
         );
         assert!(!first.stable, "seed {seed}: {first:?}");
+        assert_eq!(
+            first.rejected,
+            Some(admissible::Rejection::Unstable),
+            "seed {seed}"
+        );
+        assert_ne!(fit.order, 1, "seed {seed}");
+    }
+}
+
+/// Vuong's statistic on known differences: `[1, 2, 3, 4]` has sum 10, sample variance 5/3 and so
+/// `z = 10 / sqrt(4 * 5/3) = 3.873`; negated, its sign flips; counted with a correlation of 2,
+/// it shrinks by `sqrt(2)`. Equal positive differences are evidence without spread (`+inf`), zeros
+/// none; a NaN or a single difference gives 0.
+#[test]
+fn vuong_z_on_known_differences() {
+    let z = rational::vuong_z(&[1.0, 2.0, 3.0, 4.0], 1.0);
+    assert!((z - 10.0 / (4.0_f64 * 5.0 / 3.0).sqrt()).abs() < 1e-12, "{z}");
+    assert!((rational::vuong_z(&[-1.0, -2.0, -3.0, -4.0], 1.0) + z).abs() < 1e-12);
+    assert!((rational::vuong_z(&[1.0, 2.0, 3.0, 4.0], 2.0) - z / 2.0_f64.sqrt()).abs() < 1e-12);
+    let up = rational::vuong_z(&[0.5; 5], 1.0);
+    assert!(up.is_infinite() && up > 0.0, "{up}");
+    let down = rational::vuong_z(&[-0.5; 5], 1.0);
+    assert!(down.is_infinite() && down < 0.0, "{down}");
+    for none in [&[0.0; 5][..], &[1.0, f64::NAN, 2.0], &[3.0]] {
+        let z = rational::vuong_z(none, 1.0);
+        assert!(z.abs() < f64::MIN_POSITIVE, "{none:?}: {z}");
     }
 }

@@ -600,3 +600,25 @@ fn a_typed_path_opens_a_run_and_writes_an_export() {
     harness.run_steps(2);
     assert!(harness.query_by_label("Cancel").is_none());
 }
+
+/// The stretches are fitted at order 0, so the whole record's delay drawn beside them is its
+/// order-0 fit's when the chosen model has poles (whose delay leaves their lag out): the accel
+/// fixed at order 1 on the sample gets "whole record, order 0" in its stretch plot's legend, the
+/// gyro (order 0) keeps "whole record".
+#[test]
+fn the_stretch_plot_compares_a_model_with_poles_at_order_0() {
+    let mut harness = sample_app();
+    // "whole record" is also the span control's checkbox.
+    let legends = |h: &Harness<'_, App>| h.get_all_by_label("whole record").count() - 1;
+    assert_eq!(legends(&harness), 2, "both blocks at order 0");
+    assert!(harness.query_by_label("whole record, order 0").is_none());
+    set(&mut harness, |s| s.order.accel = OrderSetting::Fixed(1));
+    let id = identification(&harness);
+    assert_eq!(id.model.blocks["accel"].order, 1);
+    assert_eq!(legends(&harness), 1, "the gyro's");
+    assert_eq!(
+        harness.get_all_by_label("whole record, order 0").count(),
+        1,
+        "the accel's"
+    );
+}

@@ -33,6 +33,14 @@ fn diagnose(harness: &mut Harness<'static, App>) {
     harness.run_steps(4);
 }
 
+/// Asserts that no label of the app contains `text` (`why` says what it would mean).
+fn assert_not_shown(harness: &Harness<'_, App>, text: &str, why: &str) {
+    assert!(
+        harness.query_all_by_label_contains(text).next().is_none(),
+        "{why}"
+    );
+}
+
 /// The band searched is shown for each block; where the search ended below the band asked for
 /// (a real run whose optical reference is noise above its slow motion), the words say why, and
 /// on the clean sample nothing is said.
@@ -48,12 +56,10 @@ fn the_band_searched_and_where_the_inputs_are_not_the_motion_are_shown() {
     let mut harness = app(vec![sample_run_path().unwrap()]);
     diagnose(&mut harness);
     harness.get_by_label_contains("gyro: searched 0.10-40.00 Hz");
-    assert!(
-        harness
-            .query_all_by_label_contains("the diagnosis searched")
-            .next()
-            .is_none(),
-        "a limit said on the clean sample"
+    assert_not_shown(
+        &harness,
+        "the diagnosis searched",
+        "a limit said on the clean sample",
     );
 }
 
@@ -81,12 +87,10 @@ fn what_the_findings_leave_unexplained_is_shown() {
     let mut harness = app(vec![sample_run_path().unwrap()]);
     diagnose(&mut harness);
     harness.get_by_label("verdict: no missing effect");
-    assert!(
-        harness
-            .query_all_by_label_contains("leaves chi2/dof")
-            .next()
-            .is_none(),
-        "unexplained said on the clean sample"
+    assert_not_shown(
+        &harness,
+        "leaves chi2/dof",
+        "unexplained said on the clean sample",
     );
 }
 

@@ -12,9 +12,10 @@
 //! bends the gain and the phase together, and `g` then takes the gain's bend while the delay
 //! takes its phase, a worse fit; [`poles_explain_better`]): its `K` is then the gain at low
 //! frequency, its model `g K e^(-tau s)`, and its deviations widened in quadrature by what `g`'s
-//! own uncertainty moves `K` by, and never below the delay-only fit's (widened by that fit's misfit: `g`'s two-term shape is an
-//! assumption, and on simulated runs with a 120 Hz linearly interpolated reference the
-//! accelerometer's `K` kept a third of its bias, 2.1 of the narrower deviations rms). When
+//! own uncertainty moves `K` by, and never below the delay-only fit's (widened by that fit's
+//! misfit: `g`'s two-term shape is an assumption, and on simulated runs with a 120 Hz linearly
+//! interpolated reference the accelerometer's `K` kept a third of its bias, 2.1 of the narrower
+//! deviations rms). When
 //! the fit over `g` still needs poles, the dynamics are the block's (a sensor's low-pass also
 //! bends the gain, with phase): the first fit is kept, as fitted. A fixed order above 0 is the
 //! user's structure and is left alone.

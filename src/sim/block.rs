@@ -3,14 +3,14 @@
 //!
 //! Output channel `i` is
 //! `sum_j K_ij (L u_j)(t - tau - skew_i) + k2_i ud_i |ud_i| + (G f)(t - tau) + tone_i + noise_i + bias_i`,
-//! where `L` is the optional lag and `u_j` has passed the optional mount resonance. Delays and
-//! linear filters are exact (frequency domain on a band-limited periodic signal). A clock drift
+//! where `L` is the optional lag times the optional anti-alias filter and `u_j` has passed the
+//! optional mount resonance. Delays and linear filters are exact (frequency domain on a band-limited periodic signal). A clock drift
 //! is applied last, as a time warp of the whole output (8-point Lagrange interpolation).
 
 use num_complex::Complex64;
 
 use super::effect::{Block, Effect};
-use super::synth::{Grid, first_order_lowpass, resonant_lowpass};
+use super::synth::{Grid, butterworth2, first_order_lowpass, resonant_lowpass};
 use super::truth::{BlockTruth, EffectTruth, NoiseTruth};
 use crate::interp::lagrange;
 use crate::rng::Rng;
@@ -126,13 +126,12 @@ pub fn block_outputs(
             _ => {}
         }
     }
-    let lag = |f: f64| {
-        let own = lag_s.map_or(Complex64::from(1.0), |t| {
+    // The block's own dynamics beyond its delay: a lag effect and an anti-alias filter.
+    let dynamics = |f: f64| {
+        let lag = lag_s.map_or(Complex64::from(1.0), |t| {
             first_order_lowpass(f, 1.0 / (2.0 * std::f64::consts::PI * t))
         });
-        truth
-            .anti_alias_hz
-            .map_or(own, |fc| own * super::stand::butterworth2(f, fc))
+        truth.anti_alias_hz.map_or(lag, |fc| lag * butterworth2(f, fc))
     };
     let mut out: [Vec<f64>; 3] = Default::default();
     for i in 0..3 {
@@ -140,14 +139,14 @@ pub fn block_outputs(
         for (j, u) in u_spec.iter().enumerate() {
             x.iter_mut().zip(u).for_each(|(xi, uj)| *xi += uj * truth.k[i][j]);
         }
-        let x = grid.shape(&grid.delay(&x, truth.tau_s + skew[i]), lag);
+        let x = grid.shape(&grid.delay(&x, truth.tau_s + skew[i]), dynamics);
         out[i] = grid.fft.inverse(x);
     }
     for e in &truth.effects {
         match *e {
             EffectTruth::ScaleNonlinearity { k2 } => {
                 for i in 0..3 {
-                    let seen = grid.shape(&grid.delay(&u_spec[i], truth.tau_s + skew[i]), lag);
+                    let seen = grid.shape(&grid.delay(&u_spec[i], truth.tau_s + skew[i]), dynamics);
                     let ud = grid.fft.inverse(seen);
                     out[i]
                         .iter_mut()

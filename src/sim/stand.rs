@@ -32,7 +32,7 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use super::synth::{Grid, first_order_lowpass};
+use super::synth::{Grid, butterworth2, first_order_lowpass};
 use crate::rng::Rng;
 
 /// The stand's angle-measurement imperfections (all off by default).
@@ -114,12 +114,6 @@ pub(super) fn measured_angle(
         Some(rate) => through_slower_reference(&measured, grid.fft.sample_rate_hz(), rate),
         None => measured,
     }
-}
-
-/// A causal second-order Butterworth low-pass at `fc`, Hz: `1 / (1 + sqrt(2) j f/fc - (f/fc)^2)`.
-pub(super) fn butterworth2(f: f64, fc: f64) -> Complex64 {
-    let r = f / fc;
-    Complex64::new(1.0 - r * r, std::f64::consts::SQRT_2 * r).inv()
 }
 
 /// `x`, sampled at `fs`, as a reference at `reference_hz` sees it (module docs): read at the

@@ -96,6 +96,13 @@ pub fn resonant_lowpass(f: f64, f0: f64, zeta: f64) -> Complex64 {
     Complex64::new(1.0 - r * r, 2.0 * zeta * r).inv()
 }
 
+/// Causal second-order Butterworth low-pass at `fc`, Hz: the resonant low-pass damped at
+/// `1 / sqrt(2)`, `1 / (1 + sqrt(2) j f/fc - (f/fc)^2)`.
+#[must_use]
+pub fn butterworth2(f: f64, fc: f64) -> Complex64 {
+    resonant_lowpass(f, fc, std::f64::consts::FRAC_1_SQRT_2)
+}
+
 /// First-order low-pass `1 / (1 + j f / fc)`.
 #[must_use]
 pub fn first_order_lowpass(f: f64, fc: f64) -> Complex64 {

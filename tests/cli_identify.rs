@@ -361,17 +361,13 @@ fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
     assert_eq!(warning_in(&out), None);
 }
 
-/// A run whose accelerometer outputs are noise alone (a dead block beside a good gyro): refused,
-/// exit 2, one line naming the block and how to keep the other (`"blocks"`), nothing written;
-/// with the accelerometer left out, the gyro is identified.
-#[test]
-fn a_dead_block_is_refused_with_how_to_keep_the_other() {
-    let dir = tempfile::tempdir().unwrap();
-    let run = simulated_run(dir.path());
-    let text = std::fs::read_to_string(&run).unwrap();
+/// `run`'s CSV with the outputs of `columns` replaced by white noise (a dead block), written to
+/// `dir/file` with `run`'s sidecar.
+fn with_dead_columns(dir: &Path, run: &Path, file: &str, columns: &[&str]) -> PathBuf {
+    let text = std::fs::read_to_string(run).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let accel: Vec<usize> = ["ax", "ay", "az"]
+    let dead_columns: Vec<usize> = columns
         .iter()
         .map(|c| header.iter().position(|h| h == c).unwrap())
         .collect();
@@ -379,32 +375,88 @@ fn a_dead_block_is_refused_with_how_to_keep_the_other() {
     let mut dead = header.join(",") + "\n";
     for line in lines {
         let mut cells: Vec<String> = line.split(',').map(str::to_owned).collect();
-        for &c in &accel {
+        for &c in &dead_columns {
             cells[c] = format!("{:.6e}", 1e-3 * rng.normal());
         }
         dead += &(cells.join(",") + "\n");
     }
-    let dead_run = dir.path().join("dead_accel.csv");
+    let dead_run = dir.join(file);
     std::fs::write(&dead_run, dead).unwrap();
     std::fs::copy(run.with_extension("json"), dead_run.with_extension("json")).unwrap();
+    dead_run
+}
+
+fn model_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A run whose accelerometer outputs are noise alone (a dead block beside a good gyro): the
+/// gyro is identified, exactly as on its own, and the accelerometer is refused beside it, in
+/// the model file (`refused_blocks`) and in a warning; with both blocks dead, the run is
+/// refused in one line that does not offer to leave a block out.
+#[test]
+fn a_dead_block_is_refused_beside_the_identified_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = simulated_run(dir.path());
+    let dead_run = with_dead_columns(dir.path(), &run, "dead_accel.csv", &["ax", "ay", "az"]);
     let out = dir.path().join("m.json");
-    let stderr = one_line_refusal(&identify_default(&dead_run, &out), &out);
-    for part in ["dead_accel.csv", "accel block", "no usable band", "\"blocks\""] {
-        assert!(stderr.contains(part), "{part}: {stderr}");
-    }
+    let o = identify_default(&dead_run, &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(
+            "imu-attest: warning: accel block not identified, the result holds the gyro block only: no usable band"
+        ),
+        "{stderr}"
+    );
+    let model = model_json(&out);
+    assert_eq!(keys(&model["blocks"]), ["gyro"]);
+    assert_eq!(keys(&model["refused_blocks"]), ["accel"]);
+    let refused = &model["refused_blocks"]["accel"];
+    assert_eq!(refused["kind"], "no_usable_band");
+    assert!(refused.get("axis").is_none(), "{refused}");
+    assert!(
+        refused["reason"]
+            .as_str()
+            .unwrap()
+            .starts_with("accel block: no usable band")
+    );
+
+    // The gyro alone: the same model of the gyro, nothing refused.
     let settings = dir.path().join("gyro.json");
     std::fs::write(&settings, r#"{"blocks": ["gyro"]}"#).unwrap();
-    let o = identify_with(&dead_run, &settings, &out);
+    let alone = dir.path().join("alone.json");
+    let o = identify_with(&dead_run, &settings, &alone);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    assert_eq!(keys(&model["blocks"]), ["gyro"]);
+    let alone = model_json(&alone);
+    assert!(alone.get("refused_blocks").is_none());
+    for field in ["K", "tau_s", "order", "fit"] {
+        assert_eq!(
+            alone["blocks"]["gyro"][field], model["blocks"]["gyro"][field],
+            "{field}"
+        );
+    }
+
+    let both_dead = with_dead_columns(
+        dir.path(),
+        &run,
+        "dead_both.csv",
+        &["ax", "ay", "az", "gx", "gy", "gz"],
+    );
+    let out = dir.path().join("none.json");
+    let stderr = one_line_refusal(&identify_default(&both_dead, &out), &out);
+    assert!(
+        stderr.contains("dead_both.csv: gyro block: no usable band"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("leave this block out"), "{stderr}");
 }
 
 /// The loader's notices reach the user (contract section 2): an ignored column on a run that is
-/// identified, and a missing sidecar on the refusal it explains (its zero lever arm leaves the
-/// accelerometer's vertical input flat), in the refusal's one line.
+/// identified, and a missing sidecar beside the refusal it explains (its zero lever arm leaves
+/// the accelerometer's vertical input flat; the gyro is identified).
 #[test]
-fn notices_are_printed_and_join_a_refusal_they_explain() {
+fn notices_are_printed_beside_what_they_explain() {
     let dir = tempfile::tempdir().unwrap();
     let run = simulated_run(dir.path());
     let text = std::fs::read_to_string(&run).unwrap();
@@ -425,18 +477,25 @@ fn notices_are_printed_and_join_a_refusal_they_explain() {
         "{stderr}"
     );
     assert!(!stderr.contains("no sidecar"), "{stderr}");
+    assert!(model_json(&out).get("refused_blocks").is_none());
 
     std::fs::remove_file(extra.with_extension("json")).unwrap();
     std::fs::remove_file(&out).unwrap();
-    let stderr = one_line_refusal(&identify_default(&extra, &out), &out);
+    let o = identify_default(&extra, &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
     for part in [
-        "axis fy not excited",
-        "accel_lever_arm_m",
-        "(note: no sidecar extra.json",
+        "imu-attest: note: extra.csv: no sidecar extra.json",
         "lever arms zero",
+        "imu-attest: warning: accel block not identified, the result holds the gyro block only: axis fy not excited",
+        "accel_lever_arm_m",
     ] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }
+    let model = model_json(&out);
+    assert_eq!(keys(&model["blocks"]), ["gyro"]);
+    assert_eq!(model["refused_blocks"]["accel"]["kind"], "not_excited");
+    assert_eq!(model["refused_blocks"]["accel"]["axis"], "fy");
 }
 
 /// A refusal on a single-block run does not offer to leave its only block out: the first 4.4 s

@@ -1,8 +1,9 @@
 //! The app shows what the identifier can and cannot vouch for (issue 13): the self-check's
 //! warnings in Results, the band used, why each order candidate was rejected (and its held-out
 //! chi2), and the same
-//! refusal as `identify` for a run whose stand axis was held still. AccessKit (`egui_kittest`),
-//! no GPU; the worker runs synchronously.
+//! refusal as `identify` for a run whose stand axis was held still, and a block the run cannot
+//! identify said beside the one it can. AccessKit (`egui_kittest`), no GPU; the worker runs
+//! synchronously.
 
 use std::path::{Path, PathBuf};
 
@@ -128,6 +129,38 @@ fn a_run_with_a_still_stand_axis_is_refused_with_the_message_of_identify() {
     let shown = run.identification.error.clone().expect("an error");
     assert!(shown.contains(&expected), "app: {shown}\nidentify: {expected}");
     assert!(harness.get_all_by_label_contains("not excited").count() >= 1);
+}
+
+/// A run without its sidecar (lever arms zero): the gyro's results are shown, and the
+/// accelerometer's refusal above them in the words of `identify`; the diagnosis says the block
+/// was not diagnosed.
+#[test]
+fn a_refused_block_is_said_beside_the_identified_one() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.duration_s = 60.0;
+    config.seed = 4;
+    let sim = simulate(&config).expect("simulated");
+    let path = dir.path().join("no_sidecar.csv");
+    write_run(&sim, &path).expect("written");
+    std::fs::remove_file(path.with_extension("json")).expect("sidecar removed");
+
+    let mut harness = app(vec![path]);
+    let id = harness.state().runs()[0]
+        .identification
+        .as_ref()
+        .expect("identified");
+    assert_eq!(id.model.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
+    let words = id.model.refused_blocks["accel"].words("accel", &["gyro"]);
+    assert!(words.contains("axis fy not excited"), "{words}");
+    harness.get_by_label(&format!("warning: {words}"));
+    harness.get_by_label_contains("gyro τ =");
+
+    harness.get_by_label("Missing effects").click();
+    harness.run_steps(2);
+    harness.get_by_label("Find missing effects").click();
+    harness.run_steps(4);
+    harness.get_by_label_contains("accel block not diagnosed: the run cannot identify it");
 }
 
 /// A diagnosis that finishes after a newer one was requested (threaded mode: the older was

@@ -60,29 +60,27 @@ impl BatchRow {
     }
 }
 
-/// The rows of an identified model (one per block), with the diagnosis's `verdict` if any.
+/// The rows of an identified model (one per block), with the diagnosis's `verdict` if any, then
+/// one row per block the identification refused (status `refused`, the reason as its error).
 #[must_use]
 pub fn rows_of(model: &Model, verdict: Option<&str>) -> Vec<BatchRow> {
-    model
+    let s = &model.source;
+    let row = |name: &str, b: Option<&BlockModel>, verdict: Option<&str>, status: &str, error: &str| {
+        let mut row = BatchRow { cells: Vec::new() };
+        fill(
+            &mut row, &s.file, &s.sha256, &s.regime, name, b, verdict, status, error,
+        );
+        row
+    };
+    let identified = model
         .blocks
         .iter()
-        .map(|(name, b)| {
-            let mut row = BatchRow { cells: Vec::new() };
-            let s = &model.source;
-            fill(
-                &mut row,
-                &s.file,
-                &s.sha256,
-                &s.regime,
-                name,
-                Some(b),
-                verdict,
-                "ok",
-                "",
-            );
-            row
-        })
-        .collect()
+        .map(|(name, b)| row(name, Some(b), verdict, "ok", ""));
+    let refused = model
+        .refused_blocks
+        .iter()
+        .map(|(name, r)| row(name, None, None, "refused", &r.reason));
+    identified.chain(refused).collect()
 }
 
 #[expect(clippy::too_many_arguments, reason = "one row's identity, in column order")]

@@ -93,6 +93,11 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     })
     .map_err(|e| CliError::Input(e.to_string()))?;
     let mut lines = super::progress::note_lines(run_path, &notices);
+    lines.extend(super::identify::refusal_lines(
+        &report.refused_blocks,
+        report.blocks.keys(),
+        "imu-attest: warning: ",
+    ));
     lines.extend(input_limit_lines(&report, None));
     lines.extend(unexplained_lines(&report, None));
     super::identify::print_messages(&lines);

@@ -1,5 +1,6 @@
 //! `imu-attest identify RUN [--settings S.json] --out MODEL.json` (contract sections 3 and 4).
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::{Args, CliError};
@@ -11,7 +12,7 @@ use crate::diagnose::extend::extended_model;
 use crate::effect::Effect;
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
-use crate::model::Model;
+use crate::model::{Model, RefusedBlock};
 use crate::output::{OutputError, ensure_not_input};
 use crate::run::sidecar_path;
 
@@ -143,6 +144,11 @@ pub(super) fn identify_in(
             ));
         }
     }
+    messages.extend(refusal_lines(
+        &model.refused_blocks,
+        model.blocks.keys(),
+        &warning,
+    ));
     for (block, effect) in accepted {
         if !model.blocks.contains_key(block.name()) {
             messages.push(format!(
@@ -158,4 +164,17 @@ pub(super) fn identify_in(
         .check_finite()
         .map_err(|e| CliError::Internal(anyhow::anyhow!("model not written: {e}")))?;
     Ok((model, messages))
+}
+
+/// The warning of each refused block ([`RefusedBlock::words`]), after `warning`.
+pub(super) fn refusal_lines<'a>(
+    refused: &BTreeMap<String, RefusedBlock>,
+    kept: impl Iterator<Item = &'a String>,
+    warning: &str,
+) -> Vec<String> {
+    let kept: Vec<&str> = kept.map(String::as_str).collect();
+    refused
+        .iter()
+        .map(|(name, r)| format!("{warning}{}", r.words(name, &kept)))
+        .collect()
 }

@@ -89,6 +89,11 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
                 ));
             }
         }
+        messages.extend(super::identify::refusal_lines(
+            &report.model.refused_blocks,
+            report.model.blocks.keys(),
+            &format!("imu-attest: warning: {}: ", path.display()),
+        ));
         if let Ok(diagnosis) = &report.diagnosis {
             let shown = path.display().to_string();
             messages.extend(super::discrepancy::input_limit_lines(diagnosis, Some(&shown)));

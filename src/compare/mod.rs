@@ -104,6 +104,10 @@ pub struct ComparedRun {
     pub settings: Option<Settings>,
     /// Per block (`"gyro"`, `"accel"`).
     pub blocks: BTreeMap<String, BlockFigures>,
+    /// The run's blocks its identification refused (`Model::refused_blocks`): compared in no
+    /// pair. Absent when none was.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub refused_blocks: BTreeMap<String, crate::model::RefusedBlock>,
     /// The diagnosis's verdict, when the runs' findings are compared.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub verdict: Option<crate::diagnose::Verdict>,
@@ -222,6 +226,7 @@ pub fn compare(models: &[Model]) -> Result<Comparison, CompareError> {
                 .iter()
                 .map(|(name, b)| (name.clone(), BlockFigures::from_model(b)))
                 .collect(),
+            refused_blocks: m.refused_blocks.clone(),
             verdict: None,
         })
         .collect();

@@ -73,6 +73,7 @@ fn model(regime: &str, blocks: Vec<(&str, BlockModel)>) -> Model {
             .map(|(n, b)| (n.to_owned(), b))
             .collect::<BTreeMap<_, _>>(),
         recording_faults: Vec::new(),
+        refused_blocks: std::collections::BTreeMap::new(),
     }
 }
 

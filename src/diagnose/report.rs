@@ -15,7 +15,7 @@ use crate::block::Block;
 use crate::effect::Effect;
 use crate::ident::selfcheck::POOR_FIT;
 use crate::ident::settings::Settings;
-use crate::model::Source;
+use crate::model::{RefusedBlock, Source};
 
 /// The report's schema name.
 pub const DISCREPANCY_SCHEMA: &str = "imu-attest/discrepancy/1";
@@ -48,6 +48,10 @@ pub struct Report {
     pub criterion: Criterion,
     /// Per block details.
     pub blocks: BTreeMap<String, BlockReport>,
+    /// The run's blocks the identification refused beside the others (`Model::refused_blocks`):
+    /// not diagnosed, the verdict is the other blocks'. Absent when every block was diagnosed.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub refused_blocks: BTreeMap<String, RefusedBlock>,
 }
 
 impl Report {

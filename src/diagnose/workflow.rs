@@ -23,7 +23,8 @@ use crate::ident::identify::BlockIdentification;
 use crate::ident::session::Session;
 use crate::ident::settings::{OrderSetting, Settings};
 use crate::ident::signals::{block_signals, channel_names};
-use crate::model::{BlockModel, Model, Source};
+use crate::model::refused::refused_blocks;
+use crate::model::{BlockModel, Model, RefusedBlock, Source};
 use crate::run::Run;
 use crate::stand::kinematics::EulerSeries;
 use std::sync::Arc;
@@ -82,6 +83,8 @@ pub struct Prepared {
     pub source: Source,
     /// One entry per block, in the order of the settings.
     pub blocks: Vec<PreparedBlock>,
+    /// The blocks the run cannot identify, beside those it can (not diagnosed).
+    pub refused_blocks: BTreeMap<String, RefusedBlock>,
     /// What the record's halves are built from, to tell whether each finding is one property
     /// of the block over the run ([`super::halves`]; `None`: not compared).
     pub halves: Option<HalvesSource>,
@@ -201,6 +204,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         },
         source: Source::of(run),
         blocks,
+        refused_blocks: refused_blocks(&id.refused),
         halves: Some(HalvesSource {
             run: session.run().clone(),
             identification: id,
@@ -253,6 +257,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
             look_elsewhere: "2 ln(m), m the candidates tried in the round".to_owned(),
         },
         blocks,
+        refused_blocks: prep.refused_blocks.clone(),
     }
 }
 

@@ -101,6 +101,21 @@ pub struct RunIdentification {
     pub motion: Arc<ObserverEstimate>,
     /// One entry per identified block, in the order of the settings.
     pub blocks: Vec<BlockIdentification>,
+    /// The blocks the settings name that this run cannot identify, in the order of the
+    /// settings: each with its refusal ([`IdentError::is_refusal`]). Only beside at least one
+    /// identified block: a run whose every block is refused is an error.
+    pub refused: Vec<Refusal>,
+}
+
+/// A block the run cannot identify, beside others it can ([`IdentError::is_refusal`]): no band
+/// where its outputs are coherent with the inputs, or an accelerometer input axis not excited
+/// (its own error, `IdentError::NoUsableBand` or `IdentError::NotExcited`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refusal {
+    /// Which block.
+    pub block: Block,
+    /// Why.
+    pub error: IdentError,
 }
 
 /// Where [`Session::identify`] is: the stage about to start, and how many of `total`

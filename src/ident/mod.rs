@@ -151,6 +151,23 @@ impl IdentError {
         self
     }
 
+    /// Whether the error refuses one block for what its own data lack, leaving the run's other
+    /// blocks to be identified: such a block goes to [`identify::RunIdentification::refused`]
+    /// beside the others. That is no usable band (outputs not coherent with the inputs: a dead
+    /// or disconnected block), or an accelerometer input axis not excited (its inputs depend on
+    /// its lever arm: a zero or undeclared arm leaves the vertical one flat while the motion is
+    /// fine). A gyro input axis not excited is not: the gyro's inputs are the stand's angular
+    /// motion itself, so a stand axis held still takes every block's inputs with it (an
+    /// accelerometer fitted beside it came out with gains 50 % off).
+    #[must_use]
+    pub fn is_refusal(&self) -> bool {
+        match self {
+            IdentError::NoUsableBand { .. } => true,
+            IdentError::NotExcited { block, .. } => *block != crate::block::Block::Gyro.name(),
+            _ => false,
+        }
+    }
+
     /// Whether the error is the user's input (the run, or settings that do not fit it): exit
     /// status 2 and an error panel, where anything else is our fault (exit status 1).
     #[must_use]

@@ -11,8 +11,10 @@
 //!
 //! Each stage's preconditions are checked in one place: the settings against the run
 //! ([`Settings::validate`]) before anything runs, the observer's own (enough samples), the
-//! excitation and the band in [`identify_block_from`]. Results are `Arc` snapshots, shared with
-//! whoever holds them (the app's plots, a model file being written).
+//! excitation and the band in [`identify_block_from`]. A block refused for what its own data
+//! lack ([`IdentError::is_refusal`]) is set aside in [`RunIdentification::refused`] and the
+//! others are identified; only a run whose every block is refused fails. Results are `Arc`
+//! snapshots, shared with whoever holds them (the app's plots, a model file being written).
 //!
 //! [`Start::Cold`] computes what is missing from scratch: what `imu-attest identify` gives.
 //! [`Start::Warm`] (the app while a setting moves) starts the factorisation and the structural
@@ -30,7 +32,9 @@ use rayon::prelude::*;
 use super::IdentError;
 use super::causal_stage::causal_stage;
 use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
-use super::identify::{BlockIdentification, FitStart, IdentStep, RunIdentification, identify_block_from};
+use super::identify::{
+    BlockIdentification, FitStart, IdentStep, Refusal, RunIdentification, identify_block_from,
+};
 use super::settings::{Estimate, Settings};
 use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
@@ -337,12 +341,7 @@ impl Session {
                 identify_block_from(block, spectra, factorisation, &settings, previous.as_deref())
             })
             .collect();
-        // The first block's error in the settings' order, whichever thread failed first.
-        let alone = blocks.len() == 1;
-        let mut identified: Vec<BlockIdentification> = identified
-            .into_iter()
-            .collect::<Result<_, _>>()
-            .map_err(|e: IdentError| if alone { e.alone() } else { e })?;
+        let (mut identified, refused) = split_refusals(&blocks, identified)?;
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
             for b in &mut identified {
@@ -356,6 +355,7 @@ impl Session {
         let id = Arc::new(RunIdentification {
             motion,
             blocks: identified,
+            refused,
         });
         if !keep {
             return Ok(id);
@@ -386,6 +386,32 @@ impl Session {
         }
         Some(self.identify(&settings, Start::Cold, &mut |_| {}))
     }
+}
+
+/// The blocks' identifications (in the settings' order, `blocks`) split into the identified
+/// blocks and the refused ones ([`IdentError::is_refusal`]): a block the run cannot identify does
+/// not take the others with it.
+///
+/// # Errors
+/// The first block's error that is not a refusal, in the settings' order (whichever thread failed
+/// first); else, when every block is refused, the first refusal, without the advice to leave its
+/// block out (nothing would be left).
+fn split_refusals(
+    blocks: &[Block],
+    identified: Vec<Result<BlockIdentification, IdentError>>,
+) -> Result<(Vec<BlockIdentification>, Vec<Refusal>), IdentError> {
+    let (mut ok, mut refused) = (Vec::new(), Vec::new());
+    for (&block, result) in blocks.iter().zip(identified) {
+        match result {
+            Ok(b) => ok.push(b),
+            Err(error) if error.is_refusal() => refused.push(Refusal { block, error }),
+            Err(error) => return Err(error),
+        }
+    }
+    if ok.is_empty() && !refused.is_empty() {
+        return Err(refused.swap_remove(0).error.alone());
+    }
+    Ok((ok, refused))
 }
 
 /// The entry of `block` in a per-block list.

@@ -18,9 +18,11 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 pub mod effects;
+pub mod refused;
 pub mod validation;
 
 pub use effects::ModelEffects;
+pub use refused::RefusedBlock;
 
 use crate::faults::RecordingFault;
 use crate::ident::gain_curvature::EvenGain;
@@ -50,6 +52,10 @@ pub struct Model {
     /// Faults of the recording itself (`faults::detect`), absent when none was found.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub recording_faults: Vec<RecordingFault>,
+    /// The run's blocks the identification refused beside the identified ones ([`refused`]),
+    /// keyed `"gyro"` / `"accel"`: absent when every block was identified.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub refused_blocks: BTreeMap<String, RefusedBlock>,
 }
 
 /// Where the model came from.
@@ -400,6 +406,7 @@ impl Model {
                 .map(|b| (b.block.name().to_owned(), BlockModel::from_identification(b)))
                 .collect(),
             recording_faults: crate::faults::detect(run),
+            refused_blocks: refused::refused_blocks(&id.refused),
         }
     }
 
@@ -493,6 +500,7 @@ mod tests {
             settings: Settings::default(),
             blocks: BTreeMap::new(),
             recording_faults: Vec::new(),
+            refused_blocks: BTreeMap::new(),
         }
     }
 

@@ -111,9 +111,17 @@ fn run_section(h: &mut String, run: &RunReport, checks: &[Check]) {
         }
         h.push_str("</ul>");
     }
+    let kept: Vec<&str> = m.blocks.keys().map(String::as_str).collect();
     for block in Block::BOTH {
         if let Some(b) = m.blocks.get(block.name()) {
             block_section(h, block, b);
+        } else if let Some(r) = m.refused_blocks.get(block.name()) {
+            let _ = write!(
+                h,
+                "<h3 id=\"block-{0}\">{0} block</h3><p class=\"warn\">{1}</p>",
+                block.name(),
+                esc(&r.words(block.name(), &kept))
+            );
         }
     }
     diagnosis(h, run);

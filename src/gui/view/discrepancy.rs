@@ -66,6 +66,12 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         format!("{verdict} ({ended}: the inputs above are not the motion)")
     };
     ui.label(egui::RichText::new(verdict).strong());
+    for name in report.refused_blocks.keys() {
+        ui.colored_label(
+            ui.visuals().error_fg_color,
+            format!("{name} block not diagnosed: the run cannot identify it (Results says why); the verdict is the other block's"),
+        );
+    }
     for words in report.unexplained() {
         ui.colored_label(ui.visuals().error_fg_color, words);
     }

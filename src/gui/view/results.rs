@@ -111,6 +111,14 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     if ui.button("Export model JSON…").clicked() {
         commands.push(Command::ExportModel(None));
     }
+    // A block the run cannot identify is said first: the result holds the others only.
+    let kept: Vec<&str> = id.model.blocks.keys().map(String::as_str).collect();
+    for (name, refused) in &id.model.refused_blocks {
+        ui.colored_label(
+            ui.visuals().error_fg_color,
+            format!("warning: {}", refused.words(name, &kept)),
+        );
+    }
     for (block, name, m) in id.blocks().iter().filter_map(|b| {
         let (name, m) = id.model.blocks.get_key_value(b.block.name())?;
         Some((b.block, name, m))

@@ -1,0 +1,137 @@
+//! A block the run cannot identify does not take the others with it: a simulated run whose
+//! sidecar's accelerometer lever arm is lost (zero, as when the sidecar is missing) leaves that
+//! block's vertical input flat. The gyro is identified as it would be alone; the accelerometer
+//! is refused beside it, in every output that reports blocks (model, diagnosis, batch row,
+//! certificate). A still stand axis, which takes every block's inputs with it, refuses the run.
+
+#[path = "common/sim.rs"]
+mod sim_common;
+
+use std::sync::Arc;
+
+use imu_attest::batch::table::{Cell, rows_of};
+use imu_attest::block::Block;
+use imu_attest::diagnose::{DiagnoseOptions, diagnose_session};
+use imu_attest::ident::IdentError;
+use imu_attest::ident::identify::identify_run;
+use imu_attest::ident::session::Session;
+use imu_attest::ident::settings::Settings;
+use imu_attest::model::Model;
+use imu_attest::model::refused::RefusalKind;
+use imu_attest::report::{render, run_report};
+use imu_attest::run::Run;
+use imu_attest::sim::regime::Regime;
+
+/// A 60 s cruise run of `seed` with its accelerometer's lever arm lost.
+fn without_lever_arm(seed: u64) -> Run {
+    let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, seed, &[]);
+    assert!(run.sidecar.accel_lever_arm_m.iter().any(|x| *x != 0.0));
+    run.sidecar.accel_lever_arm_m = [0.0; 3];
+    run
+}
+
+#[test]
+fn the_gyro_is_identified_beside_a_refused_accelerometer() {
+    for seed in [3, 4] {
+        let run = without_lever_arm(seed);
+        let id = identify_run(&run, &Settings::default()).unwrap();
+        let blocks: Vec<Block> = id.blocks.iter().map(|b| b.block).collect();
+        assert_eq!(blocks, [Block::Gyro], "seed {seed}");
+        let [refusal] = id.refused.as_slice() else {
+            panic!("seed {seed}: {:?}", id.refused)
+        };
+        assert_eq!(refusal.block, Block::Accel);
+        let IdentError::NotExcited { axis, .. } = &refusal.error else {
+            panic!("seed {seed}: {}", refusal.error)
+        };
+        assert_eq!(*axis, "fy", "the vertical input is the flat one");
+
+        // Exactly the gyro's identification on its own.
+        let alone = identify_run(
+            &run,
+            &Settings {
+                blocks: vec![Block::Gyro],
+                ..Settings::default()
+            },
+        )
+        .unwrap();
+        assert!(alone.refused.is_empty());
+        let (a, b) = (&alone.blocks[0].structural, &id.blocks[0].structural);
+        assert_eq!((a.k, a.tau_s, a.order), (b.k, b.tau_s, b.order), "seed {seed}");
+
+        let model = Model::from_identification(&run, &Settings::default().for_run(&run), &id);
+        assert_eq!(model.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
+        let entry = &model.refused_blocks["accel"];
+        assert_eq!(entry.kind, RefusalKind::NotExcited);
+        assert_eq!(entry.axis.as_deref(), Some("fy"));
+        assert_eq!(entry.reason, refusal.error.to_string());
+        // The file round-trips with the refusal.
+        let back: Model = serde_json::from_str(&serde_json::to_string(&model).unwrap()).unwrap();
+        assert_eq!(back.refused_blocks, model.refused_blocks);
+    }
+}
+
+#[test]
+fn the_diagnosis_batch_and_certificate_say_the_block_was_refused() {
+    let run = Arc::new(without_lever_arm(3));
+    let settings = Settings::default().for_run(&run);
+    let report = diagnose_session(
+        &mut Session::new(run.clone()),
+        &settings,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
+    assert_eq!(report.refused_blocks["accel"].kind, RefusalKind::NotExcited);
+
+    let page_of = |run: &Arc<Run>| {
+        let r = run_report(&mut Session::new(run.clone()), &settings, None).unwrap();
+        let rows = rows_of(&r.model, None);
+        (render(&[r], None, "2026-11-27 00:00 UTC").0, rows)
+    };
+    let (page, rows) = page_of(&run);
+    let status = |row: &imu_attest::batch::table::BatchRow, column: &str| match row.get(column) {
+        Some(Cell::Text(t)) => t.clone(),
+        other => panic!("{column}: {other:?}"),
+    };
+    let statuses: Vec<(String, String)> = rows
+        .iter()
+        .map(|r| (status(r, "block"), status(r, "status")))
+        .collect();
+    assert_eq!(
+        statuses,
+        [
+            ("gyro".to_owned(), "ok".to_owned()),
+            ("accel".to_owned(), "refused".to_owned())
+        ]
+    );
+    assert!(status(&rows[1], "error").contains("axis fy not excited"));
+    assert!(
+        page.contains(
+            "accel block not identified, the result holds the gyro block only: axis fy not excited"
+        ),
+        "the certificate says it"
+    );
+
+    // The same run with its lever arm: nothing refused anywhere.
+    let (_, whole) = sim_common::simulated_run_of(60.0, Regime::Cruise, 3, &[]);
+    let (page, rows) = page_of(&Arc::new(whole));
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| status(r, "status") == "ok"));
+    assert!(!page.contains("not identified"));
+}
+
+/// A stand axis held still is not one block's fault: the gyro's inputs are the stand's angular
+/// motion, and the accelerometer fitted beside it had gains 50 % off. The run is refused.
+#[test]
+fn a_still_stand_axis_refuses_the_run() {
+    let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, 21, &[]);
+    let first = run.angles[0][0];
+    run.angles[0].iter_mut().for_each(|a| *a = first);
+    let err = identify_run(&run, &Settings::default()).unwrap_err();
+    assert!(
+        matches!(err, IdentError::NotExcited { block: "gyro", .. }),
+        "{err}"
+    );
+    assert!(!err.is_refusal(), "a run-level refusal: {err}");
+}

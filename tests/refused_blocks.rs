@@ -18,6 +18,7 @@ use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
 use imu_attest::model::Model;
 use imu_attest::model::refused::RefusalKind;
+use imu_attest::report::spec::{self, Spec, Verdict};
 use imu_attest::report::{render, run_report};
 use imu_attest::run::Run;
 use imu_attest::sim::regime::Regime;
@@ -112,6 +113,14 @@ fn the_diagnosis_batch_and_certificate_say_the_block_was_refused() {
         ),
         "the certificate says it"
     );
+    // A specification's limits on the refused block are undecided, not skipped.
+    let spec = Spec::parse(br#"{"gyro": {"tau_s": 0.1}, "accel": {"tau_s": 0.1}}"#, "s.json").unwrap();
+    let r = run_report(&mut Session::new(run.clone()), &settings, None).unwrap();
+    let checks = spec::check(&spec, &r.model);
+    let accel: Vec<_> = checks.iter().filter(|c| c.block == Block::Accel).collect();
+    assert_eq!(accel.len(), 1, "{checks:?}");
+    assert_eq!(accel[0].verdict, Verdict::Undecided);
+    assert_eq!(accel[0].element, "block not identified");
 
     // The same run with its lever arm: nothing refused anywhere.
     let (_, whole) = sim_common::simulated_run_of(60.0, Regime::Cruise, 3, &[]);
@@ -128,10 +137,47 @@ fn a_still_stand_axis_refuses_the_run() {
     let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, 21, &[]);
     let first = run.angles[0][0];
     run.angles[0].iter_mut().for_each(|a| *a = first);
-    let err = identify_run(&run, &Settings::default()).unwrap_err();
-    assert!(
-        matches!(err, IdentError::NotExcited { block: "gyro", .. }),
-        "{err}"
-    );
-    assert!(!err.is_refusal(), "a run-level refusal: {err}");
+    for blocks in [vec![Block::Gyro, Block::Accel], vec![Block::Gyro]] {
+        let settings = Settings {
+            blocks: blocks.clone(),
+            ..Settings::default()
+        };
+        let err = identify_run(&run, &settings).unwrap_err();
+        assert!(
+            matches!(err, IdentError::NotExcited { block: "gyro", .. }),
+            "{err}"
+        );
+        assert!(!err.is_refusal(), "a run-level refusal: {err}");
+        // Leaving the gyro out would leave nothing right (or nothing at all).
+        assert!(
+            !err.to_string().contains("leave this block out"),
+            "{blocks:?}: {err}"
+        );
+    }
+}
+
+/// A dead accelerometer (outputs noise alone) has no usable band: the diagnosis sets it aside as
+/// the identification does, though it searches a fixed band, and diagnoses the gyro.
+#[test]
+fn the_diagnosis_refuses_the_block_the_model_refuses() {
+    let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, 5, &[]);
+    let mut rng = imu_attest::rng::Rng::new(9);
+    for channel in run.accel.as_mut().unwrap() {
+        channel.iter_mut().for_each(|v| *v = 1e-3 * rng.normal());
+    }
+    let run = Arc::new(run);
+    let settings = Settings::default().for_run(&run);
+    let id = identify_run(&run, &settings).unwrap();
+    assert!(matches!(
+        id.refused[0].error,
+        IdentError::NoUsableBand { block: "accel", .. }
+    ));
+    let report = diagnose_session(
+        &mut Session::new(run.clone()),
+        &settings,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
+    assert_eq!(report.refused_blocks["accel"].kind, RefusalKind::NoUsableBand);
 }

@@ -1,10 +1,12 @@
 //! `span_s`: identify a stretch of the record. A run whose gyro logger started 30 s late (its
-//! outputs zero until then) is refused as a whole (no coherent band) and identified right over
-//! the span after the start; a span outside the record is refused with the record's extent (exit status 2).
+//! outputs zero until then) has its gyro refused over the whole record (no coherent band; the
+//! accelerometer identified beside it) or spoilt, and identified right over the span after the
+//! start; a span outside the record is refused with the record's extent (exit status 2).
 
 use std::path::Path;
 use std::process::Command;
 
+use imu_attest::block::Block;
 use imu_attest::ident::IdentError;
 use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::{Settings, SettingsError};
@@ -16,7 +18,12 @@ use imu_attest::sim::{SimConfig, simulate};
 
 fn gyro_fit(run: &Run, settings: &Settings) -> StructuralFit {
     let id = identify_run(run, settings).expect("identified");
-    let gyro = id.blocks.into_iter().next().expect("gyro first");
+    assert!(id.refused.is_empty(), "{:?}", id.refused);
+    let gyro = id
+        .blocks
+        .into_iter()
+        .find(|b| b.block == Block::Gyro)
+        .expect("the gyro");
     (*gyro.structural).clone()
 }
 
@@ -65,12 +72,23 @@ fn a_span_after_a_late_start_gives_the_clean_run_s_gain() {
         span.tau_s * 1e3,
         reference.tau_s * 1e3
     );
-    // As a whole, the dead start is refused (no band where the outputs are coherent with the
-    // inputs) or spoils K.
-    match identify_run(&late, &Settings::default()) {
-        Err(e) => assert!(matches!(e, IdentError::NoUsableBand { .. }), "{e}"),
-        Ok(id) => {
-            let whole = (*id.blocks[0].structural).clone();
+    // As a whole, the dead start refuses the gyro (no band where the outputs are coherent with
+    // the inputs) beside the accelerometer, or spoils its K.
+    let id = identify_run(&late, &Settings::default()).expect("the accelerometer is identified");
+    match id.blocks.iter().find(|b| b.block == Block::Gyro) {
+        None => {
+            let [refusal] = id.refused.as_slice() else {
+                panic!("{:?}", id.refused)
+            };
+            assert_eq!(refusal.block, Block::Gyro);
+            assert!(
+                matches!(refusal.error, IdentError::NoUsableBand { .. }),
+                "{}",
+                refusal.error
+            );
+        }
+        Some(gyro) => {
+            let whole = (*gyro.structural).clone();
             assert!(worst(&whole) > 10.0, "the dead start spoils the whole record's K");
         }
     }

@@ -43,12 +43,20 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     });
     bar.finish_and_clear();
     write_table(&out, &rows).map_err(|e| CliError::Input(e.to_string()))?;
-    let failed = rows
-        .iter()
-        .filter(|r| matches!(r.get("status"), Some(crate::batch::table::Cell::Text(s)) if s == "error"))
-        .count();
+    let count = |status: &str| {
+        rows.iter()
+            .filter(|r| matches!(r.get("status"), Some(crate::batch::table::Cell::Text(s)) if s == status))
+            .count()
+    };
+    let (failed, refused) = (count("error"), count("refused"));
+    // Blocks refused beside identified ones are counted only when there are any.
+    let refused = if refused > 0 {
+        format!(", {refused} blocks refused")
+    } else {
+        String::new()
+    };
     eprintln!(
-        "imu-attest: batch: {} runs, {} rows, {failed} failed; table written to {}",
+        "imu-attest: batch: {} runs, {} rows, {failed} failed{refused}; table written to {}",
         paths.len(),
         rows.len(),
         out.display()

@@ -150,7 +150,12 @@ pub(super) fn identify_in(
         &warning,
     ));
     for (block, effect) in accepted {
-        if !model.blocks.contains_key(block.name()) {
+        if model.refused_blocks.contains_key(block.name()) {
+            messages.push(format!(
+                "{warning}{effect} not added: the {} block was not identified",
+                block.name()
+            ));
+        } else if !model.blocks.contains_key(block.name()) {
             messages.push(format!(
                 "{warning}{effect} not added: the run has no {} block",
                 block.name()

@@ -19,7 +19,7 @@ use super::state::State;
 use super::uncertainty::{covariance, parameter_std};
 use crate::block::Block;
 use crate::effect::Effect;
-use crate::ident::identify::BlockIdentification;
+use crate::ident::identify::{BlockIdentification, resolve_band};
 use crate::ident::session::Session;
 use crate::ident::settings::{OrderSetting, Settings};
 use crate::ident::signals::{block_signals, channel_names};
@@ -131,8 +131,19 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     let id = session.identify_aside(&settings)?;
     let span = session.span(&settings)?;
     let mut blocks = Vec::new();
+    let mut refused = refused_blocks(&id.refused);
     for b in &id.blocks {
         let name = b.block.name();
+        // The identification's refusal of a block without a usable band (a dead block) holds
+        // here too, though the band searched is fixed: the diagnosis of a block the model
+        // refused would be of nothing.
+        if !given
+            && let Err(e) = resolve_band(&b.spectra, b.block, BandSetting::Auto)
+            && let Some(entry) = RefusedBlock::of(&e)
+        {
+            refused.insert(name.to_owned(), entry);
+            continue;
+        }
         // Only an auto band is ended, and only where the order-0 fit sees the gain fall evenly;
         // then the identifier, its order selection on, tells the inputs' noise from the block's
         // own dynamics (a lag's droop): a user's fixed order above 0 is dynamics as given, and
@@ -204,7 +215,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         },
         source: Source::of(run),
         blocks,
-        refused_blocks: refused_blocks(&id.refused),
+        refused_blocks: refused,
         halves: Some(HalvesSource {
             run: session.run().clone(),
             identification: id,
@@ -219,7 +230,16 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
     let mut findings = Vec::new();
     let mut blocks = BTreeMap::new();
     let mut penalty = 0.0;
-    for (block_index, pb) in prep.blocks.iter().enumerate() {
+    for pb in &prep.blocks {
+        // The block's place in the identification the halves refit (blocks set aside are not
+        // in `prep.blocks`).
+        let block_index = prep.halves.as_ref().map_or(usize::MAX, |h| {
+            h.identification
+                .blocks
+                .iter()
+                .position(|b| b.block == pb.block)
+                .unwrap_or(usize::MAX)
+        });
         let given = options.given.and_then(|m| m.blocks.get(pb.block.name()));
         // A rejected stand-side lag rejects the lag it was found as.
         let rejected: Vec<Effect> = options

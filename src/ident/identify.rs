@@ -116,6 +116,10 @@ pub struct Refusal {
     pub block: Block,
     /// Why.
     pub error: IdentError,
+    /// Whether it was decided from scratch, not on a fit started from an earlier one (an
+    /// accelerometer's weak axis is refused when the fit cannot determine its gains): else the
+    /// identification is [`RunIdentification::provisional`].
+    pub from_scratch: bool,
 }
 
 /// Where [`Session::identify`] is: the stage about to start, and how many of `total`
@@ -139,7 +143,7 @@ impl RunIdentification {
     pub fn provisional(&self) -> bool {
         self.blocks.iter().any(|b| {
             !b.structural.fitted.from_scratch() || !b.factorisation.from_scratch_for(b.wiener.estimate)
-        })
+        }) || self.refused.iter().any(|r| !r.from_scratch)
     }
 }
 
@@ -147,8 +151,10 @@ impl RunIdentification {
 /// (hold a session instead to keep the stages for another identification).
 ///
 /// # Errors
-/// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, an input axis
-/// not excited in the band ([`IdentError::NotExcited`]), or any stage's error for any block.
+/// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, a gyro input
+/// axis not excited in the band ([`IdentError::NotExcited`]), every block refused, or any other
+/// stage's error for any block. A block refused beside others is in
+/// [`RunIdentification::refused`].
 pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification, IdentError> {
     let mut session = Session::new(Arc::new(run.clone()));
     let id = session.identify(settings, Start::Cold, &mut |_| {})?;

@@ -328,6 +328,11 @@ impl Session {
         let spectra = self.spectra(&settings, &blocks)?;
         step("fit", None, blocks.len());
         let fits = &self.fits;
+        let warm: Vec<Block> = blocks
+            .iter()
+            .copied()
+            .filter(|&b| start == Start::Warm && of_block(fits, b).is_some())
+            .collect();
         let identified: Vec<Result<BlockIdentification, IdentError>> = spectra
             .into_iter()
             .zip(factorisations)
@@ -341,7 +346,10 @@ impl Session {
                 identify_block_from(block, spectra, factorisation, &settings, previous.as_deref())
             })
             .collect();
-        let (mut identified, refused) = split_refusals(&blocks, identified)?;
+        let (mut identified, mut refused) = split_refusals(&blocks, identified)?;
+        for r in &mut refused {
+            r.from_scratch = !warm.contains(&r.block);
+        }
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
             for b in &mut identified {
@@ -363,6 +371,10 @@ impl Session {
         for b in &id.blocks {
             self.fits.retain(|(block, _)| *block != b.block);
             self.fits.push((b.block, Arc::new(b.fit_start())));
+        }
+        // A refused block's last fit is no start for the next: it was not this run's answer.
+        for r in &id.refused {
+            self.fits.retain(|(block, _)| *block != r.block);
         }
         self.identification = Some((settings, id.clone()));
         Ok(id)
@@ -394,8 +406,8 @@ impl Session {
 ///
 /// # Errors
 /// The first block's error that is not a refusal, in the settings' order (whichever thread failed
-/// first); else, when every block is refused, the first refusal, without the advice to leave its
-/// block out (nothing would be left).
+/// first); else, when every block is refused, the first refusal. Neither offers to leave its
+/// block out: nothing would be left, or (a stand axis held still) nothing right.
 fn split_refusals(
     blocks: &[Block],
     identified: Vec<Result<BlockIdentification, IdentError>>,
@@ -404,8 +416,13 @@ fn split_refusals(
     for (&block, result) in blocks.iter().zip(identified) {
         match result {
             Ok(b) => ok.push(b),
-            Err(error) if error.is_refusal() => refused.push(Refusal { block, error }),
-            Err(error) => return Err(error),
+            Err(error) if error.is_refusal() => refused.push(Refusal {
+                block,
+                error,
+                from_scratch: true,
+            }),
+            // A gyro input axis not excited is the stand's: leaving the gyro out would not help.
+            Err(error) => return Err(error.alone()),
         }
     }
     if ok.is_empty() && !refused.is_empty() {

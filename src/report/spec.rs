@@ -261,6 +261,23 @@ pub fn check(spec: &Spec, model: &Model) -> Vec<Check> {
     let mut out = Vec::new();
     for (&block, limits) in &spec.limits {
         let Some(b) = model.blocks.get(block.name()) else {
+            // A block the run could not identify is not passed by saying nothing: each figure
+            // the specification limits is undecided, its element saying why.
+            if model.refused_blocks.contains_key(block.name()) {
+                for (&quantity, &limit) in limits {
+                    out.push(Check {
+                        run: model.source.file.clone(),
+                        block,
+                        quantity: quantity.id_on(block).to_owned(),
+                        element: "block not identified".to_owned(),
+                        value: f64::NAN,
+                        band: None,
+                        limit,
+                        unit: String::new(),
+                        verdict: Verdict::Undecided,
+                    });
+                }
+            }
             continue;
         };
         for (&quantity, &limit) in limits {

@@ -80,6 +80,14 @@ impl App {
         if run.identification.is_none() || model.identification.is_none() {
             return;
         }
+        // A block the model's run refused has no model to predict with (the tab says so).
+        if model
+            .identification
+            .as_ref()
+            .is_some_and(|m| m.block_model(block).is_none())
+        {
+            return;
+        }
         let wanted = crate::gui::pipeline::ValidationKey {
             model_run,
             block,

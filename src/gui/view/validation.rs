@@ -55,6 +55,21 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, runs: &[RunEntry], view: &mut Vie
             ui.spinner();
         }
     });
+    let model_run = runs
+        .iter()
+        .find(|r| r.id == view.validation_model.unwrap_or(run.id));
+    if let Some(m) = model_run.and_then(|r| r.identification.as_ref())
+        && m.block_model(view.bode_block).is_none()
+    {
+        ui.colored_label(
+            ui.visuals().error_fg_color,
+            format!(
+                "no model of the {} block to predict with: its run could not identify it (Results says why)",
+                view.bode_block.name()
+            ),
+        );
+        return;
+    }
     let Some(v) = run.validation.as_ref() else {
         ui.weak(if run.identification.is_none() {
             "waiting for the identification"

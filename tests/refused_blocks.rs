@@ -31,6 +31,19 @@ fn without_lever_arm(seed: u64) -> Run {
     run
 }
 
+/// Asserts that the diagnosis of `run` diagnoses the gyro alone and names the accelerometer
+/// refused for `kind`.
+fn assert_diagnosed_beside(run: &Arc<Run>, settings: &Settings, kind: RefusalKind) {
+    let report = diagnose_session(
+        &mut Session::new(run.clone()),
+        settings,
+        &DiagnoseOptions::default(),
+    )
+    .expect("diagnosed");
+    assert_eq!(report.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
+    assert_eq!(report.refused_blocks["accel"].kind, kind);
+}
+
 #[test]
 fn the_gyro_is_identified_beside_a_refused_accelerometer() {
     for seed in [3, 4] {
@@ -76,14 +89,7 @@ fn the_gyro_is_identified_beside_a_refused_accelerometer() {
 fn the_diagnosis_batch_and_certificate_say_the_block_was_refused() {
     let run = Arc::new(without_lever_arm(3));
     let settings = Settings::default().for_run(&run);
-    let report = diagnose_session(
-        &mut Session::new(run.clone()),
-        &settings,
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
-    assert_eq!(report.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
-    assert_eq!(report.refused_blocks["accel"].kind, RefusalKind::NotExcited);
+    assert_diagnosed_beside(&run, &settings, RefusalKind::NotExcited);
 
     let page_of = |run: &Arc<Run>| {
         let r = run_report(&mut Session::new(run.clone()), &settings, None).unwrap();
@@ -163,7 +169,9 @@ fn the_diagnosis_refuses_the_block_the_model_refuses() {
     let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, 5, &[]);
     let mut rng = imu_attest::rng::Rng::new(9);
     for channel in run.accel.as_mut().unwrap() {
-        channel.iter_mut().for_each(|v| *v = 1e-3 * rng.normal());
+        for v in channel.iter_mut() {
+            *v = 1e-3 * rng.normal();
+        }
     }
     let run = Arc::new(run);
     let settings = Settings::default().for_run(&run);
@@ -172,12 +180,5 @@ fn the_diagnosis_refuses_the_block_the_model_refuses() {
         id.refused[0].error,
         IdentError::NoUsableBand { block: "accel", .. }
     ));
-    let report = diagnose_session(
-        &mut Session::new(run.clone()),
-        &settings,
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
-    assert_eq!(report.blocks.keys().collect::<Vec<_>>(), ["gyro"]);
-    assert_eq!(report.refused_blocks["accel"].kind, RefusalKind::NoUsableBand);
+    assert_diagnosed_beside(&run, &settings, RefusalKind::NoUsableBand);
 }

@@ -141,11 +141,13 @@ fn a_refused_block_is_said_beside_the_identified_one() {
     config.duration_s = 60.0;
     config.seed = 4;
     let sim = simulate(&config).expect("simulated");
+    let with = dir.path().join("with_sidecar.csv");
+    write_run(&sim, &with).expect("written");
     let path = dir.path().join("no_sidecar.csv");
     write_run(&sim, &path).expect("written");
     std::fs::remove_file(path.with_extension("json")).expect("sidecar removed");
 
-    let mut harness = app(vec![path]);
+    let mut harness = app(vec![path, with]);
     let id = harness.state().runs()[0]
         .identification
         .as_ref()
@@ -161,6 +163,17 @@ fn a_refused_block_is_said_beside_the_identified_one() {
     harness.get_by_label("Find missing effects").click();
     harness.run_steps(4);
     harness.get_by_label_contains("accel block not diagnosed: the run cannot identify it");
+
+    // Compared with the same run and its sidecar: the accelerometer is in no pair, and says why.
+    harness.get_by_label("Compare").click();
+    harness.run_steps(2);
+    harness.get_by_label("compare no_sidecar.csv").click();
+    harness.run_steps(1);
+    harness.get_by_label("compare with_sidecar.csv").click();
+    harness.run_steps(2);
+    harness.get_by_label(
+        "no_sidecar.csv: the accel block was not identified (its Results say why): compared in no pair",
+    );
 }
 
 /// A diagnosis that finishes after a newer one was requested (threaded mode: the older was

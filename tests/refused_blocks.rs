@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use imu_attest::batch::table::{Cell, rows_of};
 use imu_attest::block::Block;
+use imu_attest::compare::compare;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_session};
 use imu_attest::ident::IdentError;
 use imu_attest::ident::identify::identify_run;
@@ -130,10 +131,19 @@ fn the_diagnosis_batch_and_certificate_say_the_block_was_refused() {
 
     // The same run with its lever arm: nothing refused anywhere.
     let (_, whole) = sim_common::simulated_run_of(60.0, Regime::Cruise, 3, &[]);
-    let (page, rows) = page_of(&Arc::new(whole));
+    let whole = Arc::new(whole);
+    let (page, rows) = page_of(&whole);
     assert_eq!(rows.len(), 2);
     assert!(rows.iter().all(|r| status(r, "status") == "ok"));
     assert!(!page.contains("not identified"));
+
+    // The two compared: the gyro in a pair, the accelerometer in none, and both say why.
+    let w = run_report(&mut Session::new(whole), &settings, None).unwrap();
+    let c = compare(&[w.model.clone(), r.model.clone()]).unwrap();
+    assert!(!c.differences.is_empty() && c.differences.iter().all(|d| d.block == "gyro"));
+    assert!(c.runs[1].refused_blocks.contains_key("accel") && c.runs[0].refused_blocks.is_empty());
+    let page = render(&[w, r], None, "2026-11-27 00:00 UTC").0;
+    assert!(page.contains(": the accel block was not identified (its run's section says why)."));
 }
 
 /// A stand axis held still is not one block's fault: the gyro's inputs are the stand's angular

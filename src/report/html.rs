@@ -611,6 +611,17 @@ fn comparison(h: &mut String, runs: &[RunReport]) {
             );
         }
         h.push_str("</table>");
+        for r in runs
+            .iter()
+            .filter(|r| r.model.refused_blocks.contains_key(block.name()))
+        {
+            let _ = write!(
+                h,
+                "<p class=\"warn\">{}: the {} block was not identified (its run's section says why).</p>",
+                esc(&r.model.source.file),
+                block.name()
+            );
+        }
         if models.iter().flatten().any(|b| b.order != first.order) {
             h.push_str("<p class=\"warn\">The runs' models have different orders: their K are static gains of different structures.</p>");
         }

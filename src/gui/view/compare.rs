@@ -67,11 +67,8 @@ pub fn show(
         ui.weak("choose two or more identified runs");
         return;
     };
-    let blocks: Vec<String> = c
-        .runs
-        .first()
-        .map(|r| r.blocks.keys().cloned().collect())
-        .unwrap_or_default();
+    // Every block any run identified (a block refused on one run is said below the buttons).
+    let blocks: Vec<String> = c.runs.iter().flat_map(|r| r.blocks.keys().cloned()).collect();
     ui.horizontal(|ui| {
         for b in crate::block::Block::BOTH {
             if blocks.iter().any(|n| n == b.name()) {
@@ -85,6 +82,18 @@ pub fn show(
         ));
     });
     let block = view.bode_block.name();
+    // Every run's refused blocks, whichever block is shown: a block missing from a pair is said.
+    for r in &c.runs {
+        for refused in r.refused_blocks.keys() {
+            ui.colored_label(
+                ui.visuals().error_fg_color,
+                format!(
+                    "{}: the {refused} block was not identified (its Results say why): compared in no pair",
+                    r.source.file
+                ),
+            );
+        }
+    }
     ui.label(significance_label(c, block));
     for line in c.mount_lines(block) {
         ui.label(line);

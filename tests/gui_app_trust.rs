@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
+use imu_attest::gui::view::compare::significance_label;
 use imu_attest::gui::view::results::{band_label, k_heading};
 use imu_attest::gui::{App, WorkerMode};
 use imu_attest::ident::identify::identify_run;
@@ -174,6 +175,12 @@ fn a_refused_block_is_said_beside_the_identified_one() {
     harness.get_by_label(
         "no_sidecar.csv: the accel block was not identified (its Results say why): compared in no pair",
     );
+    let c = harness.state().comparison().expect("compared").clone();
+    assert_eq!(
+        significance_label(&c, "accel"),
+        "accel: no pair of runs both identified it"
+    );
+    assert!(significance_label(&c, "gyro").ends_with("significant differences"));
 }
 
 /// A diagnosis that finishes after a newer one was requested (threaded mode: the older was

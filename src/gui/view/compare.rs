@@ -19,9 +19,13 @@ pub const GAINS_DIFFER_IN_KIND: &str = "some compared runs' K are the gain at lo
     gain changes across the band with no phase; an even gain in the model) and others' the band's \
     mean gain: their differences hold that change too";
 
-/// The line counting a block's significant differences, e.g. `gyro: 2 significant differences`.
+/// The line counting a block's significant differences, e.g. `gyro: 2 significant differences`,
+/// or saying that no pair of runs both identified the block (one refused it).
 #[must_use]
 pub fn significance_label(comparison: &Comparison, block: &str) -> String {
+    if !comparison.differences.iter().any(|d| d.block == block) {
+        return format!("{block}: no pair of runs both identified it");
+    }
     let n: usize = comparison
         .differences
         .iter()

@@ -192,3 +192,27 @@ fn the_diagnosis_refuses_the_block_the_model_refuses() {
     ));
     assert_diagnosed_beside(&run, &settings, RefusalKind::NoUsableBand);
 }
+
+/// Compared with its diagnoses, a run whose accelerometer was refused does not make the other
+/// run's accelerometer findings "named on one run only": that block was not diagnosed there.
+#[test]
+fn a_refused_block_s_findings_are_not_compared() {
+    let (_, whole) = sim_common::simulated_run_of(120.0, Regime::Cruise, 46, &["sensor_lag:accel@3"]);
+    let mut lost = whole.clone();
+    lost.sidecar.accel_lever_arm_m = [0.0; 3];
+    let settings = Settings::default().for_run(&whole);
+    let reports: Vec<_> = [whole, lost]
+        .into_iter()
+        .map(|run| run_report(&mut Session::new(Arc::new(run)), &settings, None).unwrap())
+        .collect();
+    let diagnosis = |i: usize| reports[i].diagnosis.as_ref().unwrap();
+    assert!(
+        diagnosis(0).findings.iter().any(|f| f.block == Block::Accel),
+        "the lag is found where the accelerometer is identified"
+    );
+    assert!(diagnosis(1).refused_blocks.contains_key("accel"));
+    let mut c = compare(&[reports[0].model.clone(), reports[1].model.clone()]).unwrap();
+    c.add_findings(&[diagnosis(0), diagnosis(1)], &["a".to_owned(), "b".to_owned()]);
+    let compared = c.findings.unwrap();
+    assert!(compared.iter().all(|d| d.block == Block::Gyro), "{compared:?}");
+}

@@ -263,7 +263,15 @@ impl Comparison {
         }
         let findings: Vec<&[crate::diagnose::Finding]> =
             reports.iter().map(|r| r.findings.as_slice()).collect();
-        self.findings = Some(findings::compare_findings(&findings, names));
+        let mut compared = findings::compare_findings(&findings, names);
+        // A block one run of the pair could not identify was not diagnosed there: its findings
+        // on the other run are not "named on one run only" (absence there says nothing).
+        let refused = |i: usize, block: crate::block::Block| {
+            self.runs[i].refused_blocks.contains_key(block.name())
+                || reports[i].refused_blocks.contains_key(block.name())
+        };
+        compared.retain(|d| !refused(d.runs[0], d.block) && !refused(d.runs[1], d.block));
+        self.findings = Some(compared);
     }
 }
 

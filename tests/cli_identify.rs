@@ -392,8 +392,9 @@ fn model_json(path: &Path) -> serde_json::Value {
 
 /// A run whose accelerometer outputs are noise alone (a dead block beside a good gyro): the
 /// gyro is identified, exactly as on its own, and the accelerometer is refused beside it, in
-/// the model file (`refused_blocks`) and in a warning; with both blocks dead, the run is
-/// refused in one line that does not offer to leave a block out.
+/// the model file (`refused_blocks`) and in a warning; with both blocks dead, or the gyro alone
+/// (a gyro's refusal is the run's), the run is refused in one line that does not offer to leave
+/// a block out.
 #[test]
 fn a_dead_block_is_refused_beside_the_identified_one() {
     let dir = tempfile::tempdir().unwrap();
@@ -447,6 +448,17 @@ fn a_dead_block_is_refused_beside_the_identified_one() {
     let stderr = one_line_refusal(&identify_default(&both_dead, &out), &out);
     assert!(
         stderr.contains("dead_both.csv: gyro block: no usable band"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("leave this block out"), "{stderr}");
+
+    // A dead gyro beside a good accelerometer refuses the run: the gyro witnesses every block's
+    // angle noise, and leaving it out would not help.
+    let dead_gyro = with_dead_columns(dir.path(), &run, "dead_gyro.csv", &["gx", "gy", "gz"]);
+    let out = dir.path().join("gyro_dead.json");
+    let stderr = one_line_refusal(&identify_default(&dead_gyro, &out), &out);
+    assert!(
+        stderr.contains("dead_gyro.csv: gyro block: no usable band"),
         "{stderr}"
     );
     assert!(!stderr.contains("leave this block out"), "{stderr}");

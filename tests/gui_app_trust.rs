@@ -173,7 +173,7 @@ fn a_refused_block_is_said_beside_the_identified_one() {
     harness.get_by_label("compare with_sidecar.csv").click();
     harness.run_steps(2);
     harness.get_by_label(
-        "no_sidecar.csv: the accel block was not identified (its Results say why): compared in no pair",
+        "no_sidecar.csv: the accel block was not identified (its Results say why): no pair with this run compares it",
     );
     let c = harness.state().comparison().expect("compared").clone();
     assert_eq!(

@@ -191,6 +191,19 @@ fn the_diagnosis_refuses_the_block_the_model_refuses() {
         IdentError::NoUsableBand { block: "accel", .. }
     ));
     assert_diagnosed_beside(&run, &settings, RefusalKind::NoUsableBand);
+    // The dead accelerometer alone: nothing left to diagnose, refused as `identify` refuses it.
+    let alone = Settings {
+        blocks: vec![Block::Accel],
+        ..settings
+    };
+    let err = diagnose_session(
+        &mut Session::new(run.clone()),
+        &alone,
+        &DiagnoseOptions::default(),
+    )
+    .expect_err("nothing to diagnose");
+    assert!(err.to_string().contains("accel block: no usable band"), "{err}");
+    assert!(!err.to_string().contains("leave this block out"), "{err}");
 }
 
 /// Compared with its diagnoses, a run whose accelerometer was refused does not make the other

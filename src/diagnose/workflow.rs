@@ -132,17 +132,21 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     let span = session.span(&settings)?;
     let mut blocks = Vec::new();
     let mut refused = refused_blocks(&id.refused);
+    let mut first_refusal = id.refused.first().map(|r| r.error.clone());
     for b in &id.blocks {
         let name = b.block.name();
         // The identification's refusal of a block without a usable band (a dead block) holds
         // here too, though the band searched is fixed: the diagnosis of a block the model
-        // refused would be of nothing.
-        if !given
-            && let Err(e) = resolve_band(&b.spectra, b.block, BandSetting::Auto)
-            && let Some(entry) = RefusedBlock::of(&e)
-        {
-            refused.insert(name.to_owned(), entry);
-            continue;
+        // refused would be of nothing, and a gyro's refuses the run as it does there.
+        if !given && let Err(e) = resolve_band(&b.spectra, b.block, BandSetting::Auto) {
+            match RefusedBlock::of(&e).filter(|_| e.is_refusal()) {
+                Some(entry) => {
+                    refused.insert(name.to_owned(), entry);
+                    first_refusal.get_or_insert(e);
+                    continue;
+                }
+                None => return Err(e.alone().into()),
+            }
         }
         // Only an auto band is ended, and only where the order-0 fit sees the gain fall evenly;
         // then the identifier, its order selection on, tells the inputs' noise from the block's
@@ -206,6 +210,12 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             base,
             dof,
         });
+    }
+    // Every block set aside: refused as the identification refuses a run with none left.
+    if blocks.is_empty()
+        && let Some(e) = first_refusal
+    {
+        return Err(e.alone().into());
     }
     Ok(Prepared {
         // The band as asked: each block's band searched is in its report.

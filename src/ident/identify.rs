@@ -107,18 +107,18 @@ pub struct RunIdentification {
     pub refused: Vec<Refusal>,
 }
 
-/// A block the run cannot identify, beside others it can ([`IdentError::is_refusal`]): no band
-/// where its outputs are coherent with the inputs, or an accelerometer input axis not excited
-/// (its own error, `IdentError::NoUsableBand` or `IdentError::NotExcited`).
+/// A block the run cannot identify, beside others it can ([`IdentError::is_refusal`]): an
+/// accelerometer with no band where its outputs are coherent with the inputs, or with an input
+/// axis not excited (its own error, `IdentError::NoUsableBand` or `IdentError::NotExcited`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Refusal {
     /// Which block.
     pub block: Block,
     /// Why.
     pub error: IdentError,
-    /// Whether it was decided from scratch, not on a fit started from an earlier one (an
-    /// accelerometer's weak axis is refused when the fit cannot determine its gains): else the
-    /// identification is [`RunIdentification::provisional`].
+    /// Whether it was decided from scratch, not on a warm start (an accelerometer's weak axis is
+    /// refused when the fit cannot determine its gains): else the identification is
+    /// [`RunIdentification::provisional`].
     pub from_scratch: bool,
 }
 
@@ -151,9 +151,9 @@ impl RunIdentification {
 /// (hold a session instead to keep the stages for another identification).
 ///
 /// # Errors
-/// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, a gyro input
-/// axis not excited in the band ([`IdentError::NotExcited`]), every block refused, or any other
-/// stage's error for any block. A block refused beside others is in
+/// Invalid settings for this run ([`IdentError::Settings`]), an observer failure, the gyro's
+/// refusal ([`IdentError::NotExcited`], [`IdentError::NoUsableBand`]), every block refused, or
+/// any other stage's error for any block. A block refused beside others is in
 /// [`RunIdentification::refused`].
 pub fn identify_run(run: &Run, settings: &Settings) -> Result<RunIdentification, IdentError> {
     let mut session = Session::new(Arc::new(run.clone()));

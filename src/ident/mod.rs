@@ -153,17 +153,20 @@ impl IdentError {
 
     /// Whether the error refuses one block for what its own data lack, leaving the run's other
     /// blocks to be identified: such a block goes to [`identify::RunIdentification::refused`]
-    /// beside the others. That is no usable band (outputs not coherent with the inputs: a dead
-    /// or disconnected block), or an accelerometer input axis not excited (its inputs depend on
-    /// its lever arm: a zero or undeclared arm leaves the vertical one flat while the motion is
-    /// fine). A gyro input axis not excited is not: the gyro's inputs are the stand's angular
-    /// motion itself, so a stand axis held still takes every block's inputs with it (an
-    /// accelerometer fitted beside it came out with gains 50 % off).
+    /// beside the others. Only the accelerometer's refusals are: no usable band (outputs not
+    /// coherent with the inputs: a dead or disconnected block), or an input axis not excited
+    /// (its inputs depend on its lever arm: a zero or undeclared arm leaves the vertical one
+    /// flat while the motion is fine). The gyro's refuse the run: its inputs are the stand's
+    /// angular motion itself (a stand axis held still takes every block's inputs with it; an
+    /// accelerometer fitted beside it came out with gains 50 % off), and its outputs witness the
+    /// stand's angle noise for every block (`Session::motion`; a dead gyro as witness left the
+    /// accelerometer's band 1.5 Hz wide).
     #[must_use]
     pub fn is_refusal(&self) -> bool {
         match self {
-            IdentError::NoUsableBand { .. } => true,
-            IdentError::NotExcited { block, .. } => *block != crate::block::Block::Gyro.name(),
+            IdentError::NoUsableBand { block, .. } | IdentError::NotExcited { block, .. } => {
+                *block != crate::block::Block::Gyro.name()
+            }
             _ => false,
         }
     }

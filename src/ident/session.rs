@@ -328,11 +328,6 @@ impl Session {
         let spectra = self.spectra(&settings, &blocks)?;
         step("fit", None, blocks.len());
         let fits = &self.fits;
-        let warm: Vec<Block> = blocks
-            .iter()
-            .copied()
-            .filter(|&b| start == Start::Warm && of_block(fits, b).is_some())
-            .collect();
         let identified: Vec<Result<BlockIdentification, IdentError>> = spectra
             .into_iter()
             .zip(factorisations)
@@ -347,8 +342,9 @@ impl Session {
             })
             .collect();
         let (mut identified, mut refused) = split_refusals(&blocks, identified)?;
+        // A refusal decided on a warm start (fit or factorisation) is redone from scratch.
         for r in &mut refused {
-            r.from_scratch = !warm.contains(&r.block);
+            r.from_scratch = start == Start::Cold;
         }
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
@@ -421,7 +417,8 @@ fn split_refusals(
                 error,
                 from_scratch: true,
             }),
-            // A gyro input axis not excited is the stand's: leaving the gyro out would not help.
+            // A gyro's refusal is the run's (`IdentError::is_refusal`): leaving it out would not
+            // help.
             Err(error) => return Err(error.alone()),
         }
     }

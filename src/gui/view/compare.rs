@@ -92,7 +92,7 @@ pub fn show(
             ui.colored_label(
                 ui.visuals().error_fg_color,
                 format!(
-                    "{}: the {refused} block was not identified (its Results say why): compared in no pair",
+                    "{}: the {refused} block was not identified (its Results say why): no pair with this run compares it",
                     r.source.file
                 ),
             );
@@ -224,6 +224,19 @@ fn findings(ui: &mut egui::Ui, c: &Comparison, block: crate::block::Block) {
         }
     }
     if !any {
-        ui.label("no finding on this block in any compared run");
+        let refused: Vec<&str> = c
+            .runs
+            .iter()
+            .filter(|r| r.refused_blocks.contains_key(block.name()))
+            .map(|r| r.source.file.as_str())
+            .collect();
+        if refused.is_empty() {
+            ui.label("no finding on this block in any compared run");
+        } else {
+            ui.label(format!(
+                "no finding on this block compared: {} did not identify it",
+                refused.join(", ")
+            ));
+        }
     }
 }

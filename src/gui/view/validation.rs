@@ -61,12 +61,15 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, runs: &[RunEntry], view: &mut Vie
     if let Some(m) = model_run.and_then(|r| r.identification.as_ref())
         && m.block_model(view.bode_block).is_none()
     {
+        let block = view.bode_block.name();
+        let why = if m.model.refused_blocks.contains_key(block) {
+            "its run could not identify it (Results says why)"
+        } else {
+            "its run has no such block"
+        };
         ui.colored_label(
             ui.visuals().error_fg_color,
-            format!(
-                "no model of the {} block to predict with: its run could not identify it (Results says why)",
-                view.bode_block.name()
-            ),
+            format!("no model of the {block} block to predict with: {why}"),
         );
         return;
     }

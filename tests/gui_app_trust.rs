@@ -158,6 +158,9 @@ fn a_refused_block_is_said_beside_the_identified_one() {
     assert!(words.contains("axis fy not excited"), "{words}");
     harness.get_by_label(&format!("warning: {words}"));
     harness.get_by_label_contains("gyro τ =");
+    harness.get_by_label("Bode").click();
+    harness.run_steps(2);
+    harness.get_by_label("accel block not identified (Results says why): no W_u to draw");
 
     harness.get_by_label("Missing effects").click();
     harness.run_steps(2);

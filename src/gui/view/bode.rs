@@ -257,6 +257,13 @@ pub fn show(ui: &mut egui::Ui, run: &RunEntry, view: &mut ViewState) {
             ui.label("recomputing…");
         }
     });
+    // A block the run could not identify has no curves: said, not silently replaced.
+    for name in id.model.refused_blocks.keys() {
+        ui.colored_label(
+            ui.visuals().error_fg_color,
+            format!("{name} block not identified (Results says why): no W_u to draw"),
+        );
+    }
     let Some(bode) = id
         .bode
         .iter()

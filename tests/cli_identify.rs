@@ -438,30 +438,21 @@ fn a_dead_block_is_refused_beside_the_identified_one() {
         );
     }
 
-    let both_dead = with_dead_columns(
-        dir.path(),
-        &run,
-        "dead_both.csv",
-        &["ax", "ay", "az", "gx", "gy", "gz"],
-    );
-    let out = dir.path().join("none.json");
-    let stderr = one_line_refusal(&identify_default(&both_dead, &out), &out);
-    assert!(
-        stderr.contains("dead_both.csv: gyro block: no usable band"),
-        "{stderr}"
-    );
-    assert!(!stderr.contains("leave this block out"), "{stderr}");
-
-    // A dead gyro beside a good accelerometer refuses the run: the gyro witnesses every block's
-    // angle noise, and leaving it out would not help.
-    let dead_gyro = with_dead_columns(dir.path(), &run, "dead_gyro.csv", &["gx", "gy", "gz"]);
-    let out = dir.path().join("gyro_dead.json");
-    let stderr = one_line_refusal(&identify_default(&dead_gyro, &out), &out);
-    assert!(
-        stderr.contains("dead_gyro.csv: gyro block: no usable band"),
-        "{stderr}"
-    );
-    assert!(!stderr.contains("leave this block out"), "{stderr}");
+    // Both blocks dead, or the gyro alone beside a good accelerometer: the run is refused (the
+    // gyro witnesses every block's angle noise), and leaving a block out would not help.
+    for (file, columns) in [
+        ("dead_both.csv", &["ax", "ay", "az", "gx", "gy", "gz"][..]),
+        ("dead_gyro.csv", &["gx", "gy", "gz"][..]),
+    ] {
+        let dead = with_dead_columns(dir.path(), &run, file, columns);
+        let out = dir.path().join("none.json");
+        let stderr = one_line_refusal(&identify_default(&dead, &out), &out);
+        assert!(
+            stderr.contains(&format!("{file}: gyro block: no usable band")),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("leave this block out"), "{stderr}");
+    }
 }
 
 /// The loader's notices reach the user (contract section 2): an ignored column on a run that is

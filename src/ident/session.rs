@@ -341,11 +341,8 @@ impl Session {
                 identify_block_from(block, spectra, factorisation, &settings, previous.as_deref())
             })
             .collect();
-        let (mut identified, mut refused) = split_refusals(&blocks, identified)?;
         // A refusal decided on a warm start (fit or factorisation) is redone from scratch.
-        for r in &mut refused {
-            r.from_scratch = start == Start::Cold;
-        }
+        let (mut identified, refused) = split_refusals(&blocks, identified, start == Start::Cold)?;
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
             for b in &mut identified {
@@ -397,8 +394,8 @@ impl Session {
 }
 
 /// The blocks' identifications (in the settings' order, `blocks`) split into the identified
-/// blocks and the refused ones ([`IdentError::is_refusal`]): a block the run cannot identify does
-/// not take the others with it.
+/// blocks and the refused ones ([`IdentError::is_refusal`], each marked `from_scratch` as the
+/// identification was): a block the run cannot identify does not take the others with it.
 ///
 /// # Errors
 /// The first block's error that is not a refusal, in the settings' order (whichever thread failed
@@ -407,6 +404,7 @@ impl Session {
 fn split_refusals(
     blocks: &[Block],
     identified: Vec<Result<BlockIdentification, IdentError>>,
+    from_scratch: bool,
 ) -> Result<(Vec<BlockIdentification>, Vec<Refusal>), IdentError> {
     let (mut ok, mut refused) = (Vec::new(), Vec::new());
     for (&block, result) in blocks.iter().zip(identified) {
@@ -415,7 +413,7 @@ fn split_refusals(
             Err(error) if error.is_refusal() => refused.push(Refusal {
                 block,
                 error,
-                from_scratch: true,
+                from_scratch,
             }),
             // A gyro's refusal is the run's (`IdentError::is_refusal`): leaving it out would not
             // help.

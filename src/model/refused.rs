@@ -48,9 +48,7 @@ impl RefusedBlock {
             reason: error.to_string(),
         })
     }
-}
 
-impl RefusedBlock {
     /// The refusal in words, as the command line and the app say it: that the block named
     /// `block` is not identified, which blocks (`kept`) the result holds, and why.
     #[must_use]

@@ -216,13 +216,19 @@ fn equation(h: &mut String, b: &BlockModel) {
         .fit
         .candidates
         .iter()
-        .map(|c| match &c.rejected {
-            Some(r) => format!("order {}: rejected, {}", c.order, esc(&r.to_string())),
-            None => format!(
-                "order {}: admissible (criterion {})",
-                c.order,
-                sig(c.criterion, 6)
-            ),
+        .map(|c| {
+            let verdict = match &c.rejected {
+                Some(r) => format!("order {}: rejected, {}", c.order, esc(&r.to_string())),
+                None => format!(
+                    "order {}: admissible (criterion {})",
+                    c.order,
+                    sig(c.criterion, 6)
+                ),
+            };
+            match c.unstable_set_aside {
+                Some(aside) => format!("{verdict}, {}", esc(&aside.to_string())),
+                None => verdict,
+            }
         })
         .collect();
     if !why.is_empty() {

@@ -265,10 +265,12 @@ fn candidates(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
         .show(ui, |ui| candidate_table(ui, name, m));
     // The reasons are sentences: wrapped under the table, so they do not widen the panel.
     for c in &m.fit.candidates {
-        if let Some(reason) = &c.rejected {
+        let rejected = c.rejected.as_ref().map(|reason| format!("no: {reason}"));
+        let set_aside = c.unstable_set_aside.map(|aside| aside.to_string());
+        for words in [rejected, set_aside].into_iter().flatten() {
             ui.horizontal_wrapped(|ui| {
                 ui.monospace(format!("order {}:", c.order));
-                ui.add(egui::Label::new(format!("no: {reason}")).wrap());
+                ui.add(egui::Label::new(words).wrap());
             });
         }
     }

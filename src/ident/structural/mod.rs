@@ -230,6 +230,35 @@ pub struct OrderCandidate {
     /// (absent when the record was not halved or the order not fitted to both halves).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub held_out_chi2: Option<f64>,
+    /// The order's unstable fit of smaller chi2 that was set aside for this stable one, because
+    /// the data did not prefer it significantly (absent when the order's best fit was kept, and
+    /// on a retune's refined orders, which are not put through the preference).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unstable_set_aside: Option<UnstableSetAside>,
+}
+
+/// An order's best fit, unstable, set aside for its best stable one: the data's preference for
+/// it (Vuong's statistic, in deviations of the summed per-bin chi2 differences) was below the
+/// bar of three deviations (`rational::Fitted::preferred`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct UnstableSetAside {
+    /// The unstable fit's chi2 (below the candidate's).
+    pub chi2: f64,
+    /// Vuong's statistic of the unstable fit over the stable one (positive: it fits better).
+    pub vuong_z: f64,
+}
+
+impl std::fmt::Display for UnstableSetAside {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "an unstable fit of chi2 {:.1} was set aside for this stable one: the data prefer it \
+             by {:.1} deviations, below the {} that would outweigh a sensor's being stable",
+            self.chi2,
+            self.vuong_z,
+            rational::PREFERENCE_Z
+        )
+    }
 }
 
 /// `N(s) / d(s) e^(-tau s)` at `s = j 2 pi f_hz`, with `N(s) = sum_m N_m s^m` and
@@ -590,7 +619,13 @@ fn finish(
     if report::has_nan(&fit) {
         return Err(StructuralError::NumericalFailure { order: fit.order });
     }
-    fit.fitted = FittedOrders::new(data, selection.models, settings, from_scratch);
+    fit.fitted = FittedOrders::new(
+        data,
+        selection.models,
+        selection.set_aside,
+        settings,
+        from_scratch,
+    );
     Ok(fit)
 }
 

@@ -4,8 +4,8 @@ use rayon::prelude::*;
 
 use super::model::{Model, Prepared, parameter_count};
 use super::{
-    InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings, admissible,
-    gain_delay, rational,
+    InformationCriterion, OrderCandidate, OrderChoice, StructuralError, StructuralSettings, UnstableSetAside,
+    admissible, gain_delay, rational,
 };
 
 /// Relative excess of chi2 over the order below that a refined order may keep (rounding: a
@@ -40,8 +40,9 @@ pub(super) enum Starts<'a> {
     Cold,
     /// The data are those these models (orders `0..`) were fitted to: they are kept as they are
     /// (all of them, also above the highest order asked for), and only orders above them are
-    /// fitted (from the one below, as [`Starts::Cold`] does).
-    Same(&'a [Model]),
+    /// fitted (from the one below, as [`Starts::Cold`] does). Beside them, each order's unstable
+    /// fit set aside, as [`Selection::set_aside`] keeps it.
+    Same(&'a [Model], &'a [Option<UnstableSetAside>]),
     /// Nearby data (a retune): each order is refined from the model of the same order here
     /// (normalised to this fit's `omega_ref`); the delay scan of order 0 is redone.
     Near(&'a [Model]),
@@ -51,6 +52,8 @@ pub(super) enum Starts<'a> {
 pub(super) struct Selection {
     /// Every order fitted (or kept), in increasing order: possibly beyond the candidates.
     pub models: Vec<Model>,
+    /// Per model, the unstable fit of its order set aside for it ([`rational::Fitted::preferred`]).
+    pub set_aside: Vec<Option<UnstableSetAside>>,
     /// Index in `models` (and in `candidates`) of the model returned.
     pub pick: usize,
     /// Every order fitted, in increasing order.
@@ -81,9 +84,14 @@ pub(super) fn fit_orders(
     settings: &StructuralSettings,
     starts: Starts,
 ) -> Result<Selection, StructuralError> {
-    let mut models = match starts {
-        Starts::Same(kept) if !kept.is_empty() => kept.to_vec(),
-        _ => vec![gain_delay::fit(data, settings.tau_min_s, settings.tau_max_s)],
+    let (mut models, mut set_aside) = match starts {
+        Starts::Same(kept, aside) if !kept.is_empty() && aside.len() == kept.len() => {
+            (kept.to_vec(), aside.to_vec())
+        }
+        _ => (
+            vec![gain_delay::fit(data, settings.tau_min_s, settings.tau_max_s)],
+            vec![None],
+        ),
     };
     // Near: every order's refinement at once (they are independent), in parallel.
     let mut warm: Vec<Option<(Model, f64)>> = match starts {
@@ -109,12 +117,15 @@ pub(super) fn fit_orders(
             .and_then(Option::take)
             .filter(|(_, chi2)| *chi2 <= below.chi2(data) * (1.0 + NESTED_SLACK));
         let fitted = match refined {
-            Some((model, _)) => Some(model),
+            Some((model, _)) => Some((model, None)),
             None => rational::fit(data, n, below, settings.max_iterations)
                 .map(|fitted| fitted.preferred(data, settings.bin_correlation)),
         };
         match fitted {
-            Some(model) => models.push(model),
+            Some((model, aside)) => {
+                models.push(model);
+                set_aside.push(aside);
+            }
             // Fixed: every order below the requested one is its starting point.
             None if matches!(choice, OrderChoice::Fixed(_)) => {
                 return Err(StructuralError::NumericalFailure { order: n });
@@ -169,6 +180,7 @@ pub(super) fn fit_orders(
             held_out_chi2: settings
                 .held_out_chi2
                 .and_then(|h| h.get(model.order()).copied().flatten()),
+            unstable_set_aside: set_aside[i],
         });
     }
     let pick = match choice {
@@ -182,6 +194,7 @@ pub(super) fn fit_orders(
     };
     Ok(Selection {
         models,
+        set_aside,
         pick,
         candidates,
     })

@@ -40,6 +40,7 @@ use rayon::prelude::*;
 use super::project::Projector;
 use num_complex::Complex64;
 
+use super::UnstableSetAside;
 use super::model::{ELEMENTS, Model, Prepared};
 
 /// Sanathanan–Koerner iterations per start.
@@ -53,7 +54,7 @@ const FILTER_RATIOS: [f64; 3] = [1.5, 3.0, 6.0];
 /// an independent simulator's accelerometer behind a 100 Hz filter with pink noise and
 /// quantisation (`m1_fn`) kept an unstable pair over the true one (pair at 645 rad/s, damping
 /// 0.70, delay 2.07 ms against 2.00) at z 2.16-2.62 and its `K` 0.54 % off at order 0.
-const PREFERENCE_Z: f64 = 3.0;
+pub(super) const PREFERENCE_Z: f64 = 3.0;
 /// Damping of the order-2 filter starts (a Butterworth pair).
 const FILTER_DAMPING: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// When a refinement from scratch stops (see [`refine`]).
@@ -98,14 +99,21 @@ impl Fitted {
     /// second-order filter at 1 kHz: the true pair (`omega_n` 630 rad/s, damping 0.71, delay
     /// 3.02 ms against 3) had a chi2 4 above an unstable fit (poles at +890 and -391 rad/s,
     /// delay 6.6 ms), and order 0 was kept with its delay 10 deviations off.
-    pub fn preferred(self, data: &Prepared, correlation: f64) -> Model {
+    ///
+    /// Returns the model, and the unstable fit when it was set aside (its chi2 and `z`).
+    pub fn preferred(self, data: &Prepared, correlation: f64) -> (Model, Option<UnstableSetAside>) {
         let Some((stable, _)) = self.stable else {
-            return self.best.0;
+            return (self.best.0, None);
         };
-        if preference_z(data, &self.best.0, &stable, correlation) > PREFERENCE_Z {
-            self.best.0
+        let vuong_z = preference_z(data, &self.best.0, &stable, correlation);
+        if vuong_z > PREFERENCE_Z {
+            (self.best.0, None)
         } else {
-            stable
+            let set_aside = UnstableSetAside {
+                chi2: self.best.1,
+                vuong_z,
+            };
+            (stable, Some(set_aside))
         }
     }
 }

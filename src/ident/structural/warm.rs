@@ -26,13 +26,17 @@
 
 use super::model::{Model, Prepared};
 use super::order::Starts;
-use super::{OrderChoice, ResponseEstimate, StructuralError, StructuralFit, StructuralSettings};
+use super::{
+    OrderChoice, ResponseEstimate, StructuralError, StructuralFit, StructuralSettings, UnstableSetAside,
+};
 
 /// Every order's model as fitted, with what identifies the data they were fitted to.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FittedOrders {
     /// Orders `0..`, normalised with `omega_ref`.
     models: Vec<Model>,
+    /// Per order, its unstable fit set aside for the model kept (`rational::Fitted::preferred`).
+    set_aside: Vec<Option<UnstableSetAside>>,
     /// The band's top, rad/s, the models' normalisation.
     omega_ref: f64,
     /// Hash of the prepared data's bits.
@@ -48,11 +52,13 @@ impl FittedOrders {
     pub(super) fn new(
         data: &Prepared,
         models: Vec<Model>,
+        set_aside: Vec<Option<UnstableSetAside>>,
         settings: &StructuralSettings,
         from_scratch: bool,
     ) -> Self {
         Self {
             models,
+            set_aside,
             omega_ref: data.omega_ref,
             fingerprint: data.fingerprint,
             settings: Some(*settings),
@@ -119,7 +125,7 @@ pub fn refit_structure(
         && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
         && kept.fingerprint == data.fingerprint;
     if same {
-        let starts = Starts::Same(&kept.models);
+        let starts = Starts::Same(&kept.models, &kept.set_aside);
         return super::finish(&data, highest, order, settings, starts, kept.from_scratch);
     }
     let near = kept.rescaled(data.omega_ref);
@@ -152,6 +158,7 @@ mod tests {
         };
         let kept = FittedOrders {
             models: vec![model],
+            set_aside: vec![None],
             omega_ref: 250.0,
             fingerprint: 0,
             settings: None,

@@ -155,6 +155,60 @@ fn a_gyro_leading_the_stand_is_a_negative_delay() {
         "{:?}",
         kinds(&b)
     );
+    let outside = "delay_outside_usual_range".to_owned();
+    assert!(
+        !kinds(&b).contains(&outside),
+        "inside the usual range: {:?}",
+        kinds(&b)
+    );
+}
+
+/// The gyro's outputs moved by whole samples (3.5 ms each) to delays outside the -20 to 50 ms
+/// searched first: 14 samples later (53.17 ms) and 8 earlier (-23.83 ms). Each is found (before:
+/// the range's end, 50.0000 and -20.0000 ms, six of their deviations off, said by nothing), with
+/// `K` as unshifted, and said (`delay_outside_usual_range`), not as the widest search's end;
+/// unshifted, it is not said.
+#[test]
+fn a_delay_outside_the_usual_range_is_found_and_said() {
+    let unshifted = gyro(&real("broad07_fast_rotation"), &Settings::default());
+    let outside = "delay_outside_usual_range".to_owned();
+    assert!(!kinds(&unshifted).contains(&outside), "{:?}", kinds(&unshifted));
+    for samples in [14_i32, -8] {
+        let mut run = real("broad07_fast_rotation");
+        let shift_s = f64::from(samples) * run.dt_s();
+        for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
+            if samples > 0 {
+                c.rotate_right(samples.unsigned_abs() as usize);
+            } else {
+                c.rotate_left(samples.unsigned_abs() as usize);
+            }
+        }
+        let b = gyro(&run, &Settings::default());
+        let (s, u) = (&b.structural, &unshifted.structural);
+        let expected = u.tau_s + shift_s;
+        eprintln!(
+            "{samples} samples: tau {} (expected {expected}), {:?}",
+            s.tau_s,
+            kinds(&b)
+        );
+        assert!((s.tau_s - expected).abs() < 2e-4, "{samples}: tau {}", s.tau_s);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((s.k[i][j] - u.k[i][j]).abs() < 2e-3, "{samples}: K {:?}", s.k);
+            }
+        }
+        assert!(kinds(&b).contains(&outside), "{samples}: {:?}", kinds(&b));
+        let words = b
+            .warnings
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join("\n");
+        assert!(
+            words.contains("clocks offset") && !words.contains("end of the widest search"),
+            "{words}"
+        );
+    }
 }
 
 #[test]
@@ -557,4 +611,32 @@ fn a_retune_starts_the_fit_over_the_even_gain_from_the_previous_one() {
             assert!(d < 0.1 * cold.structural.k_std[i][j], "K[{i}][{j}]: {d}");
         }
     }
+}
+
+/// The words of `delay_outside_usual_range`: at the widest search's end, that the true delay may
+/// lie beyond and the model is not to be trusted; inside it, the clocks; the Welch segments'
+/// overlap loss named only above a tenth of a percent.
+#[test]
+fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() {
+    let warning = |tau_s: f64, overlap_loss: f64| {
+        IdentWarning::DelayOutsideUsualRange {
+            tau_s,
+            usual_s: [-0.020, 0.050],
+            reach_s: 0.3,
+            overlap_loss,
+        }
+        .to_string()
+    };
+    let end = warning(-0.2999, 0.004);
+    assert!(
+        end.contains("end of the widest search") && !end.contains("clocks"),
+        "{end}"
+    );
+    assert!(end.contains("by 0.40 %"), "{end}");
+    let inside = warning(0.12, 5e-4);
+    assert!(
+        inside.contains("clocks offset") && inside.contains("120.000 ms"),
+        "{inside}"
+    );
+    assert!(!inside.contains("lowers the measured gain"), "{inside}");
 }

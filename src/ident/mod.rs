@@ -23,6 +23,7 @@ pub mod signals;
 pub mod spectra;
 pub mod stretches;
 pub mod structural;
+mod warning_words;
 pub mod warnings;
 pub mod wiener;
 pub mod witness_noise;

@@ -19,6 +19,10 @@
 //!   order's own residual; a delay-only model's is checked before the self-check, where it decides
 //!   the fit over an even gain ([`super::even_gain`]).
 //! - **Negative delay**: `tau + 3 sigma < 0`.
+//! - **Delay outside the usual range**: the model's delay, or else the delay-only candidate's,
+//!   outside the -20 to 50 ms searched first (found by the wider search of
+//!   `structural::gain_delay`): clocks offset between the angles and the outputs, said with the
+//!   gain the Welch segments' smaller overlap costs at that delay.
 //! - **Delay absorbed by poles**: a chosen order above 0 whose delay is negative while the
 //!   order-0 candidate's is positive, the two more than 2 sigma apart (the poles' lag replaces part of the delay; a band-limited
 //!   reference's gain rise is fitted that way: measured on a real run's 64 s stretch, order 2 with
@@ -45,7 +49,8 @@ use super::identify::row_weights;
 use super::settings::{OrderSetting, Settings, leaves_enough};
 use super::signals::channel_names;
 use super::spectra::BlockSpectra;
-use super::structural::StructuralFit;
+use super::structural::gain_delay::DELAY_REACH_S;
+use super::structural::{StructuralFit, StructuralSettings};
 use super::warnings::IdentWarning;
 use super::wiener::WienerEstimate;
 use crate::block::Block;
@@ -233,6 +238,7 @@ pub fn self_check(
             tau_std_s: fit.tau_std_s,
         });
     }
+    out.extend(delay_outside_usual_range(spectra, fit, settings));
     let delay_only = fit.candidates.iter().find(|c| c.order == 0).map(|c| c.tau_s);
     if let Some(delay_only_tau_s) = delay_only
         && fit.order > 0
@@ -258,6 +264,41 @@ pub fn self_check(
         out.push(IdentWarning::InadmissibleOrder { order: n, reason });
     }
     out
+}
+
+/// `delay_outside_usual_range` when the model's delay, or else the delay-only candidate's, lies
+/// outside the structural fit's first range (found by its wider search: a model with poles can
+/// bring its delay back inside by fitting the misfit such a delay leaves, as our simulator's runs
+/// with the outputs 47 ms late did at order 4), with the gain the Welch windows' smaller overlap
+/// costs at that delay: `1 - sum w_n w_(n+k) / sum w_n^2`, `k` the delay in samples.
+fn delay_outside_usual_range(
+    spectra: &BlockSpectra,
+    fit: &StructuralFit,
+    settings: &Settings,
+) -> Option<IdentWarning> {
+    let usual = StructuralSettings::default();
+    let usual_s = [usual.tau_min_s, usual.tau_max_s];
+    let outside = |tau: &f64| *tau < usual_s[0] || *tau > usual_s[1];
+    let delay_only = fit.candidates.iter().find(|c| c.order == 0).map(|c| c.tau_s);
+    let tau_s = Some(fit.tau_s).filter(outside).or(delay_only.filter(outside))?;
+    let n = spectra.segment_len;
+    let rate_hz = spectra.frequency_hz.get(1).map_or(0.0, |df| df * n as f64);
+    let lag = (tau_s.abs() * rate_hz).round();
+    let window = settings.welch.window.coefficients(n);
+    let power: f64 = window.iter().map(|w| w * w).sum();
+    let overlap_loss = if lag.is_finite() && power > 0.0 {
+        let k = (lag as usize).min(n);
+        let shared: f64 = window.iter().zip(&window[k..]).map(|(a, b)| a * b).sum();
+        1.0 - shared / power
+    } else {
+        1.0
+    };
+    Some(IdentWarning::DelayOutsideUsualRange {
+        tau_s,
+        usual_s,
+        reach_s: DELAY_REACH_S,
+        overlap_loss,
+    })
 }
 
 /// How many of their deviations' bound the zeros' lead must exceed for `zeros_lead`. Three, as

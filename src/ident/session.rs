@@ -38,7 +38,7 @@ use super::identify::{
 use super::settings::{Estimate, Settings};
 use super::signals::{BlockSignals, block_signals, bridged};
 use super::spectra::{BlockSpectra, block_spectra};
-use super::warnings::IdentWarning;
+use super::warnings::{ANGLE_NOISE_OVERSTATED, IdentWarning};
 use crate::block::Block;
 use crate::run::Run;
 use crate::spectral::{WelchPlanner, WelchSettings};
@@ -343,6 +343,12 @@ impl Session {
             .collect();
         // A refusal decided on a warm start (fit or factorisation) is redone from scratch.
         let (mut identified, refused) = split_refusals(&blocks, identified, start == Start::Cold)?;
+        if let Some(w) = angle_noise_overstated(&motion, self.run.sidecar.angle_noise_rad) {
+            // What the gyro says of the declared angle noise concerns every block's inputs.
+            for b in &mut identified {
+                b.warnings.push(w.clone());
+            }
+        }
         if motion.noise_colour == NoiseColour::White {
             // No witness of the motion: what the observer could not check, every block says.
             for b in &mut identified {
@@ -391,6 +397,20 @@ impl Session {
         }
         Some(self.identify(&settings, Start::Cold, &mut |_| {}))
     }
+}
+
+/// `angle_noise_overstated` when the sidecar declares an angle noise more than
+/// [`ANGLE_NOISE_OVERSTATED`] times the bound the gyro puts on it on some axis (`stand::colour`).
+fn angle_noise_overstated(motion: &ObserverEstimate, declared: Option<f64>) -> Option<IdentWarning> {
+    let declared_rad = declared?;
+    let bound_rad = motion.angle_noise_bound_rad?;
+    bound_rad
+        .iter()
+        .any(|b| declared_rad > ANGLE_NOISE_OVERSTATED * b)
+        .then_some(IdentWarning::AngleNoiseOverstated {
+            declared_rad,
+            bound_rad,
+        })
 }
 
 /// The blocks' identifications (in the settings' order, `blocks`) split into the identified

@@ -22,6 +22,10 @@ use serde::{Deserialize, Serialize};
 use super::factorisation::{Factorisation, FactorisationSettings, input_floor, residual_loading};
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
+use super::warning_words::{
+    angle_noise_colour_unknown_words, angle_noise_overstated_words, delay_absorbed_words,
+    delay_outside_words, gain_change_words, write_stretches_without_delay, zeros_lead_words,
+};
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
 pub const FACTOR_ERROR_LIMIT: f64 = 1e-6;
@@ -44,6 +48,15 @@ impl Spectrum {
         }
     }
 }
+
+/// The gain loss through the Welch windows' overlap (`delay_outside_usual_range`) above which
+/// the warning names it: a tenth of a percent, a certification's usual scale-factor tolerance.
+pub const OVERLAP_LOSS_SAID: f64 = 1e-3;
+
+/// How many times the bound the gyro puts on the angles' noise a declared `angle_noise_rad` may
+/// be before `angle_noise_overstated` is said: twice (four times in power), since the bound is an
+/// upper one (it holds the gyro's own noise too) and a median over the band.
+pub const ANGLE_NOISE_OVERSTATED: f64 = 2.0;
 
 /// One warning of a block's identification.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -154,6 +167,23 @@ pub enum IdentWarning {
         /// Its standard deviation, s.
         tau_std_s: f64,
     },
+    /// The delay (the model's, or else the delay-only candidate's) lies outside the range a
+    /// sensor's own delay is searched in first, and was found by the wider search
+    /// (`structural::gain_delay`): most likely the angles and the outputs are stamped by clocks
+    /// offset from each other, which the model holds as the block's delay. At the wider search's
+    /// end the true delay may lie beyond it.
+    DelayOutsideUsualRange {
+        /// The delay, s.
+        tau_s: f64,
+        /// The range searched first, s.
+        usual_s: [f64; 2],
+        /// How far from zero the wider search reaches, s.
+        reach_s: f64,
+        /// How much the delay lowers the measured gain through the Welch windows' smaller
+        /// overlap (`1 - r(tau)`, `r` the window's normalised autocorrelation at the delay),
+        /// relative.
+        overlap_loss: f64,
+    },
     /// The chosen model has poles and a negative delay where the delay-only model (order 0) has a
     /// positive one: its poles' lag stands in for the delay, the delay is the remainder. Such a
     /// model is the block's only when the stand's angles lag it; otherwise it describes the
@@ -232,6 +262,17 @@ pub enum IdentWarning {
         /// Whether the level is the sidecar's (`true`) or estimated from the angles.
         declared: bool,
     },
+    /// The sidecar's `angle_noise_rad` is more than [`ANGLE_NOISE_OVERSTATED`] times what the gyro
+    /// leaves unexplained in the angles (`stand::colour`: that part holds the angles' noise and
+    /// more, so it bounds it from above) on some axis. The declared value is the floor of the
+    /// angle-noise model: overstated, the observer smooths away motion it takes for noise, and
+    /// the gains are biased where the motion is weak.
+    AngleNoiseOverstated {
+        /// The declared standard deviation, rad.
+        declared_rad: f64,
+        /// The bound per angle (roll, yaw, pitch), white-equivalent standard deviation, rad.
+        bound_rad: [f64; 3],
+    },
     /// The record holds fewer Welch segments or equivalent averages than a segment left to the
     /// program must leave it ([`super::settings::AUTO_MIN_SEGMENTS`],
     /// [`super::settings::AUTO_MIN_EQUIVALENT_AVERAGES`]): the fit's weights rest on few averages,
@@ -255,66 +296,6 @@ pub enum IdentWarning {
         /// How many times finer than the spectra's the grid was.
         refinement: usize,
     },
-}
-
-/// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
-fn relative(x: f64) -> String {
-    if x.abs() >= 1e-4 {
-        format!("{:.2} %", x * 100.0)
-    } else {
-        format!("{:.0} ppm", x * 1e6)
-    }
-}
-
-/// The words of [`IdentWarning::GainChangesAcrossBand`].
-fn gain_change_words(
-    rise: f64,
-    rise_std: f64,
-    k_bias: &[f64; 3],
-    outputs: &[String; 3],
-    k_relative_std: f64,
-    band_hz: [f64; 2],
-    k_at_low_frequency: bool,
-) -> String {
-    let rows: Vec<String> = k_bias
-        .iter()
-        .zip(outputs)
-        .map(|(b, name)| {
-            format!(
-                "{}{} ({name})",
-                if *b >= 0.0 { "+" } else { "-" },
-                relative(b.abs())
-            )
-        })
-        .collect();
-    let what = if k_at_low_frequency {
-        format!(
-            "the delay-only fit's K, the band's mean gain, read its rows about {} off the gain at \
-             low frequency, more than K's deviation ({}): the block is fitted again over the even \
-             gain, K is given at low frequency (its deviations not below the delay-only fit's) and \
-             the model carries the change; a lower band top lessens it",
-            rows.join(", "),
-            relative(k_relative_std)
-        )
-    } else {
-        format!(
-            "K is the band's mean gain, and its rows read about {} off the gain at low \
-             frequency, more than K's deviation ({}): a lower band top lessens it",
-            rows.join(", "),
-            relative(k_relative_std)
-        )
-    };
-    format!(
-        "the gain {} by {} (+- {}) from {:.2} to {:.1} Hz with no phase of its own: the \
-         reference's band limit (angles interpolated from a slower rate, e.g. a motion-capture \
-         system's, or smoothed), a filter in the block, or inputs the angle-noise model shrank; \
-         {what}",
-        if rise >= 0.0 { "rises" } else { "falls" },
-        relative(rise.abs()),
-        relative(rise_std),
-        band_hz[0],
-        band_hz[1],
-    )
 }
 
 impl fmt::Display for IdentWarning {
@@ -424,6 +405,12 @@ impl fmt::Display for IdentWarning {
                 tau_s * 1e3,
                 tau_std_s * 1e3
             ),
+            IdentWarning::DelayOutsideUsualRange {
+                tau_s,
+                usual_s,
+                reach_s,
+                overlap_loss,
+            } => delay_outside_words(f, *tau_s, *usual_s, *reach_s, *overlap_loss),
             IdentWarning::DelayAbsorbedByPoles {
                 order,
                 tau_s,
@@ -466,26 +453,14 @@ impl fmt::Display for IdentWarning {
                 spectrum.name(),
                 if *converged { "" } else { " (not converged)" }
             ),
+            IdentWarning::AngleNoiseOverstated {
+                declared_rad,
+                bound_rad,
+            } => angle_noise_overstated_words(f, *declared_rad, *bound_rad),
             IdentWarning::AngleNoiseColourUnknown {
                 angle_noise_rad,
                 declared,
-            } => write!(
-                f,
-                "no gyro block in this run to check the stand's angle noise against: it is taken \
-                 as white, roll {:.1e}, yaw {:.1e}, pitch {:.1e} rad per sample ({}); if the \
-                 stand's angle noise is \
-                 coloured (an optical reference, an encoder's interpolation), this block's gains \
-                 are biased low where the motion is weak and poles may stand in for its delay: \
-                 certify with a gyro on the stand, or fix the order at 0 and compare",
-                angle_noise_rad[0],
-                angle_noise_rad[1],
-                angle_noise_rad[2],
-                if *declared {
-                    "declared"
-                } else {
-                    "estimated from the angles"
-                }
-            ),
+            } => angle_noise_colour_unknown_words(f, *angle_noise_rad, *declared),
             IdentWarning::FewSegments {
                 segments,
                 equivalent_averages,
@@ -590,70 +565,4 @@ pub fn block_warnings(
         }
     }
     warnings
-}
-
-/// [`IdentWarning::StretchesWithoutDelay`]'s sentence.
-fn write_stretches_without_delay(
-    f: &mut fmt::Formatter<'_>,
-    spans_s: &[[f64; 2]],
-    fitted: usize,
-) -> fmt::Result {
-    let spans: Vec<String> = spans_s.iter().map(|[a, b]| format!("{a:.1}-{b:.1} s")).collect();
-    let which = if spans.len() == 1 {
-        "a stretch".to_owned()
-    } else {
-        format!("{} stretches", spans.len())
-    };
-    write!(
-        f,
-        "no delay fits {which} of the record ({}) within the stationarity check's reach \
-         (+-{} s: the best is its end): there the block's response is not the record's (a \
-         recording fault, a clock jump, motion folded about Nyquist); the stationarity check and \
-         the deviations' floor rest on the other {fitted} stretches",
-        spans.join(", "),
-        super::stretches::STRETCH_DELAY_REACH_S
-    )
-}
-
-/// The words of [`IdentWarning::ZerosLead`]; `lag_s` is the delay plus the poles' lag.
-fn zeros_lead_words(
-    f: &mut fmt::Formatter<'_>,
-    order: usize,
-    lead_s: f64,
-    lead_std_s: f64,
-    lag_s: f64,
-) -> fmt::Result {
-    write!(
-        f,
-        "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency: a sensor's \
-         filters do not lead, so the stand's angles probably lag the motion by about that much \
-         (a filter with phase in the angle measurement, not a zero-phase band limit). The model \
-         is the block relative to those angles: its net delay at low frequency is {:.3} ms, and \
-         its delay and poles alone ({:.3} ms at low frequency) are the block's only if the zeros \
-         are the angles' lag; check the angle sensors' filters and latency",
-        lead_s * 1e3,
-        lead_std_s * 1e3,
-        (lag_s - lead_s) * 1e3,
-        lag_s * 1e3
-    )
-}
-
-/// The words of [`IdentWarning::DelayAbsorbedByPoles`].
-fn delay_absorbed_words(
-    f: &mut fmt::Formatter<'_>,
-    order: usize,
-    tau_s: f64,
-    tau_std_s: f64,
-    delay_only_tau_s: f64,
-) -> fmt::Result {
-    write!(
-        f,
-        "the order-{order} model's delay is negative ({:.3} +- {:.3} ms) where the delay-only model \
-         gives {:.3} ms: its poles' lag stands in for the delay; this is the block's model only if \
-         the stand's angles lag the block (angle latency), otherwise it fits the reference's own \
-         response too: compare with order 0",
-        tau_s * 1e3,
-        tau_std_s * 1e3,
-        delay_only_tau_s * 1e3
-    )
 }

@@ -220,19 +220,34 @@ const MAX_STRETCHES: usize = 5;
 /// standard deviation is about `1 / sqrt(M - 3)`); narrower windows are widened.
 const MIN_INDEPENDENT: f64 = 24.0;
 
+/// The coloured model, and what the witness bounds the angle noise by.
+pub(super) struct Coloured {
+    /// Per bin of the observer's grid and axis, the model (see [`coloured_noise`]).
+    pub per_bin: Vec<[f64; 3]>,
+    /// Per axis, the white level that bounds the angles' noise from above: the median over the
+    /// bins between [`BOUND_BAND_HZ`]'s ends (the top capped at `0.4 fs`) of `min(N_c, S_yy)`
+    /// without the floor (the unexplained part holds the angles' noise and more: the gyro's own,
+    /// the witness's misfit), as a standard deviation, rad. `None` where no bin is there.
+    pub bound_rad: Option<[f64; 3]>,
+}
+
+/// Where [`Coloured::bound_rad`] is read, Hz: the auto band's search limits.
+const BOUND_BAND_HZ: [f64; 2] = [0.1, 40.0];
+
 /// The coloured model on the observer's grid `grid`: per bin and axis, `clamp(N_c, white, S_yy)`
 /// (module docs), the median over up to five equal stretches of the record, each estimated on its
 /// own: a stretch where the gyro is no witness of the motion (a hold, a dropout, a dead start)
 /// leaves much of the motion unexplained there and would pass for angle noise everywhere; the
 /// median ignores up to two such stretches. The smoothing windows are the observer's
-/// (`max(smoothing_hz, smoothing_fraction f)` wide), widened to [`MIN_INDEPENDENT`] bins.
+/// (`max(smoothing_hz, smoothing_fraction f)` wide), widened to [`MIN_INDEPENDENT`] bins. With it,
+/// the bound the same medians put on the angles' noise ([`Coloured::bound_rad`]).
 pub(super) fn coloured_noise(
     angles: [&[f64]; 3],
     body_rates: [&[f64]; 3],
     grid: &RecordFft,
     smoothing: (f64, f64),
     white: [f64; 3],
-) -> Vec<[f64; 3]> {
+) -> Coloured {
     let n = angles[0].len();
     let rate = grid.sample_rate_hz();
     // A gyro mounted turned: its outputs in platform axes first (`super::mount`).
@@ -242,7 +257,7 @@ pub(super) fn coloured_noise(
         .map_or(body_rates, |p| p.each_ref().map(Vec::as_slice));
     let count = ((n as f64 / (MIN_STRETCH_S * rate)) as usize).clamp(1, MAX_STRETCHES);
     let count = if count.is_multiple_of(2) { count - 1 } else { count };
-    let stretches: Vec<(f64, Vec<[f64; 3]>)> = (0..count)
+    let stretches: Vec<(f64, Vec<Cell>)> = (0..count)
         .into_par_iter()
         .map(|j| {
             let range = j * n / count..(j + 1) * n / count;
@@ -252,22 +267,43 @@ pub(super) fn coloured_noise(
         })
         .collect();
     let mut values = Vec::with_capacity(count);
+    let mut median = |k: usize, a: usize, of: fn(&Cell) -> [f64; 3]| {
+        let f = grid.frequency_hz(k);
+        values.clear();
+        values.extend(stretches.iter().map(|(cell_hz, v)| {
+            let i = ((f / cell_hz) as usize).min(v.len() - 1);
+            of(&v[i])[a]
+        }));
+        values.sort_by(f64::total_cmp);
+        values[values.len() / 2]
+    };
     let mut out: Vec<[f64; 3]> = (0..grid.n_bins())
-        .map(|k| {
-            let f = grid.frequency_hz(k);
-            [0, 1, 2].map(|a| {
-                values.clear();
-                values.extend(stretches.iter().map(|(cell_hz, v)| {
-                    let i = ((f / cell_hz) as usize).min(v.len() - 1);
-                    v[i][a]
-                }));
-                values.sort_by(f64::total_cmp);
-                values[values.len() / 2]
-            })
-        })
+        .map(|k| [0, 1, 2].map(|a| median(k, a, |c| c.model)))
         .collect();
+    let top = BOUND_BAND_HZ[1].min(0.4 * rate);
+    let band: Vec<usize> = (0..grid.n_bins())
+        .filter(|&k| (BOUND_BAND_HZ[0]..=top).contains(&grid.frequency_hz(k)))
+        .collect();
+    let bound_rad = (!band.is_empty()).then(|| {
+        [0, 1, 2].map(|a| {
+            let mut levels: Vec<f64> = band.iter().map(|&k| median(k, a, |c| c.bound)).collect();
+            levels.sort_by(f64::total_cmp);
+            levels[levels.len() / 2].max(0.0).sqrt()
+        })
+    });
     keep_the_gyro_s_drift_out(&mut out, grid, white);
-    out
+    Coloured {
+        per_bin: out,
+        bound_rad,
+    }
+}
+
+/// One cell of a stretch's estimate: the model `clamp(N_c, white, S_yy)` and the bound
+/// `min(N_c, S_yy)`, per axis.
+#[derive(Clone, Copy)]
+struct Cell {
+    model: [f64; 3],
+    bound: [f64; 3],
 }
 
 /// The gyro's own noise taken out of the unexplained part. In rate units (`w^2 N`) a gyro's noise
@@ -313,7 +349,7 @@ fn stretch_noise(
     rate: f64,
     smoothing: (f64, f64),
     white: [f64; 3],
-) -> (f64, Vec<[f64; 3]>) {
+) -> (f64, Vec<Cell>) {
     let n = angles[0].len();
     let mut fft = RecordFft::new(fast_len(n), rate);
     let fft = &mut fft;
@@ -391,14 +427,9 @@ fn stretch_noise(
     (cell as f64 * rate / fft.len() as f64, out)
 }
 
-/// `clamp(N_c, white, S_yy)` per axis from a window's sums over `count` bins.
-fn unexplained(
-    sums: &Sums,
-    count: f64,
-    independent_per_bin: f64,
-    power_norm: f64,
-    white: [f64; 3],
-) -> [f64; 3] {
+/// `clamp(N_c, white, S_yy)` per axis from a window's sums over `count` bins, and the bound
+/// `min(N_c, S_yy)` (the white floor where nothing is known beyond it).
+fn unexplained(sums: &Sums, count: f64, independent_per_bin: f64, power_norm: f64, white: [f64; 3]) -> Cell {
     let independent = count * independent_per_bin;
     let scale = Complex64::from(1.0 / (count.max(1.0) * power_norm));
     let (syy, syw, sww) = (sums.yy * scale, sums.yw * scale, sums.ww * scale);
@@ -412,13 +443,17 @@ fn unexplained(
         }
         _ => white,
     };
-    [0, 1, 2].map(|a| {
+    let model = [0, 1, 2].map(|a| {
         if left[a] < MIN_SHARE * total[a] {
             white[a]
         } else {
             left[a].min(total[a]).max(white[a])
         }
-    })
+    });
+    Cell {
+        model,
+        bound: [0, 1, 2].map(|a| left[a].min(total[a])),
+    }
 }
 
 #[cfg(test)]

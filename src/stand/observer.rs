@@ -115,6 +115,10 @@ pub struct ObserverEstimate {
     pub angle_noise_psd: ErrorPsd,
     /// The spectral density of the estimate's error, per angle axis (see [`ErrorPsd`]).
     pub error_psd: ErrorPsd,
+    /// With a witness, the white level per axis that bounds the angles' noise from above (what
+    /// the gyro leaves unexplained in them, over the auto band's search limits; module
+    /// [`super::colour`]), rad; `None` without one.
+    pub angle_noise_bound_rad: Option<[f64; 3]>,
 }
 
 /// The one-sided spectral density of the angle estimate's error `theta_hat - theta`, rad^2/Hz,
@@ -270,13 +274,14 @@ pub fn observe_with_witness(
     let floor = residuals.iter().map(|r| resolution_floor(r)).fold(0.0, f64::max);
     let noise_var = noise_var.map(|v| v.max(floor));
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
-    let (noise, noise_colour) = match witness {
+    let (noise, noise_colour, angle_noise_bound_rad) = match witness {
         Some(w) => {
             let smoothing = (settings.smoothing_hz, settings.smoothing_fraction);
-            let per_bin = coloured_noise(angles, w, &fft, smoothing, noise_var);
-            (AngleNoise::PerBin(per_bin), NoiseColour::FromGyro)
+            let coloured = coloured_noise(angles, w, &fft, smoothing, noise_var);
+            let bound = coloured.bound_rad;
+            (AngleNoise::PerBin(coloured.per_bin), NoiseColour::FromGyro, bound)
         }
-        None => (AngleNoise::White(noise_var), NoiseColour::White),
+        None => (AngleNoise::White(noise_var), NoiseColour::White, None),
     };
     let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, &noise, noise_var);
     let density = 2.0 / sample_rate_hz;
@@ -330,6 +335,7 @@ pub fn observe_with_witness(
         noise_colour,
         angle_noise_psd,
         error_psd,
+        angle_noise_bound_rad,
     })
 }
 

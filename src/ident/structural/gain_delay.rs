@@ -10,7 +10,15 @@
 //! exact. The delay maximises `F`: a scan over the settings' range with a step of `1 / (16 f_max)`
 //! (the phase of the top bin wraps every `1 / f_max`, so no basin is missed; the step grows only if
 //! the range would need more than `MAX_SCAN` points), then a safeguarded Newton iteration on `F'`
-//! inside the best grid cell to a step below `1e-15` s. The scan allocates nothing: each point
+//! inside the best grid cell to a step below `1e-15` s. Beyond the range, `[-DELAY_REACH_S,
+//! DELAY_REACH_S]` is scanned too, at four points per top-bin period (a lobe of the objective is
+//! about one period wide), and its best is taken when it beats the range's by more than
+//! [`WIDER_EVIDENCE`] in chi2 (scaled by the misfit): the self-check then says so
+//! (`delay_outside_usual_range`). Without it a range's end passed for a maximum: a gyro 50.17 ms
+//! behind the angles (a real recording, its outputs delayed) came out at 50.0000 ms, six of its
+//! deviations off, said by nothing; at 100 ms an interior local maximum at 1 ms was taken. The
+//! evidence bar keeps the range's best where a periodic motion (one sine) gives lobes of equal
+//! height beyond it. The scan allocates nothing: each point
 //! costs one complex product per bin for its phase factor (`super::phasor`) and nine complex
 //! multiply-adds.
 
@@ -21,6 +29,18 @@ use super::model::{ELEMENTS, Model, Prepared};
 
 /// The most points of the delay scan.
 const MAX_SCAN: usize = 20_000;
+
+/// How far from zero the delay is searched, s, when the settings' range ends at the best: the
+/// reach of the stationarity stretches' own scan, wide enough for a logging or transport latency
+/// between the angles' and the outputs' clocks, and short beside the segments the program picks
+/// (which the delay's overlap loss of the Welch windows is measured against, in the self-check).
+pub const DELAY_REACH_S: f64 = crate::ident::stretches::STRETCH_DELAY_REACH_S;
+
+/// How much smaller (in chi2, times `max(1, chi2/dof)`) a delay beyond the settings' range must
+/// make the residual to be taken instead of the range's best: 25 (five deviations of a one-
+/// parameter difference) times 2, about the Hann bins' correlation (1.94), which the weights
+/// here do not include.
+const WIDER_EVIDENCE: f64 = 50.0;
 
 /// Sums independent of the delay.
 struct Sums<'a> {
@@ -104,7 +124,7 @@ fn pseudo_inverse(a: Matrix3<f64>) -> Matrix3<f64> {
 /// The order-0 fit on the delay range `[tau_min, tau_max]` (finite, non-empty).
 pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
     let sums = sums(data);
-    let tau = best_delay(&sums, tau_min, tau_max);
+    let tau = scan(&sums, tau_min, tau_max);
     Model {
         num: vec![sums.gain(tau)],
         den: Vec::new(),
@@ -114,17 +134,19 @@ pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
 
 /// The order-0 fit whose delay is known to lie within a scan step (`1 / (16 f_max)`) of `near`
 /// (data changed a little since a fit gave `near`): refined inside that cell alone, or by the
-/// whole scan over `[tau_min, tau_max]` when the cell does not hold a maximum.
+/// whole scan over `[tau_min, tau_max]` (widened as [`fit`] widens it) when the cell does not
+/// hold a maximum.
 pub(super) fn fit_near(data: &Prepared, near: f64, tau_min: f64, tau_max: f64) -> Model {
     let sums = sums(data);
-    let step = 2.0 * std::f64::consts::PI / data.omega_ref / 16.0;
-    let (lo, hi) = ((near - step).max(tau_min), (near + step).min(tau_max));
+    let step = scan_step(data);
+    let (reach_min, reach_max) = reach(tau_min, tau_max);
+    let (lo, hi) = ((near - step).max(reach_min), (near + step).min(reach_max));
     let (_, g_lo, _) = sums.objective(lo, true);
     let (_, g_hi, _) = sums.objective(hi, true);
     let tau = if lo < hi && g_lo > 0.0 && g_hi < 0.0 {
         refine(&sums, lo, hi, near.clamp(lo, hi))
     } else {
-        best_delay(&sums, tau_min, tau_max)
+        scan(&sums, tau_min, tau_max)
     };
     Model {
         num: vec![sums.gain(tau)],
@@ -159,11 +181,45 @@ fn sums(data: &Prepared) -> Sums<'_> {
     }
 }
 
-/// Scan, then refine inside the best cell.
-fn best_delay(sums: &Sums, tau_min: f64, tau_max: f64) -> f64 {
-    let top = 2.0 * std::f64::consts::PI / sums.data.omega_ref;
+/// The scan's step, s: `1 / (16 f_max)`, a sixteenth of the top bin's phase period.
+fn scan_step(data: &Prepared) -> f64 {
+    2.0 * std::f64::consts::PI / data.omega_ref / 16.0
+}
+
+/// The widest range searched: `[tau_min, tau_max]` widened to `+-DELAY_REACH_S`.
+fn reach(tau_min: f64, tau_max: f64) -> (f64, f64) {
+    (tau_min.min(-DELAY_REACH_S), tau_max.max(DELAY_REACH_S))
+}
+
+/// The best delay over `[tau_min, tau_max]`, or over the wider [`reach`] when the data prefer
+/// that by [`WIDER_EVIDENCE`] (module docs).
+fn scan(sums: &Sums, tau_min: f64, tau_max: f64) -> f64 {
+    let step = scan_step(sums.data);
+    let near = best_delay(sums, tau_min, tau_max, step);
+    let (lo, hi) = reach(tau_min, tau_max);
+    if lo >= tau_min && hi <= tau_max {
+        return near;
+    }
+    let far = best_delay(sums, lo, hi, 4.0 * step);
+    let chi2 = |tau: f64| {
+        Model {
+            num: vec![sums.gain(tau)],
+            den: Vec::new(),
+            tau,
+        }
+        .chi2(sums.data)
+    };
+    let (chi2_near, chi2_far) = (chi2(near), chi2(far));
+    let dof = sums.data.real_data().saturating_sub(ELEMENTS + 1).max(1) as f64;
+    let bar = WIDER_EVIDENCE * (chi2_far / dof).max(1.0);
+    if chi2_near - chi2_far > bar { far } else { near }
+}
+
+/// Scan every `step` (fewer points if that needs more than [`MAX_SCAN`]), then refine inside
+/// the best cell.
+fn best_delay(sums: &Sums, tau_min: f64, tau_max: f64, step: f64) -> f64 {
     let span = tau_max - tau_min;
-    let points = ((span / (top / 16.0)).ceil() as usize).clamp(2, MAX_SCAN);
+    let points = ((span / step).ceil() as usize).clamp(2, MAX_SCAN);
     let step = span / (points - 1) as f64;
     let at = |i: usize| {
         if i + 1 == points {

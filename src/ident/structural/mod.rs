@@ -63,7 +63,7 @@
 
 pub mod admissible;
 mod align;
-mod gain_delay;
+pub mod gain_delay;
 mod holdout;
 mod model;
 mod order;

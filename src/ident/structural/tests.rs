@@ -459,3 +459,22 @@ fn an_even_gain_is_carried_by_a_delay_only_model() {
     assert!(!first.carry_even_gain(even));
     assert_eq!(first, unchanged);
 }
+
+/// Delays outside the -20 to 50 ms searched first are found by the wider search (before: the
+/// range's end), with the gain, on noisy data; the widest search's own ends hold.
+#[test]
+fn order0_finds_delays_beyond_the_usual_range() {
+    let mut rng = Rng::new(61);
+    for tau in [-0.25, -0.1, -0.0213, 0.0537, 0.12, 0.29] {
+        let k = random_gain(&mut rng);
+        let data = synthesise(&Truth::gain_delay(k, tau), &mut rng, 1.0);
+        let fit = fit(&data, OrderChoice::Fixed(0)).expect("fit");
+        assert!(
+            (fit.tau_s - tau).abs() < 5.0 * fit.tau_std_s,
+            "tau {tau}: {} +- {}",
+            fit.tau_s,
+            fit.tau_std_s
+        );
+        assert!(max_k_error(&fit, &k) < 5e-3, "tau {tau}: {:?}", fit.k);
+    }
+}

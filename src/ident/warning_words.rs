@@ -1,0 +1,219 @@
+//! The sentences of the longer identification warnings ([`super::warnings::IdentWarning`]'s
+//! `Display`), one function per warning: sizes in the units a reader checks (ms, %, rad).
+
+use std::fmt;
+
+/// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
+fn relative(x: f64) -> String {
+    if x.abs() >= 1e-4 {
+        format!("{:.2} %", x * 100.0)
+    } else {
+        format!("{:.0} ppm", x * 1e6)
+    }
+}
+
+/// The words of [`super::warnings::IdentWarning::GainChangesAcrossBand`].
+pub(super) fn gain_change_words(
+    rise: f64,
+    rise_std: f64,
+    k_bias: &[f64; 3],
+    outputs: &[String; 3],
+    k_relative_std: f64,
+    band_hz: [f64; 2],
+    k_at_low_frequency: bool,
+) -> String {
+    let rows: Vec<String> = k_bias
+        .iter()
+        .zip(outputs)
+        .map(|(b, name)| {
+            format!(
+                "{}{} ({name})",
+                if *b >= 0.0 { "+" } else { "-" },
+                relative(b.abs())
+            )
+        })
+        .collect();
+    let what = if k_at_low_frequency {
+        format!(
+            "the delay-only fit's K, the band's mean gain, read its rows about {} off the gain at \
+             low frequency, more than K's deviation ({}): the block is fitted again over the even \
+             gain, K is given at low frequency (its deviations not below the delay-only fit's) and \
+             the model carries the change; a lower band top lessens it",
+            rows.join(", "),
+            relative(k_relative_std)
+        )
+    } else {
+        format!(
+            "K is the band's mean gain, and its rows read about {} off the gain at low \
+             frequency, more than K's deviation ({}): a lower band top lessens it",
+            rows.join(", "),
+            relative(k_relative_std)
+        )
+    };
+    format!(
+        "the gain {} by {} (+- {}) from {:.2} to {:.1} Hz with no phase of its own: the \
+         reference's band limit (angles interpolated from a slower rate, e.g. a motion-capture \
+         system's, or smoothed), a filter in the block, or inputs the angle-noise model shrank; \
+         {what}",
+        if rise >= 0.0 { "rises" } else { "falls" },
+        relative(rise.abs()),
+        relative(rise_std),
+        band_hz[0],
+        band_hz[1],
+    )
+}
+
+/// [`super::warnings::IdentWarning::StretchesWithoutDelay`]'s sentence.
+pub(super) fn write_stretches_without_delay(
+    f: &mut fmt::Formatter<'_>,
+    spans_s: &[[f64; 2]],
+    fitted: usize,
+) -> fmt::Result {
+    let spans: Vec<String> = spans_s.iter().map(|[a, b]| format!("{a:.1}-{b:.1} s")).collect();
+    let which = if spans.len() == 1 {
+        "a stretch".to_owned()
+    } else {
+        format!("{} stretches", spans.len())
+    };
+    write!(
+        f,
+        "no delay fits {which} of the record ({}) within the stationarity check's reach \
+         (+-{} s: the best is its end): there the block's response is not the record's (a \
+         recording fault, a clock jump, motion folded about Nyquist); the stationarity check and \
+         the deviations' floor rest on the other {fitted} stretches",
+        spans.join(", "),
+        super::stretches::STRETCH_DELAY_REACH_S
+    )
+}
+
+/// The words of [`super::warnings::IdentWarning::ZerosLead`]; `lag_s` is the delay plus the poles' lag.
+pub(super) fn zeros_lead_words(
+    f: &mut fmt::Formatter<'_>,
+    order: usize,
+    lead_s: f64,
+    lead_std_s: f64,
+    lag_s: f64,
+) -> fmt::Result {
+    write!(
+        f,
+        "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency: a sensor's \
+         filters do not lead, so the stand's angles probably lag the motion by about that much \
+         (a filter with phase in the angle measurement, not a zero-phase band limit). The model \
+         is the block relative to those angles: its net delay at low frequency is {:.3} ms, and \
+         its delay and poles alone ({:.3} ms at low frequency) are the block's only if the zeros \
+         are the angles' lag; check the angle sensors' filters and latency",
+        lead_s * 1e3,
+        lead_std_s * 1e3,
+        (lag_s - lead_s) * 1e3,
+        lag_s * 1e3
+    )
+}
+
+/// The words of [`super::warnings::IdentWarning::DelayAbsorbedByPoles`].
+pub(super) fn delay_absorbed_words(
+    f: &mut fmt::Formatter<'_>,
+    order: usize,
+    tau_s: f64,
+    tau_std_s: f64,
+    delay_only_tau_s: f64,
+) -> fmt::Result {
+    write!(
+        f,
+        "the order-{order} model's delay is negative ({:.3} +- {:.3} ms) where the delay-only model \
+         gives {:.3} ms: its poles' lag stands in for the delay; this is the block's model only if \
+         the stand's angles lag the block (angle latency), otherwise it fits the reference's own \
+         response too: compare with order 0",
+        tau_s * 1e3,
+        tau_std_s * 1e3,
+        delay_only_tau_s * 1e3
+    )
+}
+
+/// The words of [`super::warnings::IdentWarning::DelayOutsideUsualRange`].
+pub(super) fn delay_outside_words(
+    f: &mut fmt::Formatter<'_>,
+    tau_s: f64,
+    usual_s: [f64; 2],
+    reach_s: f64,
+    overlap_loss: f64,
+) -> fmt::Result {
+    let ms = |s: f64| s * 1e3;
+    if tau_s.abs() >= reach_s - 1e-3 {
+        write!(
+            f,
+            "delay {:.3} ms, at the end of the widest search (+-{:.0} ms): the true \
+             delay may lie beyond it, and the model, K too, is not to be trusted; \
+             align the angles and the outputs in time first",
+            ms(tau_s),
+            ms(reach_s)
+        )?;
+    } else {
+        write!(
+            f,
+            "delay {:.3} ms, outside the {:.0} to {:.0} ms a sensor's own delay is \
+             searched in (found by the search to +-{:.0} ms): most likely the angles \
+             and the outputs are stamped by clocks offset from each other (a logging \
+             or transport latency), which the model holds as the block's delay; the \
+             Welch estimate smears a delay this long into a misfit a model with poles \
+             may fit: where a poor fit is said too, align the streams in time and \
+             identify again",
+            ms(tau_s),
+            ms(usual_s[0]),
+            ms(usual_s[1]),
+            ms(reach_s)
+        )?;
+    }
+    if overlap_loss > super::warnings::OVERLAP_LOSS_SAID {
+        write!(
+            f,
+            "; a delay this long lowers the measured gain by {:.2} % (the Welch \
+             segments of the outputs and the angles overlap less): K reads low by \
+             that much; align the streams, or take longer segments",
+            overlap_loss * 100.0
+        )?;
+    }
+    Ok(())
+}
+
+/// The words of [`super::warnings::IdentWarning::AngleNoiseOverstated`].
+pub(super) fn angle_noise_overstated_words(
+    f: &mut fmt::Formatter<'_>,
+    declared_rad: f64,
+    bound_rad: [f64; 3],
+) -> fmt::Result {
+    write!(
+        f,
+        "the sidecar's angle_noise_rad, {declared_rad:.1e} rad, is more than the angles \
+     hold: what the gyro leaves unexplained in them between 0.1 and 40 Hz, which \
+     holds their noise and the gyro's own, is at most roll {:.1e}, yaw {:.1e}, pitch \
+     {:.1e} rad per sample; the declared value is the floor of the angle-noise model, \
+     and overstated it makes the observer smooth away motion it takes for noise, \
+     biasing the gains where the motion is weak; correct it, or leave it out to have \
+     it estimated",
+        bound_rad[0], bound_rad[1], bound_rad[2],
+    )
+}
+
+/// The words of [`super::warnings::IdentWarning::AngleNoiseColourUnknown`].
+pub(super) fn angle_noise_colour_unknown_words(
+    f: &mut fmt::Formatter<'_>,
+    angle_noise_rad: [f64; 3],
+    declared: bool,
+) -> fmt::Result {
+    write!(
+        f,
+        "no gyro block in this run to check the stand's angle noise against: it is taken as \
+         white, roll {:.1e}, yaw {:.1e}, pitch {:.1e} rad per sample ({}); if the stand's angle \
+         noise is coloured (an optical reference, an encoder's interpolation), this block's gains \
+         are biased low where the motion is weak and poles may stand in for its delay: certify \
+         with a gyro on the stand, or fix the order at 0 and compare",
+        angle_noise_rad[0],
+        angle_noise_rad[1],
+        angle_noise_rad[2],
+        if declared {
+            "declared"
+        } else {
+            "estimated from the angles"
+        }
+    )
+}

@@ -515,3 +515,31 @@ fn a_single_block_refusal_does_not_offer_to_leave_the_block_out() {
     assert!(stderr.trim_end().ends_with("or give band_hz"), "{stderr}");
     assert!(!stderr.contains("leave this block out"), "{stderr}");
 }
+
+/// `imu-attest COMMAND --help` (or `-h`) prints that command's usage and exits 0, for every
+/// command; it said "option --help needs a value" and exited 2.
+#[test]
+fn each_command_s_help_prints_its_usage() {
+    for command in [
+        "simulate",
+        "identify",
+        "discrepancy",
+        "compare",
+        "report",
+        "batch",
+        "inspect",
+        "bench",
+    ] {
+        for flag in ["--help", "-h"] {
+            let o = imu_attest(&[command, flag]);
+            let text = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "{command} {flag}: {text}");
+            assert!(
+                text.contains(&format!("imu-attest {command} ")),
+                "{command}: {text}"
+            );
+            let others = text.matches("  imu-attest ").count();
+            assert_eq!(others, 1, "{command}: its own usage only: {text}");
+        }
+    }
+}

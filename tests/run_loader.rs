@@ -419,6 +419,44 @@ fn unknown_columns_are_kept_with_a_notice() {
     );
 }
 
+/// A sidecar field the program does not read is noticed by name, with the field it most likely
+/// meant: a misspelt lever arm (its value then zero) is not silent. `truth` (a simulated run's)
+/// and the fields read are not noticed, and the known fields are read as before.
+#[test]
+fn unknown_sidecar_fields_are_noticed_with_the_field_meant() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, _) = csv(&ALL, 40, 0.0, 0.01);
+    let path = write(dir.path(), "s.csv", text);
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"regime": "r", "accel_lever_arm": [0.3, 0.1, 0.0], "G_mps2": 9.81,
+            "angle_noise": 1e-5, "operator": "A. N. Other", "truth": {"x": 1},
+            "gyro_lever_arm_m": [0.0, 0.0, 0.1]}"#,
+    );
+    let run = load(&path, &opts()).unwrap();
+    let said: Vec<&String> = run
+        .notices
+        .iter()
+        .filter(|n| n.starts_with("sidecar field"))
+        .collect();
+    let expected = [
+        "sidecar field 'G_mps2' is not one the program reads, ignored: did you mean 'g_mps2'?",
+        "sidecar field 'accel_lever_arm' is not one the program reads, ignored: did you mean \
+         'accel_lever_arm_m'?",
+        "sidecar field 'angle_noise' is not one the program reads, ignored: did you mean \
+         'angle_noise_rad'?",
+        "sidecar field 'operator' is not one the program reads, ignored",
+    ];
+    assert_eq!(said, expected.iter().collect::<Vec<_>>(), "{:?}", run.notices);
+    assert_eq!(
+        run.sidecar.accel_lever_arm_m, [0.0; 3],
+        "the misspelt field is not read"
+    );
+    assert_eq!(run.sidecar.gyro_lever_arm_m, [0.0, 0.0, 0.1]);
+    assert_eq!(run.sidecar.regime, "r");
+}
+
 #[test]
 fn single_block_runs_load() {
     let dir = tempfile::tempdir().unwrap();
@@ -462,8 +500,10 @@ fn sidecar_is_read_and_unknown_fields_are_ignored() {
     assert_eq!(s.gyro_lever_arm_m, [0.0, 0.0, -0.05]);
     assert_eq!(s.angle_noise_rad, Some(2e-5));
     assert_eq!(s.notes.as_deref(), Some("free text"));
-    assert!(
-        run.notices.iter().all(|n| !n.contains("sidecar")),
+    // Unknown fields are ignored, each with a notice naming it; `truth` without one.
+    assert_eq!(
+        run.notices,
+        ["sidecar field 'operator' is not one the program reads, ignored"],
         "{:?}",
         run.notices
     );
@@ -824,6 +864,14 @@ fn time_must_increase_uniformly() {
             }
         ),
         "{err}"
+    );
+    // The message gives the step and the nominal without rounding digits, the deviation and the
+    // limit (it gave "step 0.0020299999999999763 s, nominal 0.0019999999999997797 s").
+    let words = err.to_string();
+    assert!(
+        words.contains("a step of 0.0102 s, 2.00 % off the nominal 0.01 s")
+            && words.contains("at most 1 % is accepted"),
+        "{words}"
     );
     if let LoadError::IrregularSampling { dt, nominal_dt, .. } = err {
         assert!(

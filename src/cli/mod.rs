@@ -105,6 +105,11 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         Some((c, _)) if c == "-h" || c == "--help" => (c.as_str(), &argv[1..]),
         _ => ("gui", argv),
     };
+    if command != "gui" && rest.iter().any(|a| a == "--help" || a == "-h") {
+        // `imu-attest identify --help`: that command's lines of the usage, not "needs a value".
+        eprint!("{}", usage_of(command));
+        return Ok(());
+    }
     match command {
         "simulate" => simulate::run(&Args::parse(rest)?),
         "inspect" => inspect::run(&Args::parse(rest)?),
@@ -124,6 +129,22 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
             "unknown command '{other}' (try 'imu-attest help')"
         ))),
     }
+}
+
+/// The lines of [`USAGE`] for `command` (its line and the continuation lines under it), or the
+/// whole usage for a command it does not list.
+fn usage_of(command: &str) -> String {
+    let start = format!("  imu-attest {command} ");
+    let mut lines = USAGE.lines().skip_while(|l| !l.starts_with(&start));
+    let Some(first) = lines.next() else {
+        return USAGE.to_owned();
+    };
+    let mut out = format!("usage:\n{first}\n");
+    for line in lines.take_while(|l| !l.starts_with("  imu-attest ")) {
+        out.push_str(line);
+        out.push('\n');
+    }
+    out
 }
 
 /// A bare argument naming a run file opens the GUI with it (`imu-attest cruise.csv`).

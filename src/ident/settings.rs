@@ -337,6 +337,20 @@ impl Settings {
                 detail,
             }
         };
+        // A struct also deserialises from a JSON array (`[]` was taken as the defaults).
+        if let Some(at) = bytes.iter().position(|b| !b.is_ascii_whitespace())
+            && bytes[at] != b'{'
+        {
+            let before = &bytes[..at];
+            let line = before.split(|&b| b == b'\n').count();
+            let column = 1 + before.iter().rev().take_while(|&&b| b != b'\n').count();
+            return Err(SettingsError::Parse {
+                file: file.display().to_string(),
+                line,
+                column,
+                detail: "the settings must be a JSON object ({...})".to_owned(),
+            });
+        }
         let mut de = serde_json::Deserializer::from_slice(bytes);
         let settings: Self = serde_path_to_error::deserialize(&mut de)
             .map_err(|e| parse_error(e.path().to_string(), e.inner()))?;

@@ -167,7 +167,10 @@ fn parse_errors_name_line_and_column() {
         ("{\"wieght_A\": 1}", 1, "unknown field"),
         ("{\"order\": -1}", 1, "negative"),
         ("{\"order\": 1", 1, "EOF"),
-        ("[1, 2]", 1, "invalid type"),
+        ("[1, 2]", 1, "JSON object"),
+        // An empty array read as a struct gave the defaults.
+        ("\n  []", 2, "JSON object"),
+        ("\"auto\"", 1, "JSON object"),
     ];
     for (text, line, needle) in cases {
         let e = parse(text).unwrap_err();

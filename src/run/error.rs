@@ -169,7 +169,15 @@ pub enum LoadError {
         t: f64,
     },
     /// A time step deviates more than the tolerance (1 %) from the nominal (median) step.
-    #[error("{}:{line}:{column} (column 't'): irregular sampling: step {dt} s, nominal {nominal_dt} s", path.display())]
+    #[error(
+        "{}:{line}:{column} (column 't'): irregular sampling: a step of {} s, {:.2} % off the \
+         nominal {} s (the median step; at most {} % is accepted)",
+        path.display(),
+        significant(*dt),
+        100.0 * (dt - nominal_dt).abs() / nominal_dt,
+        significant(*nominal_dt),
+        100.0 * tolerance
+    )]
     IrregularSampling {
         /// The file.
         path: PathBuf,
@@ -181,6 +189,8 @@ pub enum LoadError {
         dt: f64,
         /// The nominal step (median of the first steps), s.
         nominal_dt: f64,
+        /// The relative deviation accepted.
+        tolerance: f64,
     },
     /// The time column increases uniformly but spans no finite, positive duration in floating
     /// point (steps so small the rate overflows, or a span beyond the largest number).
@@ -259,4 +269,19 @@ pub enum LoadError {
     /// The progress callback asked to stop.
     #[error("loading cancelled")]
     Cancelled,
+}
+
+/// `x` to seven significant digits, without the float's trailing rounding digits
+/// (`0.0020299999999999763` is `0.00203`).
+fn significant(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    let decimals = (6 - x.abs().log10().floor() as i32).max(0) as usize;
+    let text = format!("{x:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        text
+    }
 }

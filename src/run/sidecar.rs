@@ -55,7 +55,67 @@ impl Sidecar {
     }
 }
 
-/// The sidecar's fields as written; unknown fields are skipped by serde.
+/// The fields the program reads, and `truth` (a simulated run's, which only tests read): any
+/// other is ignored with a notice naming it.
+const KNOWN_FIELDS: [&str; 8] = [
+    "format",
+    "regime",
+    "g_mps2",
+    "accel_lever_arm_m",
+    "gyro_lever_arm_m",
+    "angle_noise_rad",
+    "notes",
+    "truth",
+];
+
+/// A notice per top-level field of `bytes` (a JSON object) the program does not read, with the
+/// known name it most likely meant (one that contains it, or is contained in it, or within two
+/// edits): a misspelt `accel_lever_arm` left the lever arm zero, and the accelerometer refused,
+/// with no word about the field.
+fn unknown_fields(bytes: &[u8]) -> Vec<String> {
+    let Ok(serde_json::Value::Object(fields)) = serde_json::from_slice::<serde_json::Value>(bytes) else {
+        return Vec::new();
+    };
+    fields
+        .keys()
+        .filter(|k| !KNOWN_FIELDS.contains(&k.as_str()))
+        .map(|k| {
+            let lower = k.to_ascii_lowercase();
+            let meant = KNOWN_FIELDS[..7].iter().find(|known| {
+                lower.len() >= 3 && (known.contains(lower.as_str()) || lower.contains(*known))
+                    || edits(&lower, known) <= 2
+            });
+            match meant {
+                Some(known) => format!(
+                    "sidecar field '{k}' is not one the program reads, ignored: did you mean \
+                     '{known}'?"
+                ),
+                None => format!("sidecar field '{k}' is not one the program reads, ignored"),
+            }
+        })
+        .collect()
+}
+
+/// The Levenshtein distance of `a` and `b` (bytes).
+fn edits(a: &str, b: &str) -> usize {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
+/// The sidecar's fields as written; unknown fields are skipped by serde (and noticed,
+/// [`unknown_fields`]).
 #[derive(Deserialize)]
 struct RawSidecar {
     format: Option<String>,
@@ -150,6 +210,7 @@ pub fn parse_sidecar(
         field,
         detail,
     };
+    notices.extend(unknown_fields(bytes));
     let mut sidecar = Sidecar::defaults(stem);
     sidecar.found = true;
     if let Some(format) = raw.format {

@@ -60,6 +60,7 @@ pub(super) fn check_time(path: &Path, t: &[f64], t_column: usize, tolerance: f64
                 column,
                 dt,
                 nominal_dt: nominal,
+                tolerance,
             });
         }
     }

@@ -277,7 +277,7 @@ fn more_bad_inputs_name_file_line_and_column() {
     for (sidecar, needles) in [
         (
             r#"{"g_mps2": "9.81"}"#,
-            &["side.json:1:", "invalid type: string"][..],
+            &["side.json:1:", "g_mps2: invalid type: string"][..],
         ),
         (r#"{"g_mps2": -9.8}"#, &["field 'g_mps2'", "positive", "-9.8"][..]),
         (
@@ -286,10 +286,12 @@ fn more_bad_inputs_name_file_line_and_column() {
         ),
         (
             r#"{"accel_lever_arm_m": 0.3}"#,
-            &["side.json:1:", "invalid type"][..],
+            &["side.json:1:", "accel_lever_arm_m: invalid type"][..],
         ),
         (r#"{"angle_noise_rad": -1}"#, &["field 'angle_noise_rad'"][..]),
-        ("\u{feff}[1, 2]", &["side.json:1:2", "invalid type"][..]),
+        ("\u{feff}[1, 2]", &["side.json:1:1", "must be a JSON object"][..]),
+        // An empty array was read as a sidecar of defaults.
+        ("\n []", &["side.json:2:2", "must be a JSON object"][..]),
     ] {
         write(d, "side.csv", format!("{HEADER}\n{rows}").as_bytes());
         write(d, "side.json", sidecar.as_bytes());

@@ -304,8 +304,22 @@ pub enum SettingsError {
     NoBlocks,
 }
 
+/// Where a JSON document that is not an object starts (1-based line and column of its first
+/// character), `None` for an object or an empty document. A struct deserialises from an array
+/// too, so an input file of `[]` would otherwise be read as all defaults.
+#[must_use]
+pub fn not_an_object(bytes: &[u8]) -> Option<(usize, usize)> {
+    let at = bytes.iter().position(|b| !b.is_ascii_whitespace())?;
+    let before = &bytes[..at];
+    (bytes[at] != b'{').then(|| {
+        let line = before.split(|&b| b == b'\n').count();
+        (line, 1 + before.iter().rev().take_while(|&&b| b != b'\n').count())
+    })
+}
+
 /// A JSON input file's problem: the line and column `serde_json` reports and what is wrong,
-/// prefixed by the JSON path (`serde_path_to_error`'s; `"."` is the document itself).
+/// prefixed by the JSON path (`serde_path_to_error`'s; `"."` is the document itself, `"?"` no
+/// field, and neither is shown).
 #[must_use]
 pub fn json_problem(path: &str, inner: &serde_json::Error) -> (usize, usize, String) {
     let what = inner
@@ -314,7 +328,8 @@ pub fn json_problem(path: &str, inner: &serde_json::Error) -> (usize, usize, Str
         .next()
         .unwrap_or_default()
         .to_owned();
-    let detail = if path == "." {
+    // `?`: serde_path_to_error's path when the error lies in no field (an unclosed object).
+    let detail = if path == "." || path == "?" {
         what
     } else {
         format!("{path}: {what}")
@@ -338,12 +353,7 @@ impl Settings {
             }
         };
         // A struct also deserialises from a JSON array (`[]` was taken as the defaults).
-        if let Some(at) = bytes.iter().position(|b| !b.is_ascii_whitespace())
-            && bytes[at] != b'{'
-        {
-            let before = &bytes[..at];
-            let line = before.split(|&b| b == b'\n').count();
-            let column = 1 + before.iter().rev().take_while(|&&b| b != b'\n').count();
+        if let Some((line, column)) = not_an_object(bytes) {
             return Err(SettingsError::Parse {
                 file: file.display().to_string(),
                 line,

@@ -193,18 +193,29 @@ pub fn parse_sidecar(
     notices: &mut Vec<String>,
 ) -> Result<Sidecar, LoadError> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    let raw: RawSidecar = serde_json::from_slice(bytes).map_err(|e| {
-        let (line, column) = (e.line(), e.column());
-        let message = e.to_string();
-        let position = format!(" at line {line} column {column}");
-        let detail = message.strip_suffix(&position).unwrap_or(&message).to_owned();
-        LoadError::Sidecar {
+    // A struct also deserialises from an array: `[]` was read as a sidecar of defaults.
+    if let Some((line, column)) = crate::ident::settings::not_an_object(bytes) {
+        return Err(LoadError::Sidecar {
             path: path.to_owned(),
             line,
             column,
-            detail,
-        }
-    })?;
+            detail: "the sidecar must be a JSON object ({...})".to_owned(),
+        });
+    }
+    // The field's name with the problem (`g_mps2: invalid type: ...`), as the settings' errors.
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    let raw: RawSidecar = serde_path_to_error::deserialize(&mut de)
+        .map_err(|e| (e.path().to_string(), e.into_inner()))
+        .and_then(|raw| de.end().map(|()| raw).map_err(|e| (".".to_owned(), e)))
+        .map_err(|(field, e)| {
+            let (line, column, detail) = crate::ident::settings::json_problem(&field, &e);
+            LoadError::Sidecar {
+                path: path.to_owned(),
+                line,
+                column,
+                detail,
+            }
+        })?;
     let value_error = |field, detail: String| LoadError::SidecarValue {
         path: path.to_owned(),
         field,

@@ -517,10 +517,11 @@ fn a_single_block_refusal_does_not_offer_to_leave_the_block_out() {
 }
 
 /// `imu-attest COMMAND --help` (or `-h`) prints that command's usage and exits 0, for every
-/// command; it said "option --help needs a value" and exited 2.
+/// command; it said "option --help needs a value" and exited 2. A misspelt command with
+/// `--help` is still an unknown command (exit 2).
 #[test]
 fn each_command_s_help_prints_its_usage() {
-    for command in [
+    let commands = [
         "simulate",
         "identify",
         "discrepancy",
@@ -529,17 +530,25 @@ fn each_command_s_help_prints_its_usage() {
         "batch",
         "inspect",
         "bench",
-    ] {
+        "gui",
+    ];
+    for command in commands {
         for flag in ["--help", "-h"] {
             let o = imu_attest(&[command, flag]);
             let text = String::from_utf8_lossy(&o.stderr);
             assert!(o.status.success(), "{command} {flag}: {text}");
-            assert!(
-                text.contains(&format!("imu-attest {command} ")),
-                "{command}: {text}"
-            );
+            let line = if command == "gui" {
+                "imu-attest [gui] ".to_owned()
+            } else {
+                format!("imu-attest {command} ")
+            };
+            assert!(text.contains(&line), "{command}: {text}");
             let others = text.matches("  imu-attest ").count();
             assert_eq!(others, 1, "{command}: its own usage only: {text}");
         }
     }
+    let o = imu_attest(&["idnetify", "--help"]);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains("unknown command 'idnetify'"), "{text}");
 }

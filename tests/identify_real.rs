@@ -613,6 +613,27 @@ fn a_retune_starts_the_fit_over_the_even_gain_from_the_previous_one() {
     }
 }
 
+/// The Welch overlap loss against the closed form for a Hann window of `n` samples at lag
+/// `u n`: `1 - (2/3) [(1 - u)(1 + cos(2 pi u) / 2) + 3 sin(2 pi u) / (4 pi)]`.
+#[test]
+fn the_overlap_loss_is_the_hann_window_s_closed_form() {
+    use std::f64::consts::PI;
+    let n = 4096;
+    let window = imu_attest::spectral::Window::Hann.coefficients(n);
+    for lag in [0_u32, 15, 41, 410, 1024] {
+        let u = f64::from(lag) / n as f64;
+        let r = (2.0 / 3.0)
+            * ((1.0 - u) * (1.0 + (2.0 * PI * u).cos() / 2.0) + 3.0 * (2.0 * PI * u).sin() / (4.0 * PI));
+        let loss = imu_attest::ident::selfcheck::overlap_loss(&window, f64::from(lag));
+        assert!(
+            (loss - (1.0 - r)).abs() < 1e-3 * (1.0 - r) + 1e-9,
+            "lag {lag}: {loss} vs {}",
+            1.0 - r
+        );
+    }
+    assert!((imu_attest::ident::selfcheck::overlap_loss(&window, f64::NAN) - 1.0).abs() < f64::EPSILON);
+}
+
 /// The words of `delay_outside_usual_range`: at the widest search's end, that the true delay may
 /// lie beyond and the model is not to be trusted; inside it, the clocks; the Welch segments'
 /// overlap loss named only above a tenth of a percent.
@@ -624,6 +645,7 @@ fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() 
             usual_s: [-0.020, 0.050],
             reach_s: 0.3,
             overlap_loss,
+            wider_search: true,
         }
         .to_string()
     };

@@ -105,7 +105,8 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
         Some((c, _)) if c == "-h" || c == "--help" => (c.as_str(), &argv[1..]),
         _ => ("gui", argv),
     };
-    if command != "gui" && rest.iter().any(|a| a == "--help" || a == "-h") {
+    let known = command == "gui" || USAGE.contains(&format!("  imu-attest {command} "));
+    if known && rest.iter().any(|a| a == "--help" || a == "-h") {
         // `imu-attest identify --help`: that command's lines of the usage, not "needs a value".
         eprint!("{}", usage_of(command));
         return Ok(());
@@ -135,6 +136,11 @@ pub fn run(argv: &[String]) -> Result<(), CliError> {
 /// whole usage for a command it does not list.
 fn usage_of(command: &str) -> String {
     let start = format!("  imu-attest {command} ");
+    let start = if command == "gui" {
+        "  imu-attest [gui] ".to_owned()
+    } else {
+        start
+    };
     let mut lines = USAGE.lines().skip_while(|l| !l.starts_with(&start));
     let Some(first) = lines.next() else {
         return USAGE.to_owned();

@@ -281,24 +281,29 @@ fn delay_outside_usual_range(
     let outside = |tau: &f64| *tau < usual_s[0] || *tau > usual_s[1];
     let delay_only = fit.candidates.iter().find(|c| c.order == 0).map(|c| c.tau_s);
     let tau_s = Some(fit.tau_s).filter(outside).or(delay_only.filter(outside))?;
-    let n = spectra.segment_len;
-    let rate_hz = spectra.frequency_hz.get(1).map_or(0.0, |df| df * n as f64);
-    let lag = (tau_s.abs() * rate_hz).round();
-    let window = settings.welch.window.coefficients(n);
-    let power: f64 = window.iter().map(|w| w * w).sum();
-    let overlap_loss = if lag.is_finite() && power > 0.0 {
-        let k = (lag as usize).min(n);
-        let shared: f64 = window.iter().zip(&window[k..]).map(|(a, b)| a * b).sum();
-        1.0 - shared / power
-    } else {
-        1.0
-    };
+    let lag = (tau_s.abs() * spectra.sample_rate_hz).round();
+    let overlap_loss = overlap_loss(&settings.welch.window.coefficients(spectra.segment_len), lag);
     Some(IdentWarning::DelayOutsideUsualRange {
         tau_s,
         usual_s,
         reach_s: DELAY_REACH_S,
         overlap_loss,
+        wider_search: delay_only.is_some_and(|t| outside(&t)),
     })
+}
+
+/// `1 - sum w_n w_(n+k) / sum w_n^2` for a lag of `lag` samples (whole, non-negative): the
+/// relative gain a delay of that many samples costs a Welch estimate through `window`; 1 for a
+/// lag beyond the window or a non-finite one.
+#[must_use]
+pub fn overlap_loss(window: &[f64], lag: f64) -> f64 {
+    let power: f64 = window.iter().map(|w| w * w).sum();
+    if !(lag.is_finite() && lag >= 0.0 && power > 0.0) {
+        return 1.0;
+    }
+    let k = (lag as usize).min(window.len());
+    let shared: f64 = window.iter().zip(&window[k..]).map(|(a, b)| a * b).sum();
+    1.0 - shared / power
 }
 
 /// How many of their deviations' bound the zeros' lead must exceed for `zeros_lead`. Three, as

@@ -352,6 +352,8 @@ impl Settings {
                 detail,
             }
         };
+        // A BOM (some editors save one) is skipped, as in a sidecar.
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
         // A struct also deserialises from a JSON array (`[]` was taken as the defaults).
         if let Some((line, column)) = not_an_object(bytes) {
             return Err(SettingsError::Parse {

@@ -136,8 +136,20 @@ pub(super) fn delay_outside_words(
     usual_s: [f64; 2],
     reach_s: f64,
     overlap_loss: f64,
+    wider_search: bool,
 ) -> fmt::Result {
     let ms = |s: f64| s * 1e3;
+    if !wider_search {
+        return write!(
+            f,
+            "the model's delay, {:.3} ms, lies outside the {:.0} to {:.0} ms a sensor's own \
+             delay is searched in, while the delay-only model's is inside it: the model's poles \
+             trade with its delay; compare with order 0",
+            ms(tau_s),
+            ms(usual_s[0]),
+            ms(usual_s[1])
+        );
+    }
     if tau_s.abs() >= reach_s - 1e-3 {
         write!(
             f,
@@ -183,13 +195,14 @@ pub(super) fn angle_noise_overstated_words(
 ) -> fmt::Result {
     write!(
         f,
-        "the sidecar's angle_noise_rad, {declared_rad:.1e} rad, is more than the angles \
-     hold: what the gyro leaves unexplained in them between 0.1 and 40 Hz, which \
-     holds their noise and the gyro's own, is at most roll {:.1e}, yaw {:.1e}, pitch \
-     {:.1e} rad per sample; the declared value is the floor of the angle-noise model, \
-     and overstated it makes the observer smooth away motion it takes for noise, \
-     biasing the gains where the motion is weak; correct it, or leave it out to have \
-     it estimated",
+        "the sidecar's angle_noise_rad, {declared_rad:.1e} rad, is more than twice what the angles \
+         hold inside the band: what the gyro leaves unexplained in them (their noise, the gyro's \
+         own and any misfit), as a white level over most of the band's bins, is roll {:.1e}, yaw \
+         {:.1e}, pitch {:.1e} rad per sample; the declared value is the floor of the \
+         angle-noise model, and overstated it makes the observer smooth away motion it takes \
+         for noise, biasing the gains where the motion is weak; correct it, or leave it out to \
+         have it estimated (angles filtered or interpolated from a slower rate hold less noise \
+         in the band than their per-sample value: leave it out for them too)",
         bound_rad[0], bound_rad[1], bound_rad[2],
     )
 }

@@ -183,6 +183,10 @@ pub enum IdentWarning {
         /// overlap (`1 - r(tau)`, `r` the window's normalised autocorrelation at the delay),
         /// relative.
         overlap_loss: f64,
+        /// Whether the delay-only candidate's delay is outside the range too (found by the wider
+        /// search); `false`: the chosen model's poles moved its delay out by themselves.
+        #[serde(default)]
+        wider_search: bool,
     },
     /// The chosen model has poles and a negative delay where the delay-only model (order 0) has a
     /// positive one: its poles' lag stands in for the delay, the delay is the remainder. Such a
@@ -410,7 +414,8 @@ impl fmt::Display for IdentWarning {
                 usual_s,
                 reach_s,
                 overlap_loss,
-            } => delay_outside_words(f, *tau_s, *usual_s, *reach_s, *overlap_loss),
+                wider_search,
+            } => delay_outside_words(f, *tau_s, *usual_s, *reach_s, *overlap_loss, *wider_search),
             IdentWarning::DelayAbsorbedByPoles {
                 order,
                 tau_s,

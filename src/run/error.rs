@@ -170,13 +170,13 @@ pub enum LoadError {
     },
     /// A time step deviates more than the tolerance (1 %) from the nominal (median) step.
     #[error(
-        "{}:{line}:{column} (column 't'): irregular sampling: a step of {} s, {:.2} % off the \
+        "{}:{line}:{column} (column 't'): irregular sampling: a step of {} s, {} % off the \
          nominal {} s (the median step; at most {} % is accepted)",
         path.display(),
-        significant(*dt),
-        100.0 * (dt - nominal_dt).abs() / nominal_dt,
-        significant(*nominal_dt),
-        100.0 * tolerance
+        significant(*dt, 7),
+        significant(100.0 * (dt - nominal_dt).abs() / nominal_dt, 4),
+        significant(*nominal_dt, 7),
+        significant(100.0 * tolerance, 4)
     )]
     IrregularSampling {
         /// The file.
@@ -271,13 +271,13 @@ pub enum LoadError {
     Cancelled,
 }
 
-/// `x` to seven significant digits, without the float's trailing rounding digits
-/// (`0.0020299999999999763` is `0.00203`).
-fn significant(x: f64) -> String {
+/// `x` to `digits` significant digits, without trailing zeros (`0.0020299999999999763` to 7 is
+/// `0.00203`; a deviation of 1.0043 % to 4 is `1.004`, not a contradicting `1`).
+fn significant(x: f64, digits: i32) -> String {
     if x == 0.0 || !x.is_finite() {
         return x.to_string();
     }
-    let decimals = (6 - x.abs().log10().floor() as i32).max(0) as usize;
+    let decimals = (digits - 1 - x.abs().log10().floor() as i32).max(0) as usize;
     let text = format!("{x:.decimals$}");
     if text.contains('.') {
         text.trim_end_matches('0').trim_end_matches('.').to_owned()

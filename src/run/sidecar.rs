@@ -55,9 +55,9 @@ impl Sidecar {
     }
 }
 
-/// The fields the program reads, and `truth` (a simulated run's, which only tests read): any
-/// other is ignored with a notice naming it.
-const KNOWN_FIELDS: [&str; 8] = [
+/// The fields the program reads ([`RawSidecar`]'s); any other but `truth` (a simulated run's,
+/// which only tests read) is ignored with a notice naming it.
+const READ_FIELDS: [&str; 7] = [
     "format",
     "regime",
     "g_mps2",
@@ -65,7 +65,6 @@ const KNOWN_FIELDS: [&str; 8] = [
     "gyro_lever_arm_m",
     "angle_noise_rad",
     "notes",
-    "truth",
 ];
 
 /// A notice per top-level field of `bytes` (a JSON object) the program does not read, with the
@@ -78,10 +77,10 @@ fn unknown_fields(bytes: &[u8]) -> Vec<String> {
     };
     fields
         .keys()
-        .filter(|k| !KNOWN_FIELDS.contains(&k.as_str()))
+        .filter(|k| *k != "truth" && !READ_FIELDS.contains(&k.as_str()))
         .map(|k| {
             let lower = k.to_ascii_lowercase();
-            let meant = KNOWN_FIELDS[..7].iter().find(|known| {
+            let meant = READ_FIELDS.iter().find(|known| {
                 lower.len() >= 3 && (known.contains(lower.as_str()) || lower.contains(*known))
                     || edits(&lower, known) <= 2
             });

@@ -221,6 +221,14 @@ const MAX_STRETCHES: usize = 5;
 const MIN_INDEPENDENT: f64 = 24.0;
 
 /// The coloured model, and what the witness bounds the angle noise by.
+///
+/// The bound's contract: per axis, a white-equivalent level (rad per sample) at or above the
+/// angles' own noise over most of [`BOUND_BAND_HZ`] (what the gyro leaves unexplained holds that
+/// noise, the gyro's own and the witness's misfit); cells where the witness says nothing (too
+/// few bins, a singular `S_ww`) are left out, and without a witnessed half of the band's bins on
+/// every axis there is no bound. Angles low-passed or interpolated from a slower rate have less
+/// noise above that rate than a white noise of their per-sample variance: there the level reads
+/// lower than that variance.
 pub(super) struct Coloured {
     /// Per bin of the observer's grid and axis, the model (see [`coloured_noise`]).
     pub per_bin: Vec<[f64; 3]>,
@@ -231,7 +239,8 @@ pub(super) struct Coloured {
     pub bound_rad: Option<[f64; 3]>,
 }
 
-/// Where [`Coloured::bound_rad`] is read, Hz: the auto band's search limits.
+/// Where [`Coloured::bound_rad`] is read, Hz: the auto band's search limits
+/// (`ident::band::AUTO_LIMITS_HZ`, the same numbers: a unit test holds them equal).
 const BOUND_BAND_HZ: [f64; 2] = [0.1, 40.0];
 
 /// The coloured model on the observer's grid `grid`: per bin and axis, `clamp(N_c, white, S_yy)`
@@ -284,13 +293,22 @@ pub(super) fn coloured_noise(
     let band: Vec<usize> = (0..grid.n_bins())
         .filter(|&k| (BOUND_BAND_HZ[0]..=top).contains(&grid.frequency_hz(k)))
         .collect();
-    let bound_rad = (!band.is_empty()).then(|| {
-        [0, 1, 2].map(|a| {
-            let mut levels: Vec<f64> = band.iter().map(|&k| median(k, a, |c| c.bound)).collect();
-            levels.sort_by(f64::total_cmp);
-            levels[levels.len() / 2].max(0.0).sqrt()
-        })
+    // Per axis, the median over the band's bins where the witness's median says something; no
+    // bound unless it does in at least half of them.
+    let per_axis = [0, 1, 2].map(|a| {
+        let mut levels: Vec<f64> = band
+            .iter()
+            .map(|&k| median(k, a, |c| c.bound))
+            .filter(|v| v.is_finite())
+            .collect();
+        levels.sort_by(f64::total_cmp);
+        (!levels.is_empty() && 2 * levels.len() >= band.len())
+            .then(|| levels[levels.len() / 2].max(0.0).sqrt())
     });
+    let bound_rad = match per_axis {
+        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+        _ => None,
+    };
     keep_the_gyro_s_drift_out(&mut out, grid, white);
     Coloured {
         per_bin: out,
@@ -435,14 +453,15 @@ fn unexplained(sums: &Sums, count: f64, independent_per_bin: f64, power_norm: f6
     let (syy, syw, sww) = (sums.yy * scale, sums.yw * scale, sums.ww * scale);
     let total = [syy[(0, 0)].re, syy[(1, 1)].re, syy[(2, 2)].re];
     // Too few bins or no witness power: nothing is known beyond the floor.
-    let left = match sww.try_inverse() {
+    let witnessed = match sww.try_inverse() {
         Some(inv) if independent > 4.0 => {
             let explained = syw * inv * syw.adjoint();
             let correction = independent / (independent - 3.0);
-            [0, 1, 2].map(|a| (total[a] - explained[(a, a)].re) * correction)
+            Some([0, 1, 2].map(|a| (total[a] - explained[(a, a)].re) * correction))
         }
-        _ => white,
+        _ => None,
     };
+    let left = witnessed.unwrap_or(white);
     let model = [0, 1, 2].map(|a| {
         if left[a] < MIN_SHARE * total[a] {
             white[a]
@@ -452,7 +471,8 @@ fn unexplained(sums: &Sums, count: f64, independent_per_bin: f64, power_norm: f6
     });
     Cell {
         model,
-        bound: [0, 1, 2].map(|a| left[a].min(total[a])),
+        // Where the witness says nothing the floor is no bound: NaN, left out of the median.
+        bound: witnessed.map_or([f64::NAN; 3], |w| [0, 1, 2].map(|a| w[a].min(total[a]))),
     }
 }
 

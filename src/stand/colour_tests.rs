@@ -217,3 +217,12 @@ fn the_gyro_s_own_noise_under_strong_motion_is_not_angle_noise() {
         }
     }
 }
+
+/// The bound on the angles' noise is read over the identifier's auto band search limits.
+#[test]
+fn the_bound_s_band_is_the_auto_band_s_search_limits() {
+    assert_eq!(
+        BOUND_BAND_HZ.map(f64::to_bits),
+        crate::ident::band::AUTO_LIMITS_HZ.map(f64::to_bits)
+    );
+}

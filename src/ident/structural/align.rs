@@ -121,6 +121,7 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
     // The model alone (gain and delay, no deviations) is what the move needs; the weights are
     // the input's throughout, and each pass starts from the last delay.
     let (lo, hi) = (settings.tau_min_s, settings.tau_max_s);
+    let correlation = settings.bin_correlation;
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return None;
     }
@@ -133,8 +134,8 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
         };
         let data = super::model::Prepared::new(&at, &rows);
         let model = match near {
-            Some(near) => super::gain_delay::fit_near(&data, near, lo, hi),
-            None => super::gain_delay::fit(&data, lo, hi),
+            Some(near) => super::gain_delay::fit_near(&data, near, lo, hi, correlation),
+            None => super::gain_delay::fit(&data, lo, hi, correlation),
         };
         let finite = model.tau.is_finite() && model.num.first()?.iter().all(|v| v.is_finite());
         finite.then_some((model, data))

@@ -11,9 +11,10 @@
 //! (the phase of the top bin wraps every `1 / f_max`, so no basin is missed; the step grows only if
 //! the range would need more than `MAX_SCAN` points), then a safeguarded Newton iteration on `F'`
 //! inside the best grid cell to a step below `1e-15` s. Beyond the range, `[-DELAY_REACH_S,
-//! DELAY_REACH_S]` is scanned too, at four points per top-bin period (a lobe of the objective is
-//! about one period wide), and its best is taken when it beats the range's by more than
-//! [`WIDER_EVIDENCE`] in chi2 (scaled by the misfit): the self-check then says so
+//! DELAY_REACH_S]` is scanned too, at the same step, and its best is taken when the range's best
+//! is the range's end and the two lie in one lobe (the range cut the maximum off), or when it
+//! beats the range's by more than [`WIDER_EVIDENCE`] in chi2 (scaled by the misfit and the bins'
+//! correlation): the self-check then says so
 //! (`delay_outside_usual_range`). Without it a range's end passed for a maximum: a gyro 50.17 ms
 //! behind the angles (a real recording, its outputs delayed) came out at 50.0000 ms, six of its
 //! deviations off, said by nothing; at 100 ms an interior local maximum at 1 ms was taken. The
@@ -30,17 +31,17 @@ use super::model::{ELEMENTS, Model, Prepared};
 /// The most points of the delay scan.
 const MAX_SCAN: usize = 20_000;
 
-/// How far from zero the delay is searched, s, when the settings' range ends at the best: the
+/// How far from zero the delay is also searched, s, beyond the settings' range ([`scan`]): the
 /// reach of the stationarity stretches' own scan, wide enough for a logging or transport latency
 /// between the angles' and the outputs' clocks, and short beside the segments the program picks
 /// (which the delay's overlap loss of the Welch windows is measured against, in the self-check).
 pub const DELAY_REACH_S: f64 = crate::ident::stretches::STRETCH_DELAY_REACH_S;
 
-/// How much smaller (in chi2, times `max(1, chi2/dof)`) a delay beyond the settings' range must
-/// make the residual to be taken instead of the range's best: 25 (five deviations of a one-
-/// parameter difference) times 2, about the Hann bins' correlation (1.94), which the weights
-/// here do not include.
-const WIDER_EVIDENCE: f64 = 50.0;
+/// How much smaller (in chi2, times `max(1, chi2/dof)` and the bins' correlation, which the
+/// weights here do not include) a delay in another lobe beyond the settings' range must make the
+/// residual to be taken instead of the range's best: 25, five deviations of a one-parameter
+/// difference.
+const WIDER_EVIDENCE: f64 = 25.0;
 
 /// Sums independent of the delay.
 struct Sums<'a> {
@@ -121,10 +122,11 @@ fn pseudo_inverse(a: Matrix3<f64>) -> Matrix3<f64> {
     v * Matrix3::from_diagonal(&inv) * v.transpose()
 }
 
-/// The order-0 fit on the delay range `[tau_min, tau_max]` (finite, non-empty).
-pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
+/// The order-0 fit on the delay range `[tau_min, tau_max]` (finite, non-empty), or beyond it
+/// ([`scan`]); `correlation` is the bins' (`bin_correlation`, at least 1).
+pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64, correlation: f64) -> Model {
     let sums = sums(data);
-    let tau = scan(&sums, tau_min, tau_max);
+    let tau = scan(&sums, tau_min, tau_max, correlation);
     Model {
         num: vec![sums.gain(tau)],
         den: Vec::new(),
@@ -135,18 +137,23 @@ pub(super) fn fit(data: &Prepared, tau_min: f64, tau_max: f64) -> Model {
 /// The order-0 fit whose delay is known to lie within a scan step (`1 / (16 f_max)`) of `near`
 /// (data changed a little since a fit gave `near`): refined inside that cell alone, or by the
 /// whole scan over `[tau_min, tau_max]` (widened as [`fit`] widens it) when the cell does not
-/// hold a maximum.
-pub(super) fn fit_near(data: &Prepared, near: f64, tau_min: f64, tau_max: f64) -> Model {
+/// hold a maximum. The cell stays inside the range when `near` is (a maximum beyond it is only
+/// taken on the scan's evidence), inside the wider reach when `near` is already beyond it.
+pub(super) fn fit_near(data: &Prepared, near: f64, tau_min: f64, tau_max: f64, correlation: f64) -> Model {
     let sums = sums(data);
     let step = scan_step(data);
-    let (reach_min, reach_max) = reach(tau_min, tau_max);
-    let (lo, hi) = ((near - step).max(reach_min), (near + step).min(reach_max));
+    let (bound_min, bound_max) = if (tau_min..=tau_max).contains(&near) {
+        (tau_min, tau_max)
+    } else {
+        reach(tau_min, tau_max)
+    };
+    let (lo, hi) = ((near - step).max(bound_min), (near + step).min(bound_max));
     let (_, g_lo, _) = sums.objective(lo, true);
     let (_, g_hi, _) = sums.objective(hi, true);
     let tau = if lo < hi && g_lo > 0.0 && g_hi < 0.0 {
         refine(&sums, lo, hi, near.clamp(lo, hi))
     } else {
-        scan(&sums, tau_min, tau_max)
+        scan(&sums, tau_min, tau_max, correlation)
     };
     Model {
         num: vec![sums.gain(tau)],
@@ -191,16 +198,22 @@ fn reach(tau_min: f64, tau_max: f64) -> (f64, f64) {
     (tau_min.min(-DELAY_REACH_S), tau_max.max(DELAY_REACH_S))
 }
 
-/// The best delay over `[tau_min, tau_max]`, or over the wider [`reach`] when the data prefer
-/// that by [`WIDER_EVIDENCE`] (module docs).
-fn scan(sums: &Sums, tau_min: f64, tau_max: f64) -> f64 {
+/// The best delay over `[tau_min, tau_max]`, or over the wider [`reach`]: when the range's best
+/// is its end (within a step) and the wider best lies in the same lobe (within half a top-bin
+/// period: the same maximum, which the range cut off), or when the data prefer the wider best by
+/// [`WIDER_EVIDENCE`] (module docs).
+fn scan(sums: &Sums, tau_min: f64, tau_max: f64, correlation: f64) -> f64 {
     let step = scan_step(sums.data);
     let near = best_delay(sums, tau_min, tau_max, step);
     let (lo, hi) = reach(tau_min, tau_max);
     if lo >= tau_min && hi <= tau_max {
         return near;
     }
-    let far = best_delay(sums, lo, hi, 4.0 * step);
+    let far = best_delay(sums, lo, hi, step);
+    let at_end = near <= tau_min + step || near >= tau_max - step;
+    if at_end && (far - near).abs() < 8.0 * step {
+        return far;
+    }
     let chi2 = |tau: f64| {
         Model {
             num: vec![sums.gain(tau)],
@@ -211,7 +224,7 @@ fn scan(sums: &Sums, tau_min: f64, tau_max: f64) -> f64 {
     };
     let (chi2_near, chi2_far) = (chi2(near), chi2(far));
     let dof = sums.data.real_data().saturating_sub(ELEMENTS + 1).max(1) as f64;
-    let bar = WIDER_EVIDENCE * (chi2_far / dof).max(1.0);
+    let bar = WIDER_EVIDENCE * correlation.max(1.0) * (chi2_far / dof).max(1.0);
     if chi2_near - chi2_far > bar { far } else { near }
 }
 

@@ -44,7 +44,8 @@ pub(super) enum Starts<'a> {
     /// fit set aside, as [`Selection::set_aside`] keeps it.
     Same(&'a [Model], &'a [Option<UnstableSetAside>]),
     /// Nearby data (a retune): each order is refined from the model of the same order here
-    /// (normalised to this fit's `omega_ref`); the delay scan of order 0 is redone.
+    /// (normalised to this fit's `omega_ref`); order 0 in its delay's scan cell, scanned again
+    /// only when the cell holds no maximum.
     Near(&'a [Model]),
 }
 
@@ -85,11 +86,31 @@ pub(super) fn fit_orders(
     starts: Starts,
 ) -> Result<Selection, StructuralError> {
     let (mut models, mut set_aside) = match starts {
-        Starts::Same(kept, aside) if !kept.is_empty() && aside.len() == kept.len() => {
-            (kept.to_vec(), aside.to_vec())
+        Starts::Same(kept, aside) if !kept.is_empty() => {
+            // Parallel to the models (`FittedOrders` keeps them so); none said where missing.
+            let mut aside = aside.to_vec();
+            aside.resize(kept.len(), None);
+            (kept.to_vec(), aside)
         }
+        // Near: order 0 refined in the previous delay's cell, scanned only when that holds no
+        // maximum (a retune is provisional: the app refits from scratch once the settings rest).
+        Starts::Near(near) if !near.is_empty() => (
+            vec![gain_delay::fit_near(
+                data,
+                near[0].tau,
+                settings.tau_min_s,
+                settings.tau_max_s,
+                settings.bin_correlation,
+            )],
+            vec![None],
+        ),
         _ => (
-            vec![gain_delay::fit(data, settings.tau_min_s, settings.tau_max_s)],
+            vec![gain_delay::fit(
+                data,
+                settings.tau_min_s,
+                settings.tau_max_s,
+                settings.bin_correlation,
+            )],
             vec![None],
         ),
     };

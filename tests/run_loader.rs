@@ -457,6 +457,22 @@ fn unknown_sidecar_fields_are_noticed_with_the_field_meant() {
     assert_eq!(run.sidecar.regime, "r");
 }
 
+/// A time column in milliseconds (a rate of 1 Hz for a 1 kHz recording) is noticed with the
+/// question of its units; a 100 Hz run's is not.
+#[test]
+fn a_slow_sample_rate_asks_whether_t_is_in_seconds() {
+    let dir = tempfile::tempdir().unwrap();
+    for (dt, said) in [(1.0, true), (0.01, false)] {
+        let (text, _) = csv(&ALL, 40, 0.0, dt);
+        let run = load(&write(dir.path(), "ms.csv", text), &opts()).unwrap();
+        let asked = run
+            .notices
+            .iter()
+            .any(|n| n.contains("is column 't' in seconds?"));
+        assert_eq!(asked, said, "dt {dt}: {:?}", run.notices);
+    }
+}
+
 #[test]
 fn single_block_runs_load() {
     let dir = tempfile::tempdir().unwrap();

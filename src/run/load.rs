@@ -12,6 +12,9 @@ use super::options::{LoadOptions, LoadProgress, MIN_SAMPLES, mem_available_bytes
 use super::stream::{self, Chunk, Pipe, RawSource, SourceError, TextChunk};
 use super::{ExtraColumn, LoadError, Run, RunSource, sidecar, timing, wrap};
 
+/// A sample rate below this is noticed (`t` in milliseconds?): far below any stand's recording
+/// (the slowest motion-capture references run at 50-100 Hz).
+const SLOW_RATE_HZ: f64 = 10.0;
 /// Capacity reserved per estimated row: the estimate from the first block is rough for gzip
 /// (read-ahead) and for files whose numbers grow longer.
 const RESERVE_MARGIN: f64 = 1.25;
@@ -127,6 +130,12 @@ fn load_stored(
         });
     }
     let sample_rate_hz = timing::check_time(path, &cols[layout.t], layout.t, options.sampling_tolerance)?;
+    if sample_rate_hz < SLOW_RATE_HZ {
+        notices.push(format!(
+            "sample rate {sample_rate_hz:.3} Hz, far below a stand's: is column 't' in seconds? (in \
+             milliseconds it reads 1000 times slow, and no band of the motion is left)"
+        ));
+    }
     let mut take = |i: usize| std::mem::take(&mut cols[i]);
     let time_s = take(layout.t);
     let mut angles = layout.angles.map(&mut take);

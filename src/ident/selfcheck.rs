@@ -292,18 +292,15 @@ fn delay_outside_usual_range(
     })
 }
 
-/// `1 - sum w_n w_(n+k) / sum w_n^2` for a lag of `lag` samples (whole, non-negative): the
-/// relative gain a delay of that many samples costs a Welch estimate through `window`; 1 for a
-/// lag beyond the window or a non-finite one.
+/// `1 -` the window's overlap correlation ([`super::spectra::overlap_correlation`]) at a lag of
+/// `lag` samples (whole, non-negative): the relative gain a delay of that many samples costs a
+/// Welch estimate through `window`; 1 for a lag beyond the window or a non-finite one.
 #[must_use]
 pub fn overlap_loss(window: &[f64], lag: f64) -> f64 {
-    let power: f64 = window.iter().map(|w| w * w).sum();
-    if !(lag.is_finite() && lag >= 0.0 && power > 0.0) {
+    if !(lag.is_finite() && lag >= 0.0) {
         return 1.0;
     }
-    let k = (lag as usize).min(window.len());
-    let shared: f64 = window.iter().zip(&window[k..]).map(|(a, b)| a * b).sum();
-    1.0 - shared / power
+    1.0 - super::spectra::overlap_correlation(window, lag as usize)
 }
 
 /// How many of their deviations' bound the zeros' lead must exceed for `zeros_lead`. Three, as

@@ -323,6 +323,18 @@ pub fn bin_correlation(w: &[f64]) -> f64 {
     total
 }
 
+/// The window's normalised overlap correlation at a shift of `shift` samples,
+/// `sum_n w_n w_(n+shift) / sum_n w_n^2`: 0 from the window's length on, and for a window of no
+/// energy.
+#[must_use]
+pub fn overlap_correlation(w: &[f64], shift: usize) -> f64 {
+    let energy: f64 = w.iter().map(|v| v * v).sum();
+    if energy <= 0.0 || shift >= w.len() {
+        return 0.0;
+    }
+    w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / energy
+}
+
 /// Welch's equivalent number of averages for `k` segments of window `w` stepped by `step`:
 /// `k / (1 + 2 sum_l (1 - l/k) rho(l)^2)`, with `rho(l)` the window's normalised overlap
 /// correlation at a shift of `l` steps.
@@ -338,7 +350,7 @@ pub fn equivalent_averages(w: &[f64], step: usize, k: usize) -> f64 {
         if shift >= w.len() {
             break;
         }
-        let rho: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / energy;
+        let rho = overlap_correlation(w, shift);
         sum += (1.0 - l as f64 / k as f64) * rho * rho;
     }
     k as f64 / (1.0 + 2.0 * sum)

@@ -55,8 +55,9 @@ impl Sidecar {
     }
 }
 
-/// The fields the program reads ([`RawSidecar`]'s); any other but `truth` (a simulated run's,
-/// which only tests read) is ignored with a notice naming it.
+/// The fields the program reads ([`RawSidecar`]'s); any other but the simulator's own
+/// ([`crate::sim::EXTRA_SIDECAR_FIELDS`], which only tests read) is ignored with a notice naming
+/// it.
 const READ_FIELDS: [&str; 7] = [
     "format",
     "regime",
@@ -77,7 +78,10 @@ fn unknown_fields(bytes: &[u8]) -> Vec<String> {
     };
     fields
         .keys()
-        .filter(|k| *k != "truth" && !READ_FIELDS.contains(&k.as_str()))
+        .filter(|k| {
+            let k = k.as_str();
+            !READ_FIELDS.contains(&k) && !crate::sim::EXTRA_SIDECAR_FIELDS.contains(&k)
+        })
         .map(|k| {
             let lower = k.to_ascii_lowercase();
             let meant = READ_FIELDS.iter().find(|known| {

@@ -167,6 +167,10 @@ pub enum SimError {
     },
 }
 
+/// The sidecar fields the simulator writes beyond the run format's (its hidden truth, which only
+/// tests read; [`SimSidecar::truth`]): the loader ignores them without a notice.
+pub const EXTRA_SIDECAR_FIELDS: [&str; 1] = ["truth"];
+
 /// The sidecar the simulator writes (contract section 2, plus `"truth"`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SimSidecar {

@@ -328,15 +328,7 @@ fn sidecar_bytes() -> impl Strategy<Value = Vec<u8>> {
         ])
         .prop_map(str::to_owned),
     ];
-    let fields = [
-        "format",
-        "regime",
-        "g_mps2",
-        "accel_lever_arm_m",
-        "gyro_lever_arm_m",
-        "angle_noise_rad",
-        "notes",
-    ];
+    let fields = imu_attest::run::SIDECAR_FIELDS;
     let structured = (
         prop::collection::vec((prop::sample::select(fields.to_vec()), value), 0..8),
         prop::collection::vec(mutation(), 0..3),

@@ -46,7 +46,9 @@ pub use crate::block::Block;
 pub use error::LoadError;
 pub use load::{load, load_bytes, load_with_progress};
 pub use options::{LoadOptions, LoadProgress, MIN_SAMPLES};
-pub use sidecar::{SIDECAR_FORMAT, STANDARD_G_MPS2, Sidecar, parse_sidecar, run_stem, sidecar_path};
+pub use sidecar::{
+    SIDECAR_FIELDS, SIDECAR_FORMAT, STANDARD_G_MPS2, Sidecar, parse_sidecar, run_stem, sidecar_path,
+};
 pub use timing::{NOMINAL_STEPS, nominal_step};
 
 /// Where a run came from.

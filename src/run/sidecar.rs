@@ -58,7 +58,7 @@ impl Sidecar {
 /// The fields the program reads ([`RawSidecar`]'s); any other but the simulator's own
 /// ([`crate::sim::EXTRA_SIDECAR_FIELDS`], which only tests read) is ignored with a notice naming
 /// it.
-const READ_FIELDS: [&str; 7] = [
+pub const SIDECAR_FIELDS: [&str; 7] = [
     "format",
     "regime",
     "g_mps2",
@@ -80,11 +80,11 @@ fn unknown_fields(bytes: &[u8]) -> Vec<String> {
         .keys()
         .filter(|k| {
             let k = k.as_str();
-            !READ_FIELDS.contains(&k) && !crate::sim::EXTRA_SIDECAR_FIELDS.contains(&k)
+            !SIDECAR_FIELDS.contains(&k) && !crate::sim::EXTRA_SIDECAR_FIELDS.contains(&k)
         })
         .map(|k| {
             let lower = k.to_ascii_lowercase();
-            let meant = READ_FIELDS.iter().find(|known| {
+            let meant = SIDECAR_FIELDS.iter().find(|known| {
                 lower.len() >= 3 && (known.contains(lower.as_str()) || lower.contains(*known))
                     || edits(&lower, known) <= 2
             });

@@ -507,15 +507,7 @@ fn a_slower_reference_weighs_the_motion_by_the_triangle_kernel() {
 fn the_sidecar_s_extra_fields_are_declared() {
     let r = simulate(&config(Regime::Cruise, 2, 20.0, &[])).unwrap();
     let value = serde_json::to_value(&r.sidecar).unwrap();
-    let format = [
-        "format",
-        "regime",
-        "g_mps2",
-        "accel_lever_arm_m",
-        "gyro_lever_arm_m",
-        "angle_noise_rad",
-        "notes",
-    ];
+    let format = crate::run::SIDECAR_FIELDS;
     let extra: Vec<&str> = value
         .as_object()
         .unwrap()

@@ -33,6 +33,7 @@ fn recorded(dir: &Path, regime: Regime, seed: u64, faults: &[FaultSpec]) -> (Run
 fn where_injected(truth: &FaultTruth) -> (Channel, usize) {
     match truth {
         FaultTruth::Glitch { channel, sample, .. } => (*channel, *sample),
+        FaultTruth::Slip { channels, sample, .. } => (channels[0], *sample),
         FaultTruth::Hold {
             channel,
             first_sample,

@@ -105,17 +105,23 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 }
 
 /// Each block's input limit ([`crate::diagnose::input_limit`]): a note where the band was ended
-/// below it, a warning where the band searched reaches into it; after `run: ` when the lines of
-/// several runs are printed together.
+/// below it, a warning where the band searched reaches into it; a warning of a step in the
+/// block's delay ([`crate::ident::delay_step`]); after `run: ` when the lines of several runs are
+/// printed together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
     let run = run.map_or_else(String::new, |r| format!("{r}: "));
     report
         .blocks
         .iter()
-        .filter_map(|(name, b)| {
-            let limit = b.input_limit.as_ref()?;
-            let kind = if limit.is_warning() { "warning" } else { "note" };
-            Some(format!("imu-attest: {kind}: {run}{}", limit.words(name)))
+        .flat_map(|(name, b)| {
+            let limit = b.input_limit.as_ref().map(|limit| {
+                let kind = if limit.is_warning() { "warning" } else { "note" };
+                format!("imu-attest: {kind}: {run}{}", limit.words(name))
+            });
+            let step = b
+                .delay_step
+                .map(|s| format!("imu-attest: warning: {run}{}", s.diagnosis_words(name)));
+            limit.into_iter().chain(step)
         })
         .collect()
 }

@@ -55,7 +55,7 @@ usage:
                       [--sensor-noise default|white] [--random-walk K] [--sensor-filter-hz HZ]
                       [--tone-hz F] [--tone-gate from:T|pulsed:ON,OFF]
                       [--sine roll|yaw|pitch:HZ:DEG]...
-                      [--fault glitch|hold|clip|wrap[:CHANNEL]]... --out RUN.csv
+                      [--fault glitch|hold|clip|wrap|slip[:CHANNEL]]... --out RUN.csv
   imu-attest identify RUN [--settings S.json] [--effects E.json] --out MODEL.json
                                                   E.json: accepted effects ({\"effects\": [{block,
                                                   effect}]}, or a discrepancy report's findings)

@@ -201,6 +201,10 @@ pub struct BlockReport {
     /// (the band then ended below it, or the user's band kept: [`super::input_limit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_limit: Option<super::input_limit::InputLimit>,
+    /// A step of the delay through the record (the streams slipped: [`crate::ident::delay_step`]);
+    /// no clock drift was searched, and the findings are of both sides of it mixed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay_step: Option<crate::ident::delay_step::DelayStep>,
     /// Per-channel gap of the model given with `--model`, as it is (no refit), dB.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub given_model_gap_db: Option<[f64; 3]>,

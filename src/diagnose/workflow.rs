@@ -100,6 +100,10 @@ pub struct PreparedBlock {
     /// Where the inputs from the angles are not the motion, at the top of the band asked for
     /// ([`super::input_limit`]).
     pub input_limit: Option<InputLimit>,
+    /// A step in the identification stretches' delays ([`crate::ident::delay_step`]): the
+    /// record's streams slipped, a clock drift is not searched (a line fitted through a step is
+    /// an invented rate), and the report says so.
+    pub delay_step: Option<crate::ident::delay_step::DelayStep>,
     /// The paper's model `K e^(-tau s)` fitted on the whole-record design (with the stretches'
     /// delay trend as the clock-drift hint).
     pub base: State,
@@ -195,11 +199,19 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         // short for them the stationarity comes from a few stretches of a shorter segment (a
         // floor on the deviations), and with a stretch named without a delay from three, whose
         // trend is too weak a test to skip the re-timing search on.
-        base.drift_hint = b
-            .stationarity
+        // Over the band searched: where it was ended, the stretches' delays over the whole band
+        // are biased by the inputs that are not the motion (a real recording's slow run, one
+        // sample slipped: 3.8 and 5.1 ms before the slip, a step no longer seen, a drift read).
+        let stationarity = if band.map(f64::to_bits) == b.band_hz.map(f64::to_bits) {
+            b.stationarity.clone()
+        } else {
+            crate::ident::stretches::cached_stationarity(&b.spectra, band)
+        };
+        base.drift_hint = stationarity
             .as_deref()
             .filter(|st| st.segment_len.is_none() && st.stretches.len() >= MIN_STRETCHES)
             .map(|st| [st.tau_trend, st.tau_trend_std]);
+        let delay_step = stationarity.as_deref().and_then(|st| st.delay_step);
         if let Some(upper) = upper {
             base.set_upper(upper);
         }
@@ -207,6 +219,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             block: b.block,
             band_hz: band,
             input_limit,
+            delay_step,
             base,
             dof,
         });
@@ -252,6 +265,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
         });
         let given = options.given.and_then(|m| m.blocks.get(pb.block.name()));
         // A rejected stand-side lag rejects the lag it was found as.
+        // Nor is a clock drift searched through a step of the delay.
         let rejected: Vec<Effect> = options
             .rejected
             .iter()
@@ -263,6 +277,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
                     e
                 }
             })
+            .chain(pb.delay_step.map(|_| Effect::ClockDrift))
             .collect();
         let (report, mut found) = diagnose_block(pb, (prep.halves.as_ref(), block_index), given, &rejected);
         penalty = pb.dof.ln();
@@ -517,6 +532,7 @@ fn diagnose_block(
     let mut report = block_report(base, &state, first_round, dof);
     report.band_hz = band;
     report.input_limit.clone_from(&pb.input_limit);
+    report.delay_step = pb.delay_step;
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     (report, findings)
 }
@@ -631,6 +647,7 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
         expected_psd: psd_cells(d, &d.expected, PSD_CELLS),
         band_hz: [0.0; 2],
         input_limit: None,
+        delay_step: None,
         given_model_gap_db: None,
     }
 }

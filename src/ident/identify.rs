@@ -344,6 +344,9 @@ fn identify_excited(
             change_s: st.tau_trend * duration,
         });
     }
+    if let Some(step) = stationarity.as_deref().and_then(|st| st.delay_step) {
+        warnings.push(step.warning());
+    }
     if let Some(st) = stationarity.as_deref().filter(|st| !st.no_delay_s.is_empty()) {
         warnings.push(IdentWarning::StretchesWithoutDelay {
             spans_s: st.no_delay_s.clone(),

@@ -10,6 +10,7 @@ pub mod band_cache;
 pub mod band_top;
 pub mod block_orders;
 pub mod causal_stage;
+pub mod delay_step;
 pub mod even_gain;
 pub mod excitation;
 pub mod factorisation;

@@ -167,14 +167,22 @@ pub struct Stationarity {
     /// clock jump, motion folded about Nyquist). Said as a warning.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub no_delay_s: Vec<[f64; 2]>,
+    /// A step in the stretches' delays ([`super::delay_step`]): the streams slipped against
+    /// each other. Said as a warning, in place of a drift.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay_step: Option<super::delay_step::DelayStep>,
 }
 
 impl Stationarity {
     /// Whether the delay's trend is significant (beyond 4 of its standard deviations) and
     /// material (over the record it moves the delay by more than 3 standard deviations of a
-    /// stretch's delay).
+    /// stretch's delay), and the delays do not step instead ([`Self::delay_step`]: a line
+    /// through a step is no drift).
     #[must_use]
     pub fn drifts(&self) -> bool {
+        if self.delay_step.is_some() {
+            return false;
+        }
         let (Some(first), Some(last)) = (self.stretches.first(), self.stretches.last()) else {
             return false;
         };
@@ -233,7 +241,7 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
             .collect();
         (fits, Some(finer.segment_len))
     };
-    summarise(stretches, segment_len)
+    summarise(stretches, segment_len, spectra.sample_rate_hz)
 }
 
 /// What the fit of one stretch gave.
@@ -252,7 +260,11 @@ enum Outcome {
 /// [`MIN_STRETCHES`] fitted, or one fewer when stretches with no delay were left out (the check
 /// is then made on the others and the warning names them: an independent simulator's run lost it
 /// to one stretch of four).
-fn summarise(outcomes: Vec<Outcome>, segment_len: Option<usize>) -> Option<Stationarity> {
+fn summarise(
+    outcomes: Vec<Outcome>,
+    segment_len: Option<usize>,
+    sample_rate_hz: f64,
+) -> Option<Stationarity> {
     let mut stretches = Vec::with_capacity(outcomes.len());
     let mut no_delay_s = Vec::new();
     for outcome in outcomes {
@@ -285,6 +297,7 @@ fn summarise(outcomes: Vec<Outcome>, segment_len: Option<usize>) -> Option<Stati
     let y: Vec<f64> = stretches.iter().map(|s| s.tau_s).collect();
     let own_std: Vec<f64> = stretches.iter().map(|s| s.tau_std_s).collect();
     let (tau_trend, tau_trend_std) = line_slope(&t, &y, &own_std);
+    let delay_step = super::delay_step::delay_step(&stretches, sample_rate_hz);
     Some(Stationarity {
         stretches,
         k_spread_std,
@@ -293,6 +306,7 @@ fn summarise(outcomes: Vec<Outcome>, segment_len: Option<usize>) -> Option<Stati
         tau_trend,
         tau_trend_std,
         no_delay_s,
+        delay_step,
     })
 }
 
@@ -491,6 +505,7 @@ mod tests {
             tau_trend,
             tau_trend_std,
             no_delay_s: Vec::new(),
+            delay_step: None,
         }
     }
 
@@ -596,11 +611,11 @@ mod tests {
                 tau_std_s: 1e-6,
             })
         };
-        let all = summarise((0..4).map(fitted).collect(), None).expect("four");
+        let all = summarise((0..4).map(fitted).collect(), None, 100.0).expect("four");
         assert!(all.no_delay_s.is_empty());
         let mut outcomes: Vec<Outcome> = (0..3).map(fitted).collect();
         outcomes.push(Outcome::NoDelay([90.0, 120.0]));
-        let three = summarise(outcomes, None).expect("three and one named");
+        let three = summarise(outcomes, None, 100.0).expect("three and one named");
         assert_eq!(three.stretches.len(), 3);
         assert_eq!(three.no_delay_s, vec![[90.0, 120.0]]);
         assert!(
@@ -610,10 +625,10 @@ mod tests {
         );
         let mut failed: Vec<Outcome> = (0..3).map(fitted).collect();
         failed.push(Outcome::Failed);
-        assert!(summarise(failed, None).is_none());
+        assert!(summarise(failed, None, 100.0).is_none());
         let mut two: Vec<Outcome> = (0..2).map(fitted).collect();
         two.extend([Outcome::NoDelay([60.0, 90.0]), Outcome::NoDelay([90.0, 120.0])]);
-        assert!(summarise(two, None).is_none());
+        assert!(summarise(two, None, 100.0).is_none());
     }
 
     /// The warning names each stretch left out and what the check rests on.

@@ -86,6 +86,42 @@ pub(super) fn write_stretches_without_delay(
     )
 }
 
+/// The words of [`super::warnings::IdentWarning::DelayStep`].
+pub(super) fn delay_step_words(
+    f: &mut fmt::Formatter<'_>,
+    before_s: f64,
+    after_s: f64,
+    [from, to]: [f64; 2],
+    samples: f64,
+) -> fmt::Result {
+    let cause = if (samples - samples.round()).abs() <= 0.1 && samples.round() != 0.0 {
+        let n = samples.round().abs();
+        let which = if samples > 0.0 {
+            "lost from the angles or repeated in the outputs"
+        } else {
+            "lost from the outputs or repeated in the angles"
+        };
+        format!(
+            "{n:.0} whole sample{}: samples {which} (a logger's slip), not a clock drift",
+            if n > 1.0 { "s" } else { "" }
+        )
+    } else {
+        "a fraction of a sample: one stream re-timed (a timestamp correction, resampling), not a \
+         clock drift"
+            .to_owned()
+    };
+    write!(
+        f,
+        "the delay steps from {:.3} ms to {:.3} ms between {from:.1} and {to:.1} s (from the first \
+         sample analysed): {:+.2} sample periods, {cause}; the model's delay and gains mix the two \
+         sides and describe neither: analyse one side alone (span_s, in the run's own time \
+         column)",
+        before_s * 1e3,
+        after_s * 1e3,
+        samples
+    )
+}
+
 /// The words of [`super::warnings::IdentWarning::ZerosLead`]; `lag_s` is the delay plus the poles' lag.
 pub(super) fn zeros_lead_words(
     f: &mut fmt::Formatter<'_>,

@@ -24,7 +24,8 @@ use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::warning_words::{
     angle_noise_colour_unknown_words, angle_noise_overstated_words, delay_absorbed_words,
-    delay_outside_words, gain_change_words, write_stretches_without_delay, zeros_lead_words,
+    delay_outside_words, delay_step_words, gain_change_words, write_stretches_without_delay,
+    zeros_lead_words,
 };
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
@@ -228,6 +229,19 @@ pub enum IdentWarning {
         trend_std: f64,
         /// Change of the delay over the record, s.
         change_s: f64,
+    },
+    /// The delay steps between two stretches of the record, each steady ([`super::delay_step`]):
+    /// the two streams slipped against each other (samples lost or repeated in one), and one
+    /// delay describes neither side.
+    DelayStep {
+        /// The delay before the step, s.
+        before_s: f64,
+        /// The delay after it, s.
+        after_s: f64,
+        /// Where it lies, s from the first sample analysed.
+        between_s: [f64; 2],
+        /// The step in sample periods.
+        samples: f64,
     },
     /// Stretches of the record for which no delay was found inside the stationarity check's scan
     /// nor inside the record's own range (`super::stretches`): there the block's response is not
@@ -442,6 +456,12 @@ impl fmt::Display for IdentWarning {
                 trend * 1e6,
                 trend_std * 1e6
             ),
+            IdentWarning::DelayStep {
+                before_s,
+                after_s,
+                between_s,
+                samples,
+            } => delay_step_words(f, *before_s, *after_s, *between_s, *samples),
             IdentWarning::StretchesWithoutDelay { spans_s, fitted } => {
                 write_stretches_without_delay(f, spans_s, *fitted)
             }

@@ -514,6 +514,9 @@ fn diagnosis(h: &mut String, run: &RunReport) {
                 let class = if limit.is_warning() { " class=\"warn\"" } else { "" };
                 let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words(name)));
             }
+            if let Some(step) = &b.delay_step {
+                let _ = write!(h, "</p><p class=\"warn\">{}.", esc(&step.diagnosis_words(name)));
+            }
             h.push_str("</p>");
         }
     }

@@ -10,8 +10,13 @@
 //!   until there are two flat tops of 3 samples) of samples exceed.
 //! - `wrap`: an angle written in [0, 2 pi) (wrapping at every zero crossing), with the file's
 //!   7 significant digits.
+//! - `slip`: the channel's stream (all three channels of its block, or the three angles) slips
+//!   one sample late: from a time drawn between 30 % and 70 % of the run, each sample is written
+//!   one row later (the sample there repeated, the last dropped), as a logger that stalls for one
+//!   sample of one stream writes it. The delay steps by one sample period there
+//!   ([`crate::ident::delay_step`]).
 //!
-//! Faults are drawn between 5 % and 95 % of the run. Units: the channel's (rad, rad/s, m/s^2), s.
+//! Faults are drawn between 5 % and 95 % of the run (a slip between 30 % and 70 %). Units: the channel's (rad, rad/s, m/s^2), s.
 
 use std::f64::consts::TAU;
 use std::str::FromStr;
@@ -34,6 +39,8 @@ pub enum FaultKind {
     Clip,
     /// An angle wrapped into [0, 2 pi).
     Wrap,
+    /// One stream one sample late from a time on.
+    Slip,
 }
 
 /// `KIND[:CHANNEL]` of `--fault`.
@@ -55,9 +62,10 @@ impl FromStr for FaultSpec {
             "hold" => FaultKind::Hold,
             "clip" => FaultKind::Clip,
             "wrap" => FaultKind::Wrap,
+            "slip" => FaultKind::Slip,
             other => {
                 return Err(format!(
-                    "unknown fault '{other}' (known: glitch, hold, clip, wrap)"
+                    "unknown fault '{other}' (known: glitch, hold, clip, wrap, slip)"
                 ));
             }
         };
@@ -123,6 +131,15 @@ pub enum FaultTruth {
         /// 0-based index of the sample after the first wrap (file line = index + 2).
         first_sample: usize,
     },
+    /// A stream written one sample late from `sample` on.
+    Slip {
+        /// The channels that slipped (a block's three, or the three angles).
+        channels: [Channel; 3],
+        /// Time of the first repeated sample, s.
+        time_s: f64,
+        /// 0-based index of the first repeated sample.
+        sample: usize,
+    },
 }
 
 /// Injects `spec` into `run` with draws from `rng`.
@@ -143,6 +160,9 @@ pub fn inject(run: &mut SimulatedRun, spec: FaultSpec, rng: &mut Rng) -> Result<
     };
     if spec.kind == FaultKind::Wrap && !channel.is_angle() {
         return Err(refuse("only an angle wraps"));
+    }
+    if spec.kind == FaultKind::Slip {
+        return slip(run, channel, rng).ok_or_else(|| refuse("its block is not simulated"));
     }
     let i = channel as usize;
     let x = match i {
@@ -192,6 +212,8 @@ pub fn inject(run: &mut SimulatedRun, spec: FaultSpec, rng: &mut Rng) -> Result<
             }
         }
         FaultKind::Clip => clip(x, t, channel, rng.uniform() < 0.5),
+        // Done above: a slip moves a whole stream.
+        FaultKind::Slip => return Err(refuse("a slip moves its whole stream")),
         FaultKind::Wrap => {
             for v in x.iter_mut() {
                 *v = v.rem_euclid(TAU);
@@ -203,6 +225,28 @@ pub fn inject(run: &mut SimulatedRun, spec: FaultSpec, rng: &mut Rng) -> Result<
                 first_sample: steps().position(|w| w).map_or(0, |i| i + 1),
             }
         }
+    })
+}
+
+/// Slips the stream of `channel` (its block's three channels, or the three angles) one sample
+/// late from a time drawn between 30 % and 70 % of the run. `None` when the block is not
+/// simulated.
+fn slip(run: &mut SimulatedRun, channel: Channel, rng: &mut Rng) -> Option<FaultTruth> {
+    let i = channel as usize;
+    let (stream, channels) = match i {
+        0..3 => (&mut run.angles, [Channel::Roll, Channel::Yaw, Channel::Pitch]),
+        3..6 => (run.gyro.as_mut()?, [Channel::Gx, Channel::Gy, Channel::Gz]),
+        _ => (run.accel.as_mut()?, [Channel::Ax, Channel::Ay, Channel::Az]),
+    };
+    let n = run.time_s.len();
+    let sample = (rng.uniform_in(0.3 * n as f64, 0.7 * n as f64) as usize).max(1);
+    for x in stream.iter_mut() {
+        x.copy_within(sample - 1..n - 1, sample);
+    }
+    Some(FaultTruth::Slip {
+        channels,
+        time_s: run.time_s[sample],
+        sample,
     })
 }
 

@@ -127,6 +127,9 @@ fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
             ui.label(words);
         }
     }
+    if let Some(step) = &b.delay_step {
+        ui.colored_label(ui.visuals().error_fg_color, step.diagnosis_words(name));
+    }
     ui.horizontal(|ui| {
         ui.vertical(|ui| {
             ui.weak("disagreement before");

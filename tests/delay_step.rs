@@ -1,0 +1,195 @@
+//! A stream that slips (a logger losing or repeating one sample of the angles or of a block's
+//! outputs) steps the delay by one sample period: the identification says the step, where it
+//! lies and that it is not a clock drift, in place of the drift a line through it would read; the
+//! diagnosis searches no clock drift through it and says so. Runs with the stand's real
+//! imperfections, every regime, the slip hidden by `simulate --fault slip` (its time only in the
+//! truth the test reads) and a real recording slipped here; clean and drifting runs have no step.
+
+#[path = "common/sim.rs"]
+mod sim_common;
+
+use std::path::Path;
+
+use imu_attest::block::Block;
+use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};
+use imu_attest::effect::Effect;
+use imu_attest::faults::Channel;
+use imu_attest::ident::identify::{RunIdentification, identify_run};
+use imu_attest::ident::settings::Settings;
+use imu_attest::ident::warnings::IdentWarning;
+use imu_attest::run::{LoadOptions, Run, load};
+use imu_attest::sim::fault::{FaultKind, FaultSpec, FaultTruth};
+use imu_attest::sim::regime::Regime;
+use imu_attest::sim::stand::StandImperfections;
+use imu_attest::sim::{SimConfig, SimulatedRun};
+
+fn config(regime: Regime, seed: u64) -> SimConfig {
+    let mut config = SimConfig::new(regime);
+    config.seed = seed;
+    config.duration_s = 300.0;
+    config.stand = StandImperfections::real();
+    config
+}
+
+fn slipped(regime: Regime, seed: u64, channel: Channel) -> (SimulatedRun, Run) {
+    let mut config = config(regime, seed);
+    config.faults = vec![FaultSpec {
+        kind: FaultKind::Slip,
+        channel: Some(channel),
+    }];
+    sim_common::simulated_run(&config)
+}
+
+/// Each block's step warning (`[before_s, after_s, between_s..., samples]`) and whether it was
+/// warned of a drift.
+fn steps(id: &RunIdentification) -> Vec<(Block, Option<[f64; 5]>, bool)> {
+    id.blocks
+        .iter()
+        .map(|b| {
+            let step = b.warnings.iter().find_map(|w| match w {
+                IdentWarning::DelayStep {
+                    before_s,
+                    after_s,
+                    between_s,
+                    samples,
+                } => Some([*before_s, *after_s, between_s[0], between_s[1], *samples]),
+                _ => None,
+            });
+            let drift = b
+                .warnings
+                .iter()
+                .any(|w| matches!(w, IdentWarning::DelayDrift { .. }));
+            (b.block, step, drift)
+        })
+        .collect()
+}
+
+#[test]
+fn a_slipped_stream_is_a_step_of_one_sample_where_it_slipped() {
+    let cases = [
+        (Regime::Cruise, 11, Channel::Gx),
+        (Regime::Approach, 12, Channel::Gx),
+        (Regime::TurbulentCruise, 13, Channel::Gz),
+        (Regime::Cruise, 14, Channel::Ax),
+        (Regime::Approach, 15, Channel::Ay),
+        (Regime::TurbulentCruise, 16, Channel::Roll),
+        (Regime::Cruise, 17, Channel::Pitch),
+    ];
+    for (regime, seed, channel) in cases {
+        let (sim, run) = slipped(regime, seed, channel);
+        let FaultTruth::Slip { time_s, .. } = sim.sidecar.truth.faults[0] else {
+            panic!("a slip was injected");
+        };
+        let at = time_s - run.time_s[0];
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        for (block, step, drift) in steps(&id) {
+            let what = format!(
+                "{regime} seed {seed}, {} slipped at {at:.1} s: {block}",
+                channel.name()
+            );
+            // The angles' slip moves both blocks' delays down; a block's own, its delay up.
+            let expected = if channel.is_angle() {
+                Some(-1.0)
+            } else {
+                let own = match channel {
+                    Channel::Gx | Channel::Gy | Channel::Gz => Block::Gyro,
+                    _ => Block::Accel,
+                };
+                (own == block).then_some(1.0)
+            };
+            match (expected, step) {
+                (Some(samples), Some([before, after, from, to, found])) => {
+                    eprintln!("{what}: {before:.6} -> {after:.6} s between {from:.1} and {to:.1} s");
+                    assert!((found - samples).abs() < 0.1, "{what}: {found} samples");
+                    assert!(
+                        (from..=to).contains(&at),
+                        "{what}: said between {from} and {to} s"
+                    );
+                    assert!(!drift, "{what}: a drift said too");
+                }
+                (None, None) => assert!(!drift, "{what}: a drift said"),
+                (expected, found) => panic!("{what}: expected {expected:?}, found {found:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn clean_and_drifting_runs_have_no_step() {
+    for (k, regime) in Regime::ALL.into_iter().enumerate() {
+        for seed in [21, 22] {
+            let seed = seed + 10 * k as u64;
+            let (_, run) = sim_common::simulated_run(&config(regime, seed));
+            let id = identify_run(&run, &Settings::default()).expect("identified");
+            for (block, step, drift) in steps(&id) {
+                assert!(
+                    step.is_none() && !drift,
+                    "{regime} seed {seed} {block}: {step:?} {drift}"
+                );
+            }
+        }
+        let (_, run) = sim_common::simulated_run_of(300.0, regime, 41 + k as u64, &["clock_drift:gyro"]);
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        let gyro = steps(&id)
+            .into_iter()
+            .find(|s| s.0 == Block::Gyro)
+            .expect("a gyro");
+        assert!(gyro.1.is_none() && gyro.2, "{regime}: a drift read as {gyro:?}");
+    }
+}
+
+fn real(name: &str) -> Run {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/real")
+        .join(format!("{name}.csv.gz"));
+    load(&path, &LoadOptions::default()).expect("the real run loads")
+}
+
+/// A real recording's gyro written one sample late from its middle on: identified with the
+/// step (and no drift), diagnosed with no clock drift and the step in the report; the
+/// recordings as they are have none.
+#[test]
+fn a_real_recording_slipped_by_one_sample_is_said_and_not_read_as_a_drift() {
+    for name in [
+        "broad07_fast_rotation",
+        "broad11_slow_translation",
+        "broad25_tapping",
+    ] {
+        let mut run = real(name);
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        assert!(
+            steps(&id).iter().all(|s| s.1.is_none()),
+            "{name}: {:?}",
+            steps(&id)
+        );
+        let middle = run.len() / 2;
+        let n = run.len();
+        for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
+            c.copy_within(middle - 1..n - 1, middle);
+        }
+        let at = run.time_s[middle] - run.time_s[0];
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        let (_, step, drift) = steps(&id)[0];
+        let [_, _, from, to, samples] = step.unwrap_or_else(|| panic!("{name}: no step"));
+        assert!(
+            (samples - 1.0).abs() < 0.1 && !drift,
+            "{name}: {samples} samples, drift {drift}"
+        );
+        assert!(
+            (from..=to).contains(&at),
+            "{name}: {from}-{to} s, slipped at {at}"
+        );
+        let report =
+            diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
+        let gyro = &report.blocks["gyro"];
+        let said = gyro
+            .delay_step
+            .unwrap_or_else(|| panic!("{name}: the report has no step"));
+        assert!((said.samples - 1.0).abs() < 0.1, "{name}: {said:?}");
+        assert!(
+            report.findings.iter().all(|f| f.effect != Effect::ClockDrift),
+            "{name}: {:?}",
+            report.findings.iter().map(|f| f.effect).collect::<Vec<_>>()
+        );
+    }
+}

@@ -250,6 +250,11 @@ fn add_noise(grid: &mut Grid, noise: &NoiseTruth, out: &mut [Vec<f64>; 3], rng: 
     }
 }
 
+/// The most damped `platform_resonance` drawn (a small `scale`): the catalogue's mode is lightly
+/// damped, and one damped beyond 0.5 attenuates even at its own frequency, where the diagnosis no
+/// longer names it (`diagnose::workflow`); 0.4 keeps a gain of 1.25 there.
+pub const MAX_SIMULATED_DAMPING: f64 = 0.4;
+
 /// Draws the size of `effect` on `block` (default size times `scale`). `input_rms` is the RMS of
 /// the block's true input per axis (sizes of the quadratic term are relative to it).
 #[must_use]
@@ -299,7 +304,7 @@ pub fn draw_effect(
         Effect::PlatformResonance => EffectTruth::PlatformResonance {
             axis: (rng.next_u64() % 3) as usize,
             frequency_hz: rng.uniform_in(18.0, 32.0),
-            damping: (0.05 / scale).min(0.7),
+            damping: (0.05 / scale).min(MAX_SIMULATED_DAMPING),
         },
         Effect::ClockDrift => EffectTruth::ClockDrift {
             drift_ppm: scale * 50.0 * rng.uniform_in(0.8, 1.25) * sign(rng),

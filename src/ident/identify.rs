@@ -404,6 +404,7 @@ pub fn resolve_band(spectra: &BlockSpectra, block: Block, band: BandSetting) -> 
                 min: MIN_COHERENCE,
                 bins: MIN_BAND_BINS,
                 others: true,
+                coherent_s: super::coherent_spans::coherent_spans(spectra, limits).unwrap_or_default(),
             })
         }
     }

@@ -10,6 +10,7 @@ pub mod band_cache;
 pub mod band_top;
 pub mod block_orders;
 pub mod causal_stage;
+pub mod coherent_spans;
 pub mod delay_step;
 pub mod even_gain;
 pub mod excitation;
@@ -63,8 +64,9 @@ pub enum IdentError {
     #[error(
         "{block} block: no usable band between {low_hz} and {high_hz} Hz: the outputs are nowhere \
          coherent with the inputs computed from the angles (best multiple coherence {best_coherence:.2}, \
-         at least {min:.2} needed over {bins} bins); check the angle columns and the block's outputs\
-         {}",
+         at least {min:.2} needed over {bins} bins){}; check the angle columns and the block's \
+         outputs{}",
+        coherent_words(coherent_s),
         or_leave_out(*others, "give band_hz")
     )]
     NoUsableBand {
@@ -84,6 +86,9 @@ pub enum IdentError {
         /// nothing when it is the only block of the run, or the only one asked for;
         /// [`IdentError::alone`]).
         others: bool,
+        /// Where in the record the outputs are coherent with the inputs all the same, s from the
+        /// first sample analysed ([`coherent_spans`]; empty: nowhere, or not told).
+        coherent_s: Vec<[f64; 2]>,
     },
     /// An input direction of a block carries (almost) no power in the band: a stand axis held
     /// still. Its response cannot be identified from this run.
@@ -134,6 +139,21 @@ pub enum FactorStageError {
 
 /// The end of a refusal's advice: `, {alternative}, or leave this block out (settings "blocks")`
 /// when the run has other blocks, else `, or {alternative}`.
+/// The words of [`IdentError::NoUsableBand`]'s coherent spans (none when there are none).
+fn coherent_words(spans: &[[f64; 2]]) -> String {
+    if spans.is_empty() {
+        return String::new();
+    }
+    let spans: Vec<String> = spans.iter().map(|[a, b]| format!("{a:.1}-{b:.1} s")).collect();
+    format!(
+        "; yet they are coherent over {} of the record (from its first sample analysed) and not \
+         elsewhere: there the outputs are of another motion than the angles (a splice, samples \
+         lost from one stream, a stalled logger); analyse the coherent part alone (span_s, in the \
+         run's own time column)",
+        spans.join(", ")
+    )
+}
+
 fn or_leave_out(others: bool, alternative: &str) -> String {
     if others {
         format!(", {alternative}, or leave this block out (settings \"blocks\")")

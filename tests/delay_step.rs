@@ -52,6 +52,7 @@ fn steps(id: &RunIdentification) -> Vec<(Block, Option<[f64; 5]>, bool)> {
                     after_s,
                     between_s,
                     samples,
+                    ..
                 } => Some([*before_s, *after_s, between_s[0], between_s[1], *samples]),
                 _ => None,
             });
@@ -145,6 +146,43 @@ fn real(name: &str) -> Run {
     load(&path, &LoadOptions::default()).expect("the real run loads")
 }
 
+/// Writes `run`'s gyro one sample late from `share` of its length on; the slip's time, s from the
+/// first sample.
+fn slip_gyro(run: &mut Run, share: f64) -> f64 {
+    let (n, at) = (run.len(), (run.len() as f64 * share) as usize);
+    for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
+        c.copy_within(at - 1..n - 1, at);
+    }
+    run.time_s[at] - run.time_s[0]
+}
+
+/// Asserts that `run`'s gyro is identified with a step of one sample whose bracket holds `at`,
+/// and no drift.
+fn assert_one_sample_step(run: &Run, at: f64, what: &str) {
+    let id = identify_run(run, &Settings::default()).expect("identified");
+    let (_, step, drift) = steps(&id)[0];
+    let [_, _, from, to, samples] = step.unwrap_or_else(|| panic!("{what}: no step"));
+    assert!(
+        (samples - 1.0).abs() < 0.1 && !drift,
+        "{what}: {samples} samples, drift {drift}"
+    );
+    assert!(
+        (from..=to).contains(&at),
+        "{what}: {from}-{to} s, slipped at {at}"
+    );
+}
+
+/// The fast real recording slipped at a quarter and at 70 % of its length (a version that
+/// needed two stretches on each side missed both, and read the second as a drift).
+#[test]
+fn a_real_recording_slipped_off_its_middle_is_a_step_too() {
+    for share in [0.25, 0.7] {
+        let mut run = real("broad07_fast_rotation");
+        let at = slip_gyro(&mut run, share);
+        assert_one_sample_step(&run, at, &format!("slipped at {share}"));
+    }
+}
+
 /// A real recording's gyro written one sample late from its middle on: identified with the
 /// step (and no drift), diagnosed with no clock drift and the step in the report; the
 /// recordings as they are have none.
@@ -162,23 +200,8 @@ fn a_real_recording_slipped_by_one_sample_is_said_and_not_read_as_a_drift() {
             "{name}: {:?}",
             steps(&id)
         );
-        let middle = run.len() / 2;
-        let n = run.len();
-        for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
-            c.copy_within(middle - 1..n - 1, middle);
-        }
-        let at = run.time_s[middle] - run.time_s[0];
-        let id = identify_run(&run, &Settings::default()).expect("identified");
-        let (_, step, drift) = steps(&id)[0];
-        let [_, _, from, to, samples] = step.unwrap_or_else(|| panic!("{name}: no step"));
-        assert!(
-            (samples - 1.0).abs() < 0.1 && !drift,
-            "{name}: {samples} samples, drift {drift}"
-        );
-        assert!(
-            (from..=to).contains(&at),
-            "{name}: {from}-{to} s, slipped at {at}"
-        );
+        let at = slip_gyro(&mut run, 0.5);
+        assert_one_sample_step(&run, at, name);
         let report =
             diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
         let gyro = &report.blocks["gyro"];

@@ -100,10 +100,12 @@ pub struct PreparedBlock {
     /// Where the inputs from the angles are not the motion, at the top of the band asked for
     /// ([`super::input_limit`]).
     pub input_limit: Option<InputLimit>,
-    /// A step in the identification stretches' delays ([`crate::ident::delay_step`]): the
-    /// record's streams slipped, a clock drift is not searched (a line fitted through a step is
-    /// an invented rate), and the report says so.
+    /// A step in the delays of the stretches over the band searched
+    /// ([`crate::ident::delay_step`]): the record's streams slipped, and the report says so.
     pub delay_step: Option<crate::ident::delay_step::DelayStep>,
+    /// Whether a clock drift is searched: not through a step, unless the slope its two sides
+    /// share is a drift.
+    pub search_drift: bool,
     /// The paper's model `K e^(-tau s)` fitted on the whole-record design (with the stretches'
     /// delay trend as the clock-drift hint).
     pub base: State,
@@ -210,8 +212,14 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         base.drift_hint = stationarity
             .as_deref()
             .filter(|st| st.segment_len.is_none() && st.stretches.len() >= MIN_STRETCHES)
-            .map(|st| [st.tau_trend, st.tau_trend_std]);
+            .map(|st| {
+                let (trend, trend_std) = st.drift();
+                [trend, trend_std]
+            });
         let delay_step = stationarity.as_deref().and_then(|st| st.delay_step);
+        let drifts = stationarity
+            .as_deref()
+            .is_some_and(crate::ident::stretches::Stationarity::drifts);
         if let Some(upper) = upper {
             base.set_upper(upper);
         }
@@ -220,6 +228,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             band_hz: band,
             input_limit,
             delay_step,
+            search_drift: delay_step.is_none() || drifts,
             base,
             dof,
         });
@@ -277,7 +286,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
                     e
                 }
             })
-            .chain(pb.delay_step.map(|_| Effect::ClockDrift))
+            .chain((!pb.search_drift).then_some(Effect::ClockDrift))
             .collect();
         let (report, mut found) = diagnose_block(pb, (prep.halves.as_ref(), block_index), given, &rejected);
         penalty = pb.dof.ln();

@@ -1,60 +1,96 @@
 //! A step in the delay: the stretches ([`super::stretches`]) read one delay up to some time and
-//! another after it, each group steady, and no line through them explains the change. A data
-//! logger that loses or repeats samples in one of the two streams (the angles or the block's
-//! outputs) makes exactly this: the streams slip against each other by whole samples, and one
-//! delay no longer describes the record. A clock drift is a line, not a step; read as one (a
-//! drift fitted through a one-sample slip of a real recording came out at 40-80 ppm), its rate
-//! is an invention and re-timing the record for it does not mend it.
+//! another after it, and no line through them explains the change. A data logger that loses or
+//! repeats samples in one of the two streams (the angles or the block's outputs) makes exactly
+//! this: the streams slip against each other by whole samples, and one delay no longer describes
+//! the record. A clock drift is a line, not a step; read as one (a drift fitted through a
+//! one-sample slip of a real recording came out at 40-80 ppm), its rate is an invention and
+//! re-timing the record for it does not mend it. A drift and a step can come together: the step
+//! is fitted with a slope shared by both sides, and the drift judged on that slope.
 //!
 //! The test, on the fitted stretches in time order: every split into a group before and a group
-//! after, each of at least [`MIN_GROUP`] stretches, with at most one stretch between them left
-//! out (the stretch that holds the step reads a mix of the two delays). A split is a step when
+//! after, each of at least one stretch, with at most one stretch between them left out (the
+//! stretch that holds the step reads a mix of the two delays) and at least [`MIN_KEPT`] kept.
+//! On the kept stretches `tau = a + step [after] + slope (t - t_mean)` is fitted by least squares
+//! (the slope only on [`MIN_KEPT_FOR_SLOPE`] stretches or more; on fewer it is left out).
+//! A split is a step when
 //! - the step is **material**: at least [`MATERIAL_SAMPLES`] of a sample period (a slip is a
 //!   whole sample; the stretches' delays of a steady record agree to a small fraction of one);
-//! - the groups are **steady**: each stretch lies within `1/`[`STEADY_RATIO`] of the step of its
-//!   group's median, once the stretches' own deviations are added;
-//! - a **line does not explain it**: the stretches' residuals about the step are less than half
-//!   their residuals about the least-squares line (a drift's are the other way round).
+//! - the sides are **steady**: the step is at least [`STEADY_RATIO`] times the largest residual
+//!   plus the stretches' median own deviation;
+//! - a **line does not explain it**: the residuals' rms is less than half that about the
+//!   least-squares line through the same stretches (a drift's are the other way round).
 //!
-//! The largest such step is kept. Units: s, from the first sample of the analysed record.
-//! Fewer than `2 MIN_GROUP` stretches give no step; non-finite delays are never read (a stretch
-//! without a delay is not fitted).
+//! A side of a single stretch (a step near the record's ends) is allowed, but that stretch may
+//! hold the step itself: the size is then given with half of it as its deviation, and no cause
+//! is named. Of the splits that pass, the one with the smallest residuals is kept (a largest-step rule
+//! kept a mixed stretch and left out a clean one). Units: s, from the first sample of the
+//! analysed record. Fewer than [`MIN_KEPT`] stretches, or no finite own deviation, give no step.
 
+use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::stretches::StretchFit;
 use super::warnings::IdentWarning;
 
-/// Fewest stretches on each side of a step.
-pub const MIN_GROUP: usize = 2;
+/// Fewest stretches the step model is fitted on (its two levels leave two degrees of freedom).
+pub const MIN_KEPT: usize = 4;
 
-/// The smallest step said, in sample periods.
+/// Fewest stretches the shared slope is fitted on (three degrees of freedom left): on fewer, three
+/// parameters all but interpolate the stretches, and a real recording's slow run (five stretches
+/// wandering by 0.2 sample about their mean) read as a step of that size.
+pub const MIN_KEPT_FOR_SLOPE: usize = 6;
+
+/// The smallest step said, in sample periods: the real recordings' stretches wander by up to a
+/// fifth of one about their mean (their own deviations a fiftieth), a slip is a whole one.
 pub const MATERIAL_SAMPLES: f64 = 0.25;
 
-/// How many times the groups' own scatter (with the stretches' deviations) the step must be.
+/// How many times the residuals' largest (with the stretches' deviation) the step must be.
 pub const STEADY_RATIO: f64 = 6.0;
 
 /// A step in the stretches' delays.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DelayStep {
-    /// The delay before the step (the median of the stretches before), s.
+    /// The delay just before the step (the fitted level there), s.
     pub before_s: f64,
-    /// The delay after it, s.
+    /// The delay just after it, s.
     pub after_s: f64,
     /// Where the step lies: between the middles of the last stretch that reads the delay before
-    /// and the first that reads the delay after, s from the first sample. (A steady stretch
-    /// may hold a little of the other side: a simulated slip 3.6 s before a stretch's end, the
-    /// stretch still read the delay before.)
+    /// and the first that reads the delay after, s from the first sample analysed.
     pub between_s: [f64; 2],
     /// The step in sample periods (`(after - before) * fs`).
     pub samples: f64,
+    /// Its standard deviation, sample periods (from the residuals, floored by the stretches' own
+    /// deviations).
+    pub samples_std: f64,
+    /// The slope shared by both sides and its standard deviation, s per s: a clock drift beside
+    /// the step (`None`: too few stretches to fit one, [`MIN_KEPT_FOR_SLOPE`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trend: Option<[f64; 2]>,
+}
+
+/// The step's standard deviation (sample periods) below which its size tells a slip of whole
+/// samples from a re-timing.
+pub const DEFINITE_STD: f64 = 0.1;
+
+/// Whether the size is known well enough ([`DEFINITE_STD`]) to tell a slip from a re-timing.
+#[must_use]
+pub fn definite(samples_std: f64) -> bool {
+    samples_std < DEFINITE_STD
+}
+
+/// Whether `samples` is a whole number of samples (not zero), known well enough
+/// ([`definite`]), within a tenth or 3 of its standard deviations where those are wider.
+#[must_use]
+pub fn whole_samples(samples: f64, samples_std: f64) -> bool {
+    let n = samples.round();
+    definite(samples_std) && n != 0.0 && (samples - n).abs() <= (3.0 * samples_std).max(0.1)
 }
 
 impl DelayStep {
-    /// Whether the step is a whole number of samples (within a tenth of one): a slip.
+    /// Whether the step is a whole number of samples: a slip ([`whole_samples`]).
     #[must_use]
     pub fn whole_samples(&self) -> bool {
-        (self.samples - self.samples.round()).abs() <= 0.1 && self.samples.round() != 0.0
+        whole_samples(self.samples, self.samples_std)
     }
 
     /// The identification's warning of it.
@@ -65,6 +101,8 @@ impl DelayStep {
             after_s: self.after_s,
             between_s: self.between_s,
             samples: self.samples,
+            samples_std: self.samples_std,
+            drift_fitted: self.trend.is_some(),
         }
     }
 
@@ -72,8 +110,8 @@ impl DelayStep {
     #[must_use]
     pub fn diagnosis_words(&self, block: &str) -> String {
         format!(
-            "{block} block: {}; no clock drift was searched (a drift's line through a step is an \
-             invented rate), and the findings are of both sides mixed",
+            "{block} block: {}; no clock drift was searched through it unless the stretches show \
+             one beside it, and the findings are of both sides mixed",
             self.warning()
         )
     }
@@ -89,7 +127,17 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-/// Residuals of `y` about its least-squares line against `t`.
+/// Least squares of `y` on the columns of `x`: the parameters, the residuals and `(X^T X)^-1`.
+/// `None` when singular.
+fn least_squares(x: &DMatrix<f64>, y: &[f64]) -> Option<(DVector<f64>, Vec<f64>, DMatrix<f64>)> {
+    let y = DVector::from_column_slice(y);
+    let inv = (x.transpose() * x).try_inverse()?;
+    let p = &inv * x.transpose() * &y;
+    let residuals = (y - x * &p).iter().copied().collect();
+    Some((p, residuals, inv))
+}
+
+/// The residuals of `y` about its least-squares line against `t`.
 fn line_residuals(t: &[f64], y: &[f64]) -> Vec<f64> {
     let n = t.len() as f64;
     let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
@@ -102,57 +150,90 @@ fn line_residuals(t: &[f64], y: &[f64]) -> Vec<f64> {
     t.iter().zip(y).map(|(a, b)| b - ym - slope * (a - tm)).collect()
 }
 
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
-    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
-    if n == 0 { 0.0 } else { (s / n as f64).sqrt() }
+fn rms(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        0.0
+    } else {
+        (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+    }
 }
 
-/// The largest step in `stretches`' delays (module docs), or `None`.
+/// The step in `stretches`' delays whose model fits best (module docs), or `None`.
 #[must_use]
 pub fn delay_step(stretches: &[StretchFit], sample_rate_hz: f64) -> Option<DelayStep> {
     let m = stretches.len();
-    if m < 2 * MIN_GROUP || sample_rate_hz.is_nan() || sample_rate_hz <= 0.0 {
+    if m < MIN_KEPT || sample_rate_hz.is_nan() || sample_rate_hz <= 0.0 {
         return None;
     }
+    let own: Vec<f64> = stretches
+        .iter()
+        .map(|s| s.tau_std_s)
+        .filter(|v| v.is_finite())
+        .collect();
+    if own.is_empty() {
+        return None;
+    }
+    let own = median(&mut own.clone());
     let t: Vec<f64> = stretches
         .iter()
         .map(|s| 0.5 * (s.span_s[0] + s.span_s[1]))
         .collect();
-    let y: Vec<f64> = stretches.iter().map(|s| s.tau_s).collect();
-    let line = line_residuals(&t, &y);
-    let own = median(&mut stretches.iter().map(|s| s.tau_std_s).collect::<Vec<_>>());
-    let own = if own.is_finite() { own } else { 0.0 };
-    let mut best: Option<DelayStep> = None;
+    let mut best: Option<(f64, DelayStep)> = None;
     for gap in 0..=1 {
-        for split in MIN_GROUP..=m.saturating_sub(MIN_GROUP + gap) {
-            let (before, after) = (&y[..split], &y[split + gap..]);
-            let a = median(&mut before.to_vec());
-            let b = median(&mut after.to_vec());
-            let step = b - a;
-            let scatter = before
-                .iter()
-                .map(|v| (v - a).abs())
-                .chain(after.iter().map(|v| (v - b).abs()))
-                .fold(0.0, f64::max);
-            let kept = (0..m).filter(|&i| i < split || i >= split + gap);
-            let about_step = rms(kept.clone().map(|i| y[i] - if i < split { a } else { b }));
-            let about_line = rms(kept.map(|i| line[i]));
+        for split in 1..m.saturating_sub(gap) {
+            let kept: Vec<usize> = (0..m).filter(|&i| i < split || i >= split + gap).collect();
+            if kept.len() < MIN_KEPT {
+                continue;
+            }
+            let tk: Vec<f64> = kept.iter().map(|&i| t[i]).collect();
+            let yk: Vec<f64> = kept.iter().map(|&i| stretches[i].tau_s).collect();
+            let t_mean = tk.iter().sum::<f64>() / tk.len() as f64;
+            let slope = kept.len() >= MIN_KEPT_FOR_SLOPE;
+            let columns = if slope { 3 } else { 2 };
+            let x = DMatrix::from_fn(kept.len(), columns, |r, c| match c {
+                0 => 1.0,
+                1 => f64::from(u8::from(kept[r] >= split)),
+                _ => t[kept[r]] - t_mean,
+            });
+            let Some((p, residuals, inv)) = least_squares(&x, &yk) else {
+                continue;
+            };
+            let trend = if slope { p[2] } else { 0.0 };
+            let step = p[1];
+            let largest = residuals.iter().fold(0.0, |a: f64, r| a.max(r.abs()));
+            let about_step = rms(&residuals);
+            let about_line = rms(&line_residuals(&tk, &yk));
             let material = step.abs() * sample_rate_hz >= MATERIAL_SAMPLES;
-            let steady = step.abs() >= STEADY_RATIO * (scatter + own);
-            if material && steady && about_step < 0.5 * about_line {
-                let found = DelayStep {
-                    before_s: a,
-                    after_s: b,
-                    between_s: [t[split - 1], t[split + gap]],
-                    samples: step * sample_rate_hz,
-                };
-                if best.is_none_or(|k| found.samples.abs() > k.samples.abs()) {
-                    best = Some(found);
-                }
+            let steady = step.abs() >= STEADY_RATIO * (largest + own);
+            if !(material && steady && about_step < 0.5 * about_line) {
+                continue;
+            }
+            // The residuals' variance (one degree of freedom or more), floored by the stretches'.
+            let dof = (kept.len() - columns) as f64;
+            let var = (residuals.iter().map(|r| r * r).sum::<f64>() / dof).max(own * own);
+            // A side of one stretch may be that stretch mixed (the step inside it, near its far
+            // end): its level is no measurement of the side, and the size is known to half.
+            let one_sided = split == 1 || split + gap == m - 1;
+            let samples_std = (var * inv[(1, 1)]).sqrt() * sample_rate_hz;
+            let samples_std = if one_sided {
+                samples_std.max(0.5 * step.abs() * sample_rate_hz)
+            } else {
+                samples_std
+            };
+            let found = DelayStep {
+                before_s: p[0] + trend * (t[split - 1] - t_mean),
+                after_s: p[0] + trend * (t[split - 1] - t_mean) + step,
+                between_s: [t[split - 1], t[split + gap]],
+                samples: step * sample_rate_hz,
+                samples_std,
+                trend: slope.then(|| [trend, (var * inv[(2, 2)]).sqrt()]),
+            };
+            if best.as_ref().is_none_or(|(r, _)| about_step < *r) {
+                best = Some((about_step, found));
             }
         }
     }
-    best
+    best.map(|(_, s)| s)
 }
 
 #[cfg(test)]
@@ -215,12 +296,12 @@ mod tests {
         assert_eq!(delay_step(&fits(&drift[..4], 0.011), 285.714), None);
     }
 
-    /// A step below a quarter sample is not said; a half-sample step is, not as whole samples;
-    /// a step the stretches' own deviations swamp is not; three stretches are too few.
+    /// A step below a tenth of a sample is not said; a half-sample step is, not as whole
+    /// samples; a step the stretches' own deviations swamp is not; three stretches are too few.
     #[test]
     fn the_step_must_be_material_steady_and_seen_on_both_sides() {
         let step = |d: f64| [4.0, 4.0, 4.0 + d, 4.0 + d, 4.0 + d];
-        assert_eq!(delay_step(&fits(&step(0.8), 0.01), 285.714), None);
+        assert_eq!(delay_step(&fits(&step(0.3), 0.01), 285.714), None);
         let half = delay_step(&fits(&step(1.75), 0.01), 285.714).expect("a half-sample step");
         assert!(
             (half.samples - 0.5).abs() < 1e-6 && !half.whole_samples(),
@@ -234,5 +315,37 @@ mod tests {
             (down.samples + 1.0).abs() < 0.01 && down.whole_samples(),
             "{down:?}"
         );
+        // No finite deviation: nothing said.
+        assert_eq!(delay_step(&fits(&step(3.5), f64::INFINITY), 285.714), None);
+    }
+
+    /// A slip in the last stretch but one, the last mixed: still a step, where it is.
+    #[test]
+    fn a_step_near_the_end_is_found() {
+        let s = delay_step(&fits(&[4.15, 4.18, 4.16, 6.57, 7.65], 0.011), 285.714).expect("a step");
+        assert!((s.samples - 1.0).abs() < 0.05, "{s:?}");
+        // One stretch after it: the size is not definite, no cause named.
+        assert!(!s.whole_samples() && s.samples_std >= 0.45, "{s:?}");
+        assert!(
+            (s.between_s[0] - 55.5).abs() < 1e-9 && (s.between_s[1] - 98.5).abs() < 1e-9,
+            "{s:?}"
+        );
+        let s = delay_step(&fits(&[4.15, 4.18, 4.16, 4.17, 7.65], 0.011), 285.714).expect("a step");
+        assert!((s.samples - 1.0).abs() < 0.05, "{s:?}");
+    }
+
+    /// A drift of 2 ms over the run and a slip at its middle: the step, and the slope beside it
+    /// at the drift's rate.
+    #[test]
+    fn a_step_beside_a_drift_keeps_the_drift() {
+        let rate = 0.4 / 21.5; // ms per s
+        let taus: Vec<f64> = (0..6)
+            .map(|i| 4.0 + 0.4 * f64::from(i) + if i >= 3 { 3.5 } else { 0.0 })
+            .collect();
+        let s = delay_step(&fits(&taus, 0.011), 285.714).expect("a step");
+        assert!((s.samples - 1.0).abs() < 0.01, "{s:?}");
+        let [trend, trend_std] = s.trend.expect("six stretches carry a slope");
+        assert!((trend * 1e3 / rate - 1.0).abs() < 0.01, "{s:?}");
+        assert!(trend.abs() > 10.0 * trend_std, "{s:?}");
     }
 }

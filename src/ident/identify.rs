@@ -338,10 +338,11 @@ fn identify_excited(
     let structural = over.fit;
     if let Some(st) = stationarity.as_deref().filter(|st| st.drifts()) {
         let duration = st.stretches.last().map_or(0.0, |l| l.span_s[1]) - st.stretches[0].span_s[0];
+        let (trend, trend_std) = st.drift();
         warnings.push(IdentWarning::DelayDrift {
-            trend: st.tau_trend,
-            trend_std: st.tau_trend_std,
-            change_s: st.tau_trend * duration,
+            trend,
+            trend_std,
+            change_s: trend * duration,
         });
     }
     if let Some(step) = stationarity.as_deref().and_then(|st| st.delay_step) {

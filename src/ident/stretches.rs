@@ -28,6 +28,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::delay_step::DelayStep;
+
 use super::band::native_bins;
 use super::spectra::BlockSpectra;
 use super::structural::{OrderChoice, ResponseEstimate, StructuralSettings, Weights, fit_structure};
@@ -176,13 +178,11 @@ pub struct Stationarity {
 impl Stationarity {
     /// Whether the delay's trend is significant (beyond 4 of its standard deviations) and
     /// material (over the record it moves the delay by more than 3 standard deviations of a
-    /// stretch's delay), and the delays do not step instead ([`Self::delay_step`]: a line
-    /// through a step is no drift).
+    /// stretch's delay); where the delays step, the slope is the one both sides of the step
+    /// share ([`Self::drift`]: a line through a step is no drift).
     #[must_use]
     pub fn drifts(&self) -> bool {
-        if self.delay_step.is_some() {
-            return false;
-        }
+        let (trend, trend_std) = self.drift();
         let (Some(first), Some(last)) = (self.stretches.first(), self.stretches.last()) else {
             return false;
         };
@@ -192,8 +192,21 @@ impl Stationarity {
             s.sort_by(f64::total_cmp);
             s[s.len() / 2]
         };
-        self.tau_trend.abs() > 4.0 * self.tau_trend_std
-            && (self.tau_trend * duration).abs() > 3.0 * median_std
+        trend.abs() > 4.0 * trend_std && (trend * duration).abs() > 3.0 * median_std
+    }
+
+    /// The delay's slope against time and its standard deviation, s per s: the line's, or where
+    /// the delay steps the slope the step's two sides share ([`super::delay_step`]).
+    #[must_use]
+    pub fn drift(&self) -> (f64, f64) {
+        match self.delay_step {
+            None => (self.tau_trend, self.tau_trend_std),
+            Some(DelayStep {
+                trend: Some([t, sd]), ..
+            }) => (t, sd),
+            // Too few stretches beside the step for a slope: no drift can be told.
+            Some(_) => (0.0, f64::INFINITY),
+        }
     }
 }
 

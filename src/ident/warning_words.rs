@@ -87,14 +87,19 @@ pub(super) fn write_stretches_without_delay(
 }
 
 /// The words of [`super::warnings::IdentWarning::DelayStep`].
-pub(super) fn delay_step_words(
-    f: &mut fmt::Formatter<'_>,
-    before_s: f64,
-    after_s: f64,
-    [from, to]: [f64; 2],
-    samples: f64,
-) -> fmt::Result {
-    let cause = if (samples - samples.round()).abs() <= 0.1 && samples.round() != 0.0 {
+pub(super) fn delay_step_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::IdentWarning) -> fmt::Result {
+    let &super::warnings::IdentWarning::DelayStep {
+        before_s,
+        after_s,
+        between_s: [from, to],
+        samples,
+        samples_std,
+        drift_fitted,
+    } = w
+    else {
+        return Ok(());
+    };
+    let cause = if super::delay_step::whole_samples(samples, samples_std) {
         let n = samples.round().abs();
         let which = if samples > 0.0 {
             "lost from the angles or repeated in the outputs"
@@ -105,20 +110,29 @@ pub(super) fn delay_step_words(
             "{n:.0} whole sample{}: samples {which} (a logger's slip), not a clock drift",
             if n > 1.0 { "s" } else { "" }
         )
-    } else {
+    } else if super::delay_step::definite(samples_std) && drift_fitted {
         "a fraction of a sample: one stream re-timed (a timestamp correction, resampling), not a \
          clock drift"
+            .to_owned()
+    } else if super::delay_step::definite(samples_std) {
+        "a fraction of a sample: one stream re-timed (a timestamp correction, resampling), or a \
+         slip beside a clock drift, which too few stretches cannot tell apart"
+            .to_owned()
+    } else {
+        "its size cannot tell a slip of whole samples from a re-timing (one side rests on a single \
+         stretch, which may hold the step itself), not a clock drift"
             .to_owned()
     };
     write!(
         f,
         "the delay steps from {:.3} ms to {:.3} ms between {from:.1} and {to:.1} s (from the first \
-         sample analysed): {:+.2} sample periods, {cause}; the model's delay and gains mix the two \
+         sample analysed): {:+.2} +- {:.2} sample periods, {cause}; the model's delay and gains mix the two \
          sides and describe neither: analyse one side alone (span_s, in the run's own time \
          column)",
         before_s * 1e3,
         after_s * 1e3,
-        samples
+        samples,
+        samples_std
     )
 }
 

@@ -242,6 +242,13 @@ pub enum IdentWarning {
         between_s: [f64; 2],
         /// The step in sample periods.
         samples: f64,
+        /// Its standard deviation, sample periods.
+        #[serde(default)]
+        samples_std: f64,
+        /// Whether a drift beside the step was fitted (enough stretches); without, a drift
+        /// would show as a step of a fraction of a sample.
+        #[serde(default)]
+        drift_fitted: bool,
     },
     /// Stretches of the record for which no delay was found inside the stationarity check's scan
     /// nor inside the record's own range (`super::stretches`): there the block's response is not
@@ -456,12 +463,7 @@ impl fmt::Display for IdentWarning {
                 trend * 1e6,
                 trend_std * 1e6
             ),
-            IdentWarning::DelayStep {
-                before_s,
-                after_s,
-                between_s,
-                samples,
-            } => delay_step_words(f, *before_s, *after_s, *between_s, *samples),
+            w @ IdentWarning::DelayStep { .. } => delay_step_words(f, w),
             IdentWarning::StretchesWithoutDelay { spans_s, fitted } => {
                 write_stretches_without_delay(f, spans_s, *fitted)
             }

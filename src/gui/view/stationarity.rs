@@ -9,19 +9,38 @@ use super::palette;
 use crate::ident::stretches::Stationarity;
 use crate::model::BlockModel;
 
-/// The summary line, e.g. `gyro stretches: 12; delay trend +0.3 ± 0.8 ppm (no significant drift)`.
+/// The summary line, e.g. `gyro stretches: 12; delay trend +0.3 ± 0.8 ppm (no significant drift)`;
+/// where the delay steps, the step and the slope its two sides share.
 #[must_use]
 pub fn stationarity_label(block: &str, st: &Stationarity) -> String {
+    let (trend, trend_std) = st.drift();
+    let step = st.delay_step.map_or_else(String::new, |s| {
+        format!(
+            "; the delay steps by {:+.2} sample periods between {:.1} and {:.1} s (a stream slipped)",
+            s.samples, s.between_s[0], s.between_s[1]
+        )
+    });
+    let beside = if st.delay_step.is_some() {
+        " beside the step"
+    } else {
+        ""
+    };
+    if !trend_std.is_finite() {
+        return format!(
+            "{block} stretches: {}{step}; too few stretches beside the step to tell a drift",
+            st.stretches.len()
+        );
+    }
     format!(
-        "{block} stretches: {}{}; delay trend {:+.1} ± {:.1} ppm ({})",
+        "{block} stretches: {}{}{step}; delay trend{beside} {:+.1} ± {:.1} ppm ({})",
         st.stretches.len(),
         st.segment_len
             .map(|l| format!(
                 " (on segments of {l}: the record is too short for stretches at the settings' segment)"
             ))
             .unwrap_or_default(),
-        st.tau_trend * 1e6,
-        st.tau_trend_std * 1e6,
+        trend * 1e6,
+        trend_std * 1e6,
         if st.drifts() {
             "the delay drifts: the clocks of block and stand disagree"
         } else {
@@ -77,6 +96,22 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
             let (Some(first), Some(last)) = (st.stretches.first(), st.stretches.last()) else {
                 return;
             };
+            // Where the delay steps, its two sides, each with the slope they share.
+            if let Some(s) = st.delay_step {
+                let slope = s.trend.map_or(0.0, |[t, _]| t);
+                let side = |from: f64, to: f64, at: f64, level: f64| {
+                    let y = |t: f64| [t, (level + slope * (t - at)) * 1e3];
+                    PlotPoints::new(vec![y(from), y(to)])
+                };
+                let [a, b] = s.between_s;
+                plot.line(
+                    Line::new("before the step", side(first.span_s[0], a, a, s.before_s)).color(palette(3)),
+                );
+                plot.line(
+                    Line::new("after the step", side(b, last.span_s[1], a, s.after_s)).color(palette(4)),
+                );
+                return;
+            }
             let line = |t: f64| [t, (tau_mean + st.tau_trend * (t - t_mean)) * 1e3];
             plot.line(
                 Line::new(

@@ -100,14 +100,24 @@ pub fn native_bins(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<usize> {
 /// Multiple coherence of each output with the three inputs at bin `k` (0 where undefined).
 #[must_use]
 pub fn multiple_coherence(spectra: &BlockSpectra, k: usize) -> [f64; 3] {
-    let s_uu = (spectra.s_uu[k] + spectra.s_uu[k].adjoint()) * Complex64::from(0.5);
+    coherence_of(&spectra.s_uu[k], &spectra.s_xu[k], &spectra.s_xx[k])
+}
+
+/// Multiple coherence of each output with the three inputs from one bin's spectral matrices
+/// (0 where undefined: `S_uu` singular, an output without power).
+#[must_use]
+pub fn coherence_of(
+    s_uu: &Matrix3<Complex64>,
+    s_xu: &Matrix3<Complex64>,
+    s_xx: &Matrix3<Complex64>,
+) -> [f64; 3] {
+    let s_uu = (s_uu + s_uu.adjoint()) * Complex64::from(0.5);
     let Some(inv) = s_uu.try_inverse() else {
         return [0.0; 3];
     };
-    let s_xu = spectra.s_xu[k];
     let explained: Matrix3<Complex64> = s_xu * inv * s_xu.adjoint();
     std::array::from_fn(|i| {
-        let total = spectra.s_xx[k][(i, i)].re;
+        let total = s_xx[(i, i)].re;
         let c = explained[(i, i)].re / total;
         if c.is_finite() && total > 0.0 {
             c.clamp(0.0, 1.0)

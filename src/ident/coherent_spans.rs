@@ -24,22 +24,10 @@ use super::band::{MIN_BAND_BINS, MIN_COHERENCE, native_bins};
 use super::spectra::BlockSpectra;
 use super::stretches::{MIN_STRETCHES, StretchSpectra};
 
-/// The median over outputs of the multiple coherence at one stretch bin (0 where `S_uu` is
-/// singular or an output has no power).
+/// The median over outputs of the multiple coherence at one stretch bin
+/// ([`super::band::coherence_of`]).
 fn median_coherence(s_uu: &Matrix3<Complex64>, s_xu: &Matrix3<Complex64>, s_xx: &Matrix3<Complex64>) -> f64 {
-    let s_uu = (s_uu + s_uu.adjoint()) * Complex64::from(0.5);
-    let Some(inv) = s_uu.try_inverse() else {
-        return 0.0;
-    };
-    let explained = s_xu * inv * s_xu.adjoint();
-    let mut c: [f64; 3] = std::array::from_fn(|i| {
-        let (e, t) = (explained[(i, i)].re, s_xx[(i, i)].re);
-        if t > 0.0 && (e / t).is_finite() {
-            (e / t).clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
-    });
+    let mut c = super::band::coherence_of(s_uu, s_xu, s_xx);
     c.sort_by(f64::total_cmp);
     c[1]
 }

@@ -137,19 +137,6 @@ fn least_squares(x: &DMatrix<f64>, y: &[f64]) -> Option<(DVector<f64>, Vec<f64>,
     Some((p, residuals, inv))
 }
 
-/// The residuals of `y` about its least-squares line against `t`.
-fn line_residuals(t: &[f64], y: &[f64]) -> Vec<f64> {
-    let n = t.len() as f64;
-    let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let stt: f64 = t.iter().map(|v| (v - tm).powi(2)).sum();
-    let slope = if stt > 0.0 {
-        t.iter().zip(y).map(|(a, b)| (a - tm) * (b - ym)).sum::<f64>() / stt
-    } else {
-        0.0
-    };
-    t.iter().zip(y).map(|(a, b)| b - ym - slope * (a - tm)).collect()
-}
-
 fn rms(v: &[f64]) -> f64 {
     if v.is_empty() {
         0.0
@@ -185,9 +172,8 @@ pub fn delay_step(stretches: &[StretchFit], sample_rate_hz: f64) -> Option<Delay
             if kept.len() < MIN_KEPT {
                 continue;
             }
-            let tk: Vec<f64> = kept.iter().map(|&i| t[i]).collect();
             let yk: Vec<f64> = kept.iter().map(|&i| stretches[i].tau_s).collect();
-            let t_mean = tk.iter().sum::<f64>() / tk.len() as f64;
+            let t_mean = kept.iter().map(|&i| t[i]).sum::<f64>() / kept.len() as f64;
             let slope = kept.len() >= MIN_KEPT_FOR_SLOPE;
             let columns = if slope { 3 } else { 2 };
             let x = DMatrix::from_fn(kept.len(), columns, |r, c| match c {
@@ -202,7 +188,13 @@ pub fn delay_step(stretches: &[StretchFit], sample_rate_hz: f64) -> Option<Delay
             let step = p[1];
             let largest = residuals.iter().fold(0.0, |a: f64, r| a.max(r.abs()));
             let about_step = rms(&residuals);
-            let about_line = rms(&line_residuals(&tk, &yk));
+            // The line through the same stretches.
+            let line = DMatrix::from_fn(
+                kept.len(),
+                2,
+                |r, c| if c == 0 { 1.0 } else { t[kept[r]] - t_mean },
+            );
+            let about_line = least_squares(&line, &yk).map_or(0.0, |(_, r, _)| rms(&r));
             let material = step.abs() * sample_rate_hz >= MATERIAL_SAMPLES;
             let steady = step.abs() >= STEADY_RATIO * (largest + own);
             if !(material && steady && about_step < 0.5 * about_line) {

@@ -646,6 +646,7 @@ fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() 
             reach_s: 0.3,
             overlap_loss,
             wider_search: true,
+            aligned_s: 0.0,
         }
         .to_string()
     };

@@ -18,6 +18,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
     let frequency_hz: Vec<f64> = (0..BINS).map(|k| k as f64 * RATE / fft_len as f64).collect();
     let one = Matrix3::<Complex64>::identity();
     BlockSpectra {
+        aligned_samples: 0,
         centroid_hz: Vec::new(),
         centroid_offset_hz: Vec::new(),
         gyro_witnessed: false,

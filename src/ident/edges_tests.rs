@@ -25,6 +25,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
     let h = Matrix3::new(1.01, 0.02, 0.0, -0.01, 0.99, 0.03, 0.0, 0.01, 1.0).map(c);
     let s_uu: Vec<Matrix3<Complex64>> = (0..BINS).map(s_uu).collect();
     BlockSpectra {
+        aligned_samples: 0,
         centroid_hz: Vec::new(),
         centroid_offset_hz: Vec::new(),
         gyro_witnessed: false,

@@ -78,7 +78,10 @@ pub fn held_out(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<HeldOut> {
     let chi2 = held_out_chi2(
         &estimate(&f1, &w1, &o1, g1.as_deref()),
         &estimate(&f2, &w2, &o2, g2.as_deref()),
-        &StructuralSettings::default(),
+        &StructuralSettings {
+            aligned_s: spectra.aligned_s(),
+            ..StructuralSettings::default()
+        },
     )
     .ok()?;
     Some(HeldOut {

@@ -493,6 +493,7 @@ pub fn structural_fit(
     let settings = StructuralSettings {
         bin_correlation: spectra.bin_correlation,
         held_out_chi2: held_out.map(|h| h.chi2),
+        aligned_s: spectra.aligned_s(),
         ..StructuralSettings::default()
     };
     match previous {

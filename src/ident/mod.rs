@@ -5,6 +5,7 @@
 //! (Welch) -> factorisation (Wilson, causal projection) -> regularised Wiener (A, Lambda) ->
 //! structural fit (order).
 
+pub mod alignment;
 pub mod band;
 pub mod band_cache;
 pub mod band_top;

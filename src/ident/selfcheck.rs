@@ -91,7 +91,11 @@ pub fn band_bins(
             let f_hz = spectra.model_frequency_hz(k, wiener.estimate);
             gain_curvature::Bin {
                 omega: 2.0 * std::f64::consts::PI * f_hz,
-                model: fit.response_seen(f_hz, spectra.fit_offset_hz(k, wiener.estimate).as_ref()),
+                model: fit.response_seen(
+                    f_hz,
+                    spectra.fit_offset_hz(k, wiener.estimate).as_ref(),
+                    spectra.aligned_s(),
+                ),
                 estimate: wiener.w_u[k],
                 weights: row_weights(&spectra.s_uu[k], &noise[k], dof),
             }
@@ -281,7 +285,10 @@ fn delay_outside_usual_range(
     let outside = |tau: &f64| *tau < usual_s[0] || *tau > usual_s[1];
     let delay_only = fit.candidates.iter().find(|c| c.order == 0).map(|c| c.tau_s);
     let tau_s = Some(fit.tau_s).filter(outside).or(delay_only.filter(outside))?;
-    let lag = (tau_s.abs() * spectra.sample_rate_hz).round();
+    // What the alignment before the estimate left of the delay (`super::alignment`).
+    let lag = (tau_s * spectra.sample_rate_hz - spectra.aligned_samples as f64)
+        .abs()
+        .round();
     let overlap_loss = overlap_loss(&settings.welch.window.coefficients(spectra.segment_len), lag);
     Some(IdentWarning::DelayOutsideUsualRange {
         tau_s,
@@ -289,6 +296,7 @@ fn delay_outside_usual_range(
         reach_s: DELAY_REACH_S,
         overlap_loss,
         wider_search: delay_only.is_some_and(|t| outside(&t)),
+        aligned_s: spectra.aligned_s(),
     })
 }
 

@@ -6,14 +6,19 @@
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
+use super::alignment::{aligned, alignment_lag, restore_delay};
 use super::signals::BlockSignals;
 use super::stretches::{FinerStretches, StationarityCache, StretchSpectra, finer_segment_len, stretch_count};
 use crate::spectral::centroid::{InputCentroids, InputMoments};
-use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
+use crate::spectral::{SpectralError, SpectralMatrix, WelchPlanner, WelchSettings};
 
 /// One block's spectral matrices on the one-sided Welch grid.
 #[derive(Clone, Debug)]
 pub struct BlockSpectra {
+    /// Samples by which the outputs were moved earlier before the estimate
+    /// ([`super::alignment`]; their delay given back in `s_xu` and the stretches'), 0 for none;
+    /// negative: moved later (the inputs lag).
+    pub aligned_samples: i64,
     /// Bin frequencies `k fs / N`, `k = 0..=N/2`, Hz.
     pub frequency_hz: Vec<f64>,
     /// Input spectral matrix per bin.
@@ -64,6 +69,12 @@ pub struct BlockSpectra {
 }
 
 impl BlockSpectra {
+    /// [`Self::aligned_samples`] in seconds.
+    #[must_use]
+    pub fn aligned_s(&self) -> f64 {
+        self.aligned_samples as f64 / self.sample_rate_hz
+    }
+
     /// Bins between two native (un-padded) bins: `fft_len / segment_len`, at least 1. Native bin
     /// `b` is bin `b * native_step()` of the padded grid.
     #[must_use]
@@ -149,24 +160,45 @@ pub fn block_spectra(
         fft_len: Some(settings.fft_len.unwrap_or(ZERO_PAD * settings.segment_len)),
         ..*settings
     };
-    let channels: Vec<&[f64]> = signals
+    let whole: Vec<&[f64]> = signals
         .input
         .iter()
         .chain(signals.output.iter())
         .map(Vec::as_slice)
         .collect();
-    // The stretches' matrices come from the same segment transforms when the grid allows
-    // (`welch_matrix_parts`), else from a second pass.
+    let (m, parts) = record_matrix(planner, &whole, sample_rate_hz, settings)?;
+    let window = planner.window(settings.window, settings.segment_len);
+    let part = |r0: usize, c0: usize| -> Vec<Matrix3<Complex64>> {
+        (0..m.n_bins())
+            .map(|f| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]))
+            .collect()
+    };
+    // The outputs moved by whole samples where they lag the inputs enough to smear the estimate
+    // (`super::alignment`); the record's estimate again on the aligned copies.
+    let lag = alignment_lag(&part(0, 0), &part(3, 0), &part(3, 3), &window, sample_rate_hz);
+    let record_len = whole.first().map_or(0, |c| c.len());
+    let lag = if record_len.saturating_sub(lag.unsigned_abs() as usize) >= settings.segment_len {
+        lag
+    } else {
+        0
+    };
+    let (channels, start) = aligned(&whole, lag);
+    let (m, parts, lag, channels, start) = if lag == 0 {
+        (m, parts, lag, channels, start)
+    } else {
+        let (moved, moved_parts) = record_matrix(planner, &channels, sample_rate_hz, settings)?;
+        // Kept only where it brings the outputs closer to the inputs: a lag read off a
+        // distorted impulse response would smear the estimate more.
+        if super::alignment::mean_coherence(&moved) > super::alignment::mean_coherence(&m) {
+            (moved, moved_parts, lag, channels, start)
+        } else {
+            (m, parts, 0, whole.clone(), 0)
+        }
+    };
     let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
     let n_stretches = stretch_count(n_segments);
-    let (m, parts) = if n_stretches > 0 {
-        planner.welch_matrix_parts(&channels, sample_rate_hz, settings, n_stretches)?
-    } else {
-        (planner.welch_matrix(&channels, sample_rate_hz, settings)?, None)
-    };
     let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
     let bins = m.n_bins();
-    let window = planner.window(settings.window, settings.segment_len);
     let mut stretches = match parts {
         Some(parts) => stretches_of(&parts, n_segments, settings, sample_rate_hz, &window),
         None => stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?,
@@ -191,7 +223,7 @@ pub fn block_spectra(
     let n_samples = channels.first().map_or(0, |c| c.len());
     // Only where the settings' segment gives too few stretches (`finer_segment_len` says None
     // otherwise).
-    let finer_stretches = match finer_segment_len(settings, n_samples) {
+    let mut finer_stretches = match finer_segment_len(settings, n_samples) {
         Some(segment_len) => {
             let finer = WelchSettings {
                 segment_len,
@@ -206,7 +238,19 @@ pub fn block_spectra(
         }
         None => None,
     };
-    Ok(BlockSpectra {
+    let stretch_sets =
+        std::iter::once(&mut stretches).chain(finer_stretches.as_mut().map(|f| &mut f.stretches));
+    for set in stretch_sets {
+        for stretch in set.iter_mut() {
+            let moments = stretch.moments.as_ref();
+            restore_delay(&mut stretch.s_xu, lag, sample_rate_hz, |b| {
+                moments.and_then(|m| m.centroid_at(b)).map(|(fc, _)| fc)
+            });
+            stretch.span_s = stretch.span_s.map(|t| t + start as f64 / sample_rate_hz);
+        }
+    }
+    let mut spectra = BlockSpectra {
+        aligned_samples: lag,
         centroid_hz: centroids.hz,
         centroid_offset_hz: centroids.offset_hz,
         gyro_witnessed: false,
@@ -224,7 +268,30 @@ pub fn block_spectra(
         sample_rate_hz,
         fft_len: settings.nfft(),
         segment_len: settings.segment_len,
-    })
+    };
+    // Each native bin given back its delay where the fit compares it (at its centroid).
+    let mut s_xu = std::mem::take(&mut spectra.s_xu);
+    let at = |k: usize| spectra.centroid_hz.get(spectra.native_index(k)?).copied();
+    restore_delay(&mut s_xu, lag, sample_rate_hz, at);
+    spectra.s_xu = s_xu;
+    Ok(spectra)
+}
+
+/// The record's matrix of `channels` and, where the grid allows, its stretches' matrices from the
+/// same segment transforms ([`WelchPlanner::welch_matrix_parts`]; else `None`: a second pass).
+fn record_matrix(
+    planner: &mut WelchPlanner,
+    channels: &[&[f64]],
+    sample_rate_hz: f64,
+    settings: &WelchSettings,
+) -> Result<(SpectralMatrix, Option<Vec<SpectralMatrix>>), SpectralError> {
+    let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
+    let n_stretches = stretch_count(n_segments);
+    if n_stretches > 0 {
+        planner.welch_matrix_parts(channels, sample_rate_hz, settings, n_stretches)
+    } else {
+        Ok((planner.welch_matrix(channels, sample_rate_hz, settings)?, None))
+    }
 }
 
 /// The stretches from the groups' matrices of [`WelchPlanner::welch_matrix_parts`] (group `i` is

@@ -230,6 +230,7 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
                 let at = At {
                     frequency_hz: &frequency_hz,
                     offset_hz: offsets.as_deref(),
+                    aligned_s: spectra.aligned_s(),
                 };
                 fit_stretch(s, &native, spectra.native_step(), at)
             })
@@ -246,6 +247,7 @@ pub fn stationarity(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<Station
         let at = At {
             frequency_hz: &frequency_hz,
             offset_hz: None,
+            aligned_s: spectra.aligned_s(),
         };
         let fits = finer
             .stretches
@@ -392,6 +394,8 @@ pub fn compared_at(
 struct At<'a> {
     frequency_hz: &'a [f64],
     offset_hz: Option<&'a [Matrix3<Complex64>]>,
+    /// `StructuralSettings::aligned_s`.
+    aligned_s: f64,
 }
 
 /// The order-0 fit of one stretch over the native band bins (`native` indexes the padded grid,
@@ -412,6 +416,7 @@ fn fit_stretch(s: &StretchSpectra, native: &[usize], step: usize, at: At) -> Out
         tau_min_s: -STRETCH_DELAY_REACH_S,
         tau_max_s: STRETCH_DELAY_REACH_S,
         narrow_to_scatter: false,
+        aligned_s: at.aligned_s,
         ..StructuralSettings::default()
     };
     let Ok(fit) = fit_structure(&input, OrderChoice::Fixed(0), &reach) else {
@@ -596,6 +601,7 @@ mod tests {
             let at = At {
                 frequency_hz: &frequency_hz,
                 offset_hz: None,
+                aligned_s: 0.0,
             };
             match fit_stretch(&s, &native, 1, at) {
                 Outcome::Fitted(fit) => {

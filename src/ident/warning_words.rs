@@ -179,15 +179,23 @@ pub(super) fn delay_absorbed_words(
     )
 }
 
-/// The words of [`super::warnings::IdentWarning::DelayOutsideUsualRange`].
+/// The words of [`super::warnings::IdentWarning::DelayOutsideUsualRange`] (nothing for another
+/// warning).
 pub(super) fn delay_outside_words(
     f: &mut fmt::Formatter<'_>,
-    tau_s: f64,
-    usual_s: [f64; 2],
-    reach_s: f64,
-    overlap_loss: f64,
-    wider_search: bool,
+    w: &super::warnings::IdentWarning,
 ) -> fmt::Result {
+    let super::warnings::IdentWarning::DelayOutsideUsualRange {
+        tau_s,
+        usual_s,
+        reach_s,
+        overlap_loss,
+        wider_search,
+        aligned_s,
+    } = *w
+    else {
+        return Ok(());
+    };
     let ms = |s: f64| s * 1e3;
     if !wider_search {
         return write!(
@@ -215,15 +223,27 @@ pub(super) fn delay_outside_words(
             "delay {:.3} ms, outside the {:.0} to {:.0} ms a sensor's own delay is \
              searched in (found by the search to +-{:.0} ms): most likely the angles \
              and the outputs are stamped by clocks offset from each other (a logging \
-             or transport latency), which the model holds as the block's delay; the \
-             Welch estimate smears a delay this long into a misfit a model with poles \
-             may fit: where a poor fit is said too, align the streams in time and \
-             identify again",
+             or transport latency), which the model holds as the block's delay",
             ms(tau_s),
             ms(usual_s[0]),
             ms(usual_s[1]),
             ms(reach_s)
         )?;
+        if aligned_s == 0.0 {
+            write!(
+                f,
+                "; the Welch estimate smears a delay this long into a misfit a model with \
+                 poles may fit: where a poor fit is said too, align the streams in time and \
+                 identify again"
+            )?;
+        } else {
+            write!(
+                f,
+                "; the outputs were moved by {:.3} ms against the angles before the spectra \
+                 were estimated (whole samples), so the estimate is not smeared by it",
+                ms(aligned_s)
+            )?;
+        }
     }
     if overlap_loss > super::warnings::OVERLAP_LOSS_SAID {
         write!(

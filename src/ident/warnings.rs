@@ -188,6 +188,10 @@ pub enum IdentWarning {
         /// search); `false`: the chosen model's poles moved its delay out by themselves.
         #[serde(default)]
         wider_search: bool,
+        /// How far the outputs were moved before the Welch estimate (`super::alignment`), s: the
+        /// estimate smears only the rest of the delay. 0: not moved.
+        #[serde(default)]
+        aligned_s: f64,
     },
     /// The chosen model has poles and a negative delay where the delay-only model (order 0) has a
     /// positive one: its poles' lag stands in for the delay, the delay is the remainder. Such a
@@ -430,13 +434,7 @@ impl fmt::Display for IdentWarning {
                 tau_s * 1e3,
                 tau_std_s * 1e3
             ),
-            IdentWarning::DelayOutsideUsualRange {
-                tau_s,
-                usual_s,
-                reach_s,
-                overlap_loss,
-                wider_search,
-            } => delay_outside_words(f, *tau_s, *usual_s, *reach_s, *overlap_loss, *wider_search),
+            w @ IdentWarning::DelayOutsideUsualRange { .. } => delay_outside_words(f, w),
             IdentWarning::DelayAbsorbedByPoles {
                 order,
                 tau_s,

@@ -129,6 +129,7 @@ mod tests {
             })
             .collect();
         BlockSpectra {
+            aligned_samples: 0,
             frequency_hz,
             s_uu: Vec::new(),
             s_xu: Vec::new(),

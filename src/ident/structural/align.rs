@@ -35,12 +35,15 @@ const PASSES: usize = 3;
 /// passes, rad.
 const SETTLED_RAD: f64 = 1e-6;
 
-/// `dW/df` of `N(s) / d(s) e^(-tau s)` at `f_hz`, per Hz (`s = j 2 pi f`).
+/// `dW/df` of `N(s) / d(s) e^(-tau s)` at `f_hz`, per Hz (`s = j 2 pi f`), with the delay's own
+/// slope for `tau_s - aligned_s` only (the part of the delay an aligned estimate smears,
+/// `StructuralSettings::aligned_s`; 0: the whole slope).
 #[must_use]
 pub fn rational_slope(
     numerator: &[[[f64; 3]; 3]],
     denominator: &[f64],
     tau_s: f64,
+    aligned_s: f64,
     f_hz: f64,
 ) -> Matrix3<Complex64> {
     let ds = Complex64::new(0.0, 2.0 * std::f64::consts::PI);
@@ -65,30 +68,40 @@ pub fn rational_slope(
             p *= s;
         }
         let ratio = n / d;
-        (n1 / d - n * d1 / (d * d) - ratio * tau_s) * delay * ds
+        (n1 / d - n * d1 / (d * d) - ratio * (tau_s - aligned_s)) * delay * ds
     })
 }
 
 impl StructuralFit {
     /// The model as an estimate whose columns lie at offsets `offset_hz` about `f_hz` sees it,
-    /// `W(f) + W'(f) G` (module docs); `W(f)` without an offset.
+    /// `W(f) + W'(f) G` (module docs; the delay's slope less `aligned_s`, [`rational_slope`]);
+    /// `W(f)` without an offset.
     #[must_use]
-    pub fn response_seen(&self, f_hz: f64, offset_hz: Option<&Matrix3<Complex64>>) -> Matrix3<Complex64> {
+    pub fn response_seen(
+        &self,
+        f_hz: f64,
+        offset_hz: Option<&Matrix3<Complex64>>,
+        aligned_s: f64,
+    ) -> Matrix3<Complex64> {
         let at = self.response(f_hz);
         match offset_hz {
-            Some(g) => at + rational_slope(&self.numerator, &self.denominator, self.tau_s, f_hz) * g,
+            Some(g) => {
+                at + rational_slope(&self.numerator, &self.denominator, self.tau_s, aligned_s, f_hz) * g
+            }
             None => at,
         }
     }
 }
 
 /// `input`'s estimate moved to its bins' frequencies by the order-0 model `K e^(-tau s)`:
-/// `H - W'(f) G` per bin, `W'(f) = -j 2 pi tau K e^(-j 2 pi f tau)`.
+/// `H - W'(f) G` per bin, `W'(f) = -j 2 pi (tau - aligned) K e^(-j 2 pi f tau)` (the slope of
+/// the delay the estimate smears, `StructuralSettings::aligned_s`).
 fn moved(
     input: &ResponseEstimate,
     offsets: &[Matrix3<Complex64>],
     k: &[f64; super::model::ELEMENTS],
     tau: f64,
+    aligned: f64,
 ) -> Vec<Matrix3<Complex64>> {
     let gain = Matrix3::from_fn(|i, j| Complex64::from(k[3 * i + j]));
     input
@@ -98,8 +111,8 @@ fn moved(
         .zip(offsets)
         .map(|((h, &f), g)| {
             let phase = -2.0 * std::f64::consts::PI * f * tau;
-            let slope =
-                Complex64::new(0.0, -2.0 * std::f64::consts::PI * tau) * Complex64::from_polar(1.0, phase);
+            let slope = Complex64::new(0.0, -2.0 * std::f64::consts::PI * (tau - aligned))
+                * Complex64::from_polar(1.0, phase);
             h - gain * slope * g
         })
         .collect()
@@ -141,7 +154,7 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
         finite.then_some((model, data))
     };
     let (mut model, mut data) = order0(input.response, None)?;
-    let mut response = moved(input, offsets, &model.num[0], model.tau);
+    let mut response = moved(input, offsets, &model.num[0], model.tau, settings.aligned_s);
     for _ in 0..PASSES {
         let Some((next, next_data)) = order0(&response, Some(model.tau)) else {
             break;
@@ -150,7 +163,7 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
         // move changes by less than that fraction of itself.
         let settled = (next.tau - model.tau).abs() * next_data.omega_ref <= SETTLED_RAD;
         (model, data) = (next, next_data);
-        response = moved(input, offsets, &model.num[0], model.tau);
+        response = moved(input, offsets, &model.num[0], model.tau, settings.aligned_s);
         if settled {
             break;
         }
@@ -212,7 +225,7 @@ mod tests {
                 let diff = (rational_response(numerator, denominator, 0.0042, f + h)
                     - rational_response(numerator, denominator, 0.0042, f - h))
                     / Complex64::from(2.0 * h);
-                let slope = rational_slope(numerator, denominator, 0.0042, f);
+                let slope = rational_slope(numerator, denominator, 0.0042, 0.0, f);
                 assert!(
                     (diff - slope).norm() < 1e-7 * slope.norm().max(1e-3),
                     "{f} Hz: {:e}",

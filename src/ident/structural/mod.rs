@@ -192,6 +192,10 @@ pub struct StructuralSettings {
     /// less than they say (`scatter`). Off for fits whose deviations serve as floors (the
     /// stationarity stretches).
     pub narrow_to_scatter: bool,
+    /// The part of the delay, s, that the estimate does not smear over a bin: the outputs were
+    /// moved by it before the Welch estimate ([`crate::ident::alignment`]), so an estimate
+    /// compared at its inputs' centroid (`align`) holds only the remaining delay's slope. 0: none.
+    pub aligned_s: f64,
 }
 
 impl Default for StructuralSettings {
@@ -204,6 +208,7 @@ impl Default for StructuralSettings {
             bin_correlation: 1.0,
             held_out_chi2: None,
             narrow_to_scatter: true,
+            aligned_s: 0.0,
         }
     }
 }

@@ -31,8 +31,10 @@ fn config(regime: Regime, latency_s: f64, seed: u64) -> SimConfig {
 }
 
 /// The gyro's delay within 50 us and five of its deviations of the sensor's less the angles'
-/// latency, its `K` within 0.3 % of the true one; the accelerometer's delay within 50 us; the
-/// gyro's outputs moved by the whole samples of its delay before the spectra.
+/// latency, its `K` within 0.3 % of the true one; the accelerometer's delay within 50 us and its
+/// `K` within 0.5 % (on runs of 120 s its error reaches 0.43 % without a latency, README); the
+/// gyro's outputs moved by the whole samples of its delay before the spectra. (The 250 ms run:
+/// the witness moved by a phase turn after its window gave the gyro's `K` 0.82 % off.)
 #[test]
 fn late_angles_leave_the_gyro_s_gain_and_both_delays_right() {
     let cases = [
@@ -40,6 +42,7 @@ fn late_angles_leave_the_gyro_s_gain_and_both_delays_right() {
         (Regime::Approach, 0.1, 5),
         (Regime::Cruise, 0.2, 3),
         (Regime::TurbulentCruise, 0.15, 6),
+        (Regime::Approach, 0.25, 8),
     ];
     for (regime, latency_s, seed) in cases {
         let (sim, run) = sim_common::simulated_run(&config(regime, latency_s, seed));
@@ -54,7 +57,11 @@ fn late_angles_leave_the_gyro_s_gain_and_both_delays_right() {
             let label = format!("{regime:?} {latency_s} s seed {seed} {:?}", b.block);
             eprintln!("{label}: tau {} (expected {expected})", fit.tau_s);
             assert!((fit.tau_s - expected).abs() < 5e-5, "{label}: tau {}", fit.tau_s);
+            let matrix = |k: &[[f64; 3]; 3]| nalgebra::Matrix3::from_fn(|i, j| k[i][j]);
+            let rel = (matrix(&fit.k) - matrix(&truth.k)).norm() / matrix(&truth.k).norm();
+            eprintln!("{label}: K off by {:.3} %", rel * 100.0);
             if b.block != Block::Gyro {
+                assert!(rel < 5e-3, "{label}: K off by {:.3} %", rel * 100.0);
                 continue;
             }
             assert!(
@@ -63,9 +70,6 @@ fn late_angles_leave_the_gyro_s_gain_and_both_delays_right() {
                 fit.tau_s,
                 fit.tau_std_s
             );
-            let matrix = |k: &[[f64; 3]; 3]| nalgebra::Matrix3::from_fn(|i, j| k[i][j]);
-            let rel = (matrix(&fit.k) - matrix(&truth.k)).norm() / matrix(&truth.k).norm();
-            eprintln!("{label}: K off by {:.3} %", rel * 100.0);
             assert!(rel < 3e-3, "{label}: K off by {:.3} %", rel * 100.0);
         }
         let mut session = Session::new(Arc::new(run));

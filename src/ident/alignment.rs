@@ -20,11 +20,12 @@
 //! consumer of the spectra sees the block's whole delay as before, with no overlap loss beyond the
 //! remaining lag. The inputs' and outputs' copies are both cut to their common length (`|l|`
 //! samples fewer), the stretches' times are the inputs'; an alignment that lowers the outputs'
-//! mean coherence with the inputs is dropped ([`mean_coherence`]).
+//! coherence with the inputs where they are coherent is dropped ([`coherence_gain`]).
 //!
 //! **The lag** is the peak of `sum_ij |h_ij(l)|^2` over `|l| <= ` [`ALIGN_REACH_S`] (the identifier's
 //! widest delay search), `h(l) = sum_k w_k H1(f_k) e^(i 2 pi k l / M)` the coherence-weighted
-//! impulse response of the `H1 = S_xu S_uu^-1` estimate on the padded grid of `M` points (`w_k`
+//! impulse response of the `H1 = S_xu (S_uu + e I)^-1` estimate on the padded grid (`e` a
+//! [`REGULARISATION`] share of the inputs' mean power) of `M` points (`w_k`
 //! the bin's mean multiple coherence, squared: noise bins count little). `H1` takes the inputs'
 //! own cross-spectra out, and the squared magnitude over every pair is blind to the axes' order
 //! and signs (a triad mounted turned still peaks at its delay). A lag is applied only where it
@@ -51,6 +52,10 @@ pub const ALIGN_REACH_S: f64 = STRETCH_DELAY_REACH_S;
 /// thousandth of a percent on the gain, 5 samples on a segment of 4096 (10 ms at 500 Hz); the
 /// sensors' own delays of a few samples are left as they are (their spectra unchanged to the bit).
 pub const MIN_OVERLAP_LOSS: f64 = 1e-5;
+
+/// The share of the inputs' mean power added to each direction's before `S_uu` is inverted for
+/// the impulse response: a direction weaker than this is all but left out of it.
+pub const REGULARISATION: f64 = 0.01;
 
 /// How many times the score at lag 0 the peak must reach for a lag to be applied. A broad-band
 /// input of coherent bandwidth `B` has a peak `1 / B` wide: its score at a lag of `0.75 / B` from
@@ -96,25 +101,35 @@ pub fn alignment_lag(
     if clear && matters { lag } else { 0 }
 }
 
-/// The mean over the bins between DC and Nyquist of the outputs' mean multiple coherence with
-/// the inputs, in a 6x6 matrix of `[u; x]`: what a right alignment raises (the segments'
-/// overlap loss gone) and a wrong one lowers. 0 for no such bin.
+/// The smallest mean multiple coherence of a bin [`coherence_gain`] compares: below, a bin's
+/// coherence is mostly its estimate's noise, which the two estimates' different segments move by
+/// more than an alignment does.
+pub const COHERENT: f64 = 0.5;
+
+/// What aligning the outputs did to their coherence with the inputs, in two 6x6 matrices of
+/// `[u; x]` on one grid (`first` before, `moved` after): the sum over the bins between DC and
+/// Nyquist where `first`'s mean multiple coherence is at least [`COHERENT`] of the change in its
+/// square. A right alignment raises it (the segments' overlap loss gone), a wrong one lowers it.
+/// 0 for no such bin or different grids.
 #[must_use]
-pub fn mean_coherence(m: &SpectralMatrix) -> f64 {
-    let bins = m.n_bins();
-    if bins < 3 || m.n_channels < 6 {
+pub fn coherence_gain(first: &SpectralMatrix, moved: &SpectralMatrix) -> f64 {
+    let bins = first.n_bins();
+    if bins < 3 || moved.n_bins() != bins || first.n_channels < 6 || moved.n_channels < 6 {
         return 0.0;
     }
-    let part = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
-    let total: f64 = (1..bins - 1)
-        .map(|f| {
-            coherence_of(&part(f, 0, 0), &part(f, 3, 0), &part(f, 3, 3))
-                .iter()
-                .sum::<f64>()
-                / 3.0
+    let mean = |m: &SpectralMatrix, f: usize| {
+        let part = |r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
+        coherence_of(&part(0, 0), &part(3, 0), &part(3, 3))
+            .iter()
+            .sum::<f64>()
+            / 3.0
+    };
+    (1..bins - 1)
+        .filter_map(|f| {
+            let before = mean(first, f);
+            (before >= COHERENT).then(|| mean(moved, f).powi(2) - before.powi(2))
         })
-        .sum();
-    total / (bins - 2) as f64
+        .sum()
 }
 
 /// `sum_ij |h_ij(l)|^2` at every lag `l` of the grid (index `l mod M`), or `None` for no coherent
@@ -132,8 +147,13 @@ fn score(
     for k in 1..bins - 1 {
         let coherence = coherence_of(&s_uu[k], &s_xu[k], &s_xx[k]);
         let w = (coherence.iter().sum::<f64>() / 3.0).powi(2);
-        let h1 = (s_uu[k] + s_uu[k].adjoint()) * Complex64::from(0.5);
-        let Some(inverse) = h1.try_inverse() else { continue };
+        // Regularised: a weak input direction (an accelerometer's, along its lever arm) would
+        // put its noise-amplified column above every other.
+        let power = (s_uu[k] + s_uu[k].adjoint()) * Complex64::from(0.5);
+        let floor = REGULARISATION * power.trace().re / 3.0;
+        let Some(inverse) = (power + Matrix3::identity() * Complex64::from(floor)).try_inverse() else {
+            continue;
+        };
         let h = s_xu[k] * inverse * Complex64::from(w);
         if w > 0.0 && h.iter().all(|z| z.is_finite()) {
             weighted[k] = h;

@@ -189,7 +189,7 @@ pub fn block_spectra(
         let (moved, moved_parts) = record_matrix(planner, &channels, sample_rate_hz, settings)?;
         // Kept only where it brings the outputs closer to the inputs: a lag read off a
         // distorted impulse response would smear the estimate more.
-        if super::alignment::mean_coherence(&moved) > super::alignment::mean_coherence(&m) {
+        if super::alignment::coherence_gain(&m, &moved) > 0.0 {
             (moved, moved_parts, lag, channels, start)
         } else {
             (m, parts, 0, whole.clone(), 0)

@@ -168,14 +168,18 @@ fn witness_angles(rates: &[f64], sample_rate_hz: f64) -> Vec<f64> {
     remove_line(&angle, sample_rate_hz).2
 }
 
-/// Half-width, in bins of the record's transform, of the window over which [`align`] smooths the
-/// coherency: a few hundredths of a hertz on a record of minutes (a delay of 0.3 s turns the phase
-/// across it by a fifth of a radian).
-const ALIGN_HALF_WIDTH: usize = 15;
+/// Half-width, Hz, of the window over which [`align`] smooths the coherency (a delay of 0.3 s
+/// turns the phase across it by a fifth of a radian), as whole bins of the stretch's transform
+/// between [`ALIGN_MIN_BINS`] and [`ALIGN_MAX_BINS`].
+const ALIGN_HALF_WIDTH_HZ: f64 = 0.05;
+/// Fewest bins on either side of [`align`]'s window (the coherency of fewer is mostly noise).
+const ALIGN_MIN_BINS: usize = 2;
+/// Most bins on either side of [`align`]'s window.
+const ALIGN_MAX_BINS: usize = 15;
 
 /// Advances the witness's spectra `w` by its bulk delay behind the angles' `y`: the peak of their
 /// summed cross-correlation with each bin weighted by the squared coherency over
-/// [`ALIGN_HALF_WIDTH`] bins on either side and divided by the two signals' smoothed power
+/// [`ALIGN_HALF_WIDTH_HZ`] on either side and divided by the two signals' smoothed power
 /// (a generalised cross-correlation, "SCOT" with coherence weighting), refined by a parabola. A
 /// delay left in would turn the phase across a smoothing window and leak motion into the
 /// unexplained part. The plain cross-correlation is dominated by the slowest motion, whose peak
@@ -185,6 +189,8 @@ const ALIGN_HALF_WIDTH: usize = 15;
 fn align(w: &mut [Vec<Complex64>; 3], y: &[Vec<Complex64>; 3], fft: &mut RecordFft) -> f64 {
     let rate = fft.sample_rate_hz();
     let bins = fft.n_bins();
+    let df = rate / fft.len() as f64;
+    let half = ((ALIGN_HALF_WIDTH_HZ / df).round() as usize).clamp(ALIGN_MIN_BINS, ALIGN_MAX_BINS);
     let raw: Vec<Complex64> = (0..bins)
         .map(|k| (0..3).map(|a| y[a][k] * w[a][k].conj()).sum())
         .collect();
@@ -197,10 +203,7 @@ fn align(w: &mut [Vec<Complex64>; 3], y: &[Vec<Complex64>; 3], fft: &mut RecordF
     }
     let cross: Vec<Complex64> = (0..bins)
         .map(|k| {
-            let (lo, hi) = (
-                k.saturating_sub(ALIGN_HALF_WIDTH),
-                (k + ALIGN_HALF_WIDTH + 1).min(bins),
-            );
+            let (lo, hi) = (k.saturating_sub(half), (k + half + 1).min(bins));
             let (c, py, pw) = (
                 sums[hi].0 - sums[lo].0,
                 sums[hi].1 - sums[lo].1,
@@ -410,19 +413,24 @@ fn stretch_noise(
     let mut fft = RecordFft::new(fast_len(n), rate);
     let fft = &mut fft;
     let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, rate).2, fft.len())));
-    let spectra = |fft: &mut RecordFft, angles: [&[f64]; 3]| {
+    // `shift`: samples by which the witness is moved later before it is windowed.
+    let spectra = |fft: &mut RecordFft, angles: [&[f64]; 3], shift: f64| {
         let euler = witness_euler_rates(angles, body_rates);
         let len = fft.len();
-        euler.map(|r| fft.forward(&hann_windowed(&witness_angles(&r, rate), len)))
+        euler.map(|r| fft.forward(&hann_windowed(&delayed(&witness_angles(&r, rate), shift), len)))
     };
     // The gyro's rates are late by its delay: converted at the angles of the same instant, a fast
     // rotation turns the attitude within the delay and the conversion itself leaks. So: the
-    // delay from a first conversion, then the conversion at the angles that much earlier.
-    let mut first = spectra(fft, angles);
+    // delay from a first conversion, then the conversion at the angles that much earlier, the
+    // witness moved by the delay before it is windowed (moved after, by a phase turn, its window
+    // no longer matches the angles' by the delay over the stretch's length: with the angles
+    // 250 ms late on stretches of 24 s, a thousandth of the angles' power left unexplained, taken
+    // for their noise, and the gyro's `K` 0.8 % high), then any rest by a phase turn.
+    let mut first = spectra(fft, angles, 0.0);
     let delay_s = align(&mut first, &y, fft);
     drop(first);
     let late = angles.map(|a| delayed(a, delay_s * rate));
-    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice));
+    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice), -delay_s * rate);
     align(&mut w, &y, fft);
     // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
     // stretch's equivalent number of independent samples, spread over the grid's bins.

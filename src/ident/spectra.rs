@@ -168,14 +168,10 @@ pub fn block_spectra(
         .collect();
     let (m, parts) = record_matrix(planner, &whole, sample_rate_hz, settings)?;
     let window = planner.window(settings.window, settings.segment_len);
-    let part = |r0: usize, c0: usize| -> Vec<Matrix3<Complex64>> {
-        (0..m.n_bins())
-            .map(|f| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]))
-            .collect()
-    };
+    let (s_uu, s_xu, s_xx) = (part(&m, 0, 0), part(&m, 3, 0), part(&m, 3, 3));
     // The outputs moved by whole samples where they lag the inputs enough to smear the estimate
     // (`super::alignment`); the record's estimate again on the aligned copies.
-    let lag = alignment_lag(&part(0, 0), &part(3, 0), &part(3, 3), &window, sample_rate_hz);
+    let lag = alignment_lag(&s_uu, &s_xu, &s_xx, &window, sample_rate_hz);
     let record_len = whole.first().map_or(0, |c| c.len());
     let lag = if record_len.saturating_sub(lag.unsigned_abs() as usize) >= settings.segment_len {
         lag
@@ -183,22 +179,22 @@ pub fn block_spectra(
         0
     };
     let (channels, start) = aligned(&whole, lag);
-    let (m, parts, lag, channels, start) = if lag == 0 {
-        (m, parts, lag, channels, start)
+    // The first estimate's blocks are kept unless the aligned estimate replaces them.
+    let (m, parts, lag, channels, start, (s_uu, s_xu, s_xx)) = if lag == 0 {
+        (m, parts, lag, channels, start, (s_uu, s_xu, s_xx))
     } else {
         let (moved, moved_parts) = record_matrix(planner, &channels, sample_rate_hz, settings)?;
         // Kept only where it brings the outputs closer to the inputs: a lag read off a
         // distorted impulse response would smear the estimate more.
         if super::alignment::coherence_gain(&m, &moved) > 0.0 {
-            (moved, moved_parts, lag, channels, start)
+            let blocks = (part(&moved, 0, 0), part(&moved, 3, 0), part(&moved, 3, 3));
+            (moved, moved_parts, lag, channels, start, blocks)
         } else {
-            (m, parts, 0, whole.clone(), 0)
+            (m, parts, 0, whole.clone(), 0, (s_uu, s_xu, s_xx))
         }
     };
     let n_segments = settings.n_segments(channels.first().map_or(0, |c| c.len()));
     let n_stretches = stretch_count(n_segments);
-    let block = |f: usize, r0: usize, c0: usize| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]);
-    let bins = m.n_bins();
     let mut stretches = match parts {
         Some(parts) => stretches_of(&parts, n_segments, settings, sample_rate_hz, &window),
         None => stretch_spectra(planner, &channels, sample_rate_hz, settings, &window)?,
@@ -259,9 +255,9 @@ pub fn block_spectra(
         stationarity_cache: StationarityCache::default(),
         held_out_cache: super::holdout::HeldOutCache::default(),
         frequency_hz: m.frequency_hz.clone(),
-        s_uu: (0..bins).map(|f| block(f, 0, 0)).collect(),
-        s_xu: (0..bins).map(|f| block(f, 3, 0)).collect(),
-        s_xx: (0..bins).map(|f| block(f, 3, 3)).collect(),
+        s_uu,
+        s_xu,
+        s_xx,
         n_averages: m.n_averages,
         equivalent_averages: equivalent_averages(&window, settings.step(), m.n_averages),
         bin_correlation: bin_correlation(&window),
@@ -275,6 +271,14 @@ pub fn block_spectra(
     restore_delay(&mut s_xu, lag, sample_rate_hz, at);
     spectra.s_xu = s_xu;
     Ok(spectra)
+}
+
+/// The `3 x 3` block of `m` from row `r0` and column `c0` at every bin (`[u; x]`: `(0, 0)` the
+/// inputs' `S_uu`, `(3, 0)` `S_xu`, `(3, 3)` `S_xx`).
+fn part(m: &SpectralMatrix, r0: usize, c0: usize) -> Vec<Matrix3<Complex64>> {
+    (0..m.n_bins())
+        .map(|f| Matrix3::from_fn(|i, j| m[(f, r0 + i, c0 + j)]))
+        .collect()
 }
 
 /// The record's matrix of `channels` and, where the grid allows, its stretches' matrices from the

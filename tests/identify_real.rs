@@ -13,19 +13,15 @@ use imu_attest::ident::structural::admissible::Rejection;
 use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::run::{LoadOptions, Run, load, load_bytes};
 use imu_attest::spectral::WelchSettings;
+#[path = "common/real.rs"]
+mod real_common;
+use real_common::{k_error, real};
 
 const RUNS: [&str; 3] = [
     "broad07_fast_rotation",
     "broad11_slow_translation",
     "broad25_tapping",
 ];
-
-fn real(name: &str) -> Run {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/real")
-        .join(format!("{name}.csv.gz"));
-    load(&path, &LoadOptions::default()).expect("the real run loads")
-}
 
 fn gyro(run: &Run, settings: &Settings) -> BlockIdentification {
     let mut id = identify_run(run, settings).expect("identified");
@@ -51,12 +47,7 @@ fn defaults_give_the_known_gain_and_delay_on_every_real_run() {
     for name in RUNS {
         let b = gyro(&real(name), &Settings::default());
         let s = &b.structural;
-        let k_err = (0..3)
-            .flat_map(|i| (0..3).map(move |j| (i, j)))
-            .map(|(i, j)| (s.k[i][j] - f64::from(u8::from(i == j))).powi(2))
-            .sum::<f64>()
-            .sqrt()
-            / 3f64.sqrt();
+        let k_err = k_error(&s.k);
         eprintln!(
             "{name}: order {}, band {:?}, tau {:.3} +- {:.3} ms, |K - I|/|I| {k_err:.4}, warnings {:?}",
             s.order,

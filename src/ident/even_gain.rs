@@ -10,15 +10,20 @@
 //! fit when it is delay-only and the first fit's poles do not explain the data better (the
 //! information criterion of both on the same data, `g`'s two coefficients counted: a sensor's lag
 //! bends the gain and the phase together, and `g` then takes the gain's bend while the delay
-//! takes its phase, a worse fit; [`poles_explain_better`]): its `K` is then the gain at low
+//! takes its phase, a worse fit; [`poles_margin`]): its `K` is then the gain at low
 //! frequency, its model `g K e^(-tau s)`, and its deviations widened in quadrature by what `g`'s
 //! own uncertainty moves `K` by, and never below the delay-only fit's (widened by that fit's
 //! misfit: `g`'s two-term shape is an assumption, and on simulated runs with a 120 Hz linearly
 //! interpolated reference the accelerometer's `K` kept a third of its bias, 2.1 of the narrower
 //! deviations rms). When
 //! the fit over `g` still needs poles, the dynamics are the block's (a sensor's low-pass also
-//! bends the gain, with phase): the first fit is kept, as fitted. A fixed order above 0 is the
-//! user's structure and is left alone.
+//! bends the gain, with phase): the first fit is kept, as fitted. When the first fit's poles win
+//! on the criterion alone, they are kept and `poles_or_even_gain` says so with the delay the fit
+//! over `g` gives: the two differ by the poles' lag, and only the margin tells them apart (the
+//! real run `broad07` with its gyro written 6 samples late, a 25 ms delay: order 3 at 11.4 ms,
+//! its criterion 7 below the fit over `g` at 25.2 ms, said by nothing before; at the recording's
+//! own 4.2 ms the order-3 fit's delay is negative and the rules reject it). A fixed order above
+//! 0 is the user's structure and is left alone.
 //!
 //! Units as [`super::gain_curvature`]: `omega` in rad/s, `K` dimensionless. Nothing here panics
 //! on any input; a check that cannot be made (no bins, no information) leaves the fit as it was.
@@ -126,9 +131,16 @@ pub fn over_even_gain(
     ) else {
         return Ok(unchanged(fit, said));
     };
-    if over.order > 0 || poles_explain_better(&fit, &over, &even, spectra.bin_correlation) {
-        // Poles over the even gain too, or poles that explain the gain's change better than the
-        // even gain does (with its phase): the block's own dynamics, its fit as fitted.
+    let margin = poles_margin(&fit, &over, &even, spectra.bin_correlation);
+    if over.order > 0 {
+        // Poles over the even gain too: the block's own dynamics, its fit as fitted.
+        return Ok(unchanged(fit, said));
+    }
+    if let Some(margin) = margin.filter(|m| *m > 0.0) {
+        // Poles that explain the gain's change better than the even gain does (with its phase):
+        // kept, and said, with the delay the even gain would give (the two are told apart by
+        // the margin alone).
+        let said = poles_or_even_gain(&fit, &widened(&over), &warning, margin);
         return Ok(unchanged(fit, said));
     }
     let mut over = widened(&over);
@@ -185,8 +197,33 @@ pub fn over_even_gain(
     })
 }
 
-/// Whether `first`, a fit with poles, explains the block's estimate better than `over`, the
-/// delay-only fit over the even gain `even`: the selection's information criterion
+/// `poles_or_even_gain`: the kept fit with poles `first`, the delay-only fit over the even gain
+/// `over` (deviations widened as reported), the gain's change as `gain_changes_across_band`
+/// said it, and the criterion's margin of `first` over `over`.
+fn poles_or_even_gain(
+    first: &StructuralFit,
+    over: &StructuralFit,
+    change: &IdentWarning,
+    margin: f64,
+) -> Option<IdentWarning> {
+    let IdentWarning::GainChangesAcrossBand { rise, band_hz, .. } = *change else {
+        return None;
+    };
+    Some(IdentWarning::PolesOrEvenGain {
+        order: first.order,
+        tau_s: first.tau_s,
+        tau_std_s: first.tau_std_s,
+        even_tau_s: over.tau_s,
+        even_tau_std_s: over.tau_std_s,
+        rise,
+        band_hz,
+        margin,
+    })
+}
+
+/// How much better `first`, a fit with poles, explains the block's estimate than `over`, the
+/// delay-only fit over the even gain `even` (positive: `first` better): the difference of the
+/// selection's information criterion
 /// ([`criterion_value`], BIC; the bins' correlation and the overdispersion of the better of the
 /// two discounted as in the selection) with `g`'s coefficients counted among `over`'s
 /// parameters. Both chi2 are of the same estimate `W_u` with the same row weights (`over`'s is
@@ -195,19 +232,17 @@ pub fn over_even_gain(
 /// gain's bend is narrowed more, which leans the comparison towards the poles. Measured on 126
 /// simulated runs with slower or band-limited references (a reviewer's campaign): the fit over
 /// `g` kept wherever the first fit had admissible poles without a sensor filter (won by 90 on the
-/// criterion in the one such block). A delay-only `first` never is.
-fn poles_explain_better(
+/// criterion in the one such block). `None` for a delay-only `first` or figures missing.
+fn poles_margin(
     first: &StructuralFit,
     over: &StructuralFit,
     even: &EvenGain,
     bin_correlation: f64,
-) -> bool {
+) -> Option<f64> {
     let chosen = |fit: &StructuralFit| fit.candidates.iter().find(|c| c.order == fit.order).cloned();
-    let (Some(a), Some(b)) = (chosen(first), chosen(over)) else {
-        return false;
-    };
+    let (a, b) = (chosen(first)?, chosen(over)?);
     if first.order == 0 || !(a.chi2.is_finite() && b.chi2.is_finite()) {
-        return false;
+        return None;
     }
     let b_parameters = b.parameters + even.coefficients.len();
     let real_data = first.dof + a.parameters;
@@ -220,5 +255,5 @@ fn poles_explain_better(
     let effective_data = ((real_data as f64 / correlation) as usize).max(1);
     let criterion =
         |chi2: f64, p: usize| criterion_value(InformationCriterion::Bic, chi2 / scale, p, effective_data);
-    criterion(a.chi2, a.parameters) < criterion(b.chi2, b_parameters)
+    Some(criterion(b.chi2, b_parameters) - criterion(a.chi2, a.parameters))
 }

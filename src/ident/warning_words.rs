@@ -179,6 +179,45 @@ pub(super) fn delay_absorbed_words(
     )
 }
 
+/// The words of [`super::warnings::IdentWarning::PolesOrEvenGain`] (nothing for another warning).
+pub(super) fn poles_or_even_gain_words(
+    f: &mut fmt::Formatter<'_>,
+    w: &super::warnings::IdentWarning,
+) -> fmt::Result {
+    let super::warnings::IdentWarning::PolesOrEvenGain {
+        order,
+        tau_s,
+        tau_std_s,
+        even_tau_s,
+        even_tau_std_s,
+        rise,
+        band_hz,
+        margin,
+    } = *w
+    else {
+        return Ok(());
+    };
+    write!(
+        f,
+        "the gain {} by {} from {:.2} to {:.1} Hz, and the order-{order} model takes the change \
+         for the block's dynamics: its delay is {:.3} ms (+- {:.3} ms), its poles' lag standing in \
+         for the rest; the delay-only model over an even gain (the reference's band limit: angles \
+         interpolated from a slower rate, or smoothed) gives {:.3} ms (+- {:.3} ms) and explains \
+         the data less well by {margin:.1} on the information criterion. A band-limited reference \
+         and a filter in the block are told apart only by that margin: if the block has no filter \
+         of its own, fix the order to 0 (K is then the gain at low frequency, the model carrying \
+         the even gain)",
+        if rise >= 0.0 { "rises" } else { "falls" },
+        relative(rise.abs()),
+        band_hz[0],
+        band_hz[1],
+        tau_s * 1e3,
+        tau_std_s * 1e3,
+        even_tau_s * 1e3,
+        even_tau_std_s * 1e3,
+    )
+}
+
 /// The words of [`super::warnings::IdentWarning::DelayOutsideUsualRange`] (nothing for another
 /// warning).
 pub(super) fn delay_outside_words(

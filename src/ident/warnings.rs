@@ -24,8 +24,8 @@ use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::warning_words::{
     angle_noise_colour_unknown_words, angle_noise_overstated_words, delay_absorbed_words,
-    delay_outside_words, delay_step_words, gain_change_words, write_stretches_without_delay,
-    zeros_lead_words,
+    delay_outside_words, delay_step_words, gain_change_words, poles_or_even_gain_words,
+    write_stretches_without_delay, zeros_lead_words,
 };
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
@@ -206,6 +206,32 @@ pub enum IdentWarning {
         tau_std_s: f64,
         /// The delay of the order-0 candidate, s.
         delay_only_tau_s: f64,
+    },
+    /// The block's gain changes across the band with no phase of its own
+    /// (`gain_changes_across_band` on the delay-only model's residual) and the chosen model takes
+    /// the change as dynamics: its poles explain the estimate better, on the information
+    /// criterion, than the delay-only model over an even gain (`super::even_gain`), so they are
+    /// kept, and their lag at low frequency trades with the delay. A band-limited reference
+    /// bends the gain the same way; where the block has no filter of its own the delay-only
+    /// model's delay is the block's, and the chosen model's is not.
+    PolesOrEvenGain {
+        /// The chosen order.
+        order: usize,
+        /// Its delay, s.
+        tau_s: f64,
+        /// Its standard deviation, s.
+        tau_std_s: f64,
+        /// The delay of the delay-only model over the even gain, s.
+        even_tau_s: f64,
+        /// Its standard deviation, s.
+        even_tau_std_s: f64,
+        /// The gain's change from the band's bottom to its top, relative.
+        rise: f64,
+        /// The band, Hz.
+        band_hz: [f64; 2],
+        /// How much lower the chosen model's information criterion is than the delay-only model's
+        /// over the even gain (the even gain's coefficients counted), in the criterion's units.
+        margin: f64,
     },
     /// The chosen model's zeros lead at low frequency, beyond three of their deviations' bound: a
     /// sensor's filters do not lead, an angle measurement that lags the motion (filtered or
@@ -435,6 +461,7 @@ impl fmt::Display for IdentWarning {
                 tau_std_s * 1e3
             ),
             w @ IdentWarning::DelayOutsideUsualRange { .. } => delay_outside_words(f, w),
+            w @ IdentWarning::PolesOrEvenGain { .. } => poles_or_even_gain_words(f, w),
             IdentWarning::DelayAbsorbedByPoles {
                 order,
                 tau_s,

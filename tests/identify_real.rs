@@ -647,7 +647,7 @@ fn the_overlap_loss_is_the_hann_window_s_closed_form() {
 /// overlap loss named only above a tenth of a percent.
 #[test]
 fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() {
-    let warning = |tau_s: f64, overlap_loss: f64| {
+    let whose = |tau_s: f64, overlap_loss: f64, model_tau_s: Option<f64>| {
         IdentWarning::DelayOutsideUsualRange {
             tau_s,
             usual_s: [-0.020, 0.050],
@@ -655,9 +655,19 @@ fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() 
             overlap_loss,
             wider_search: true,
             aligned_s: 0.0,
+            model_tau_s,
         }
         .to_string()
     };
+    let warning = |tau_s: f64, overlap_loss: f64| whose(tau_s, overlap_loss, None);
+    // The delay-only model's delay outside, the chosen model's inside: both named, each as whose.
+    let traded = whose(0.060, 1e-5, Some(0.046));
+    assert!(
+        traded.contains("the delay-only model's delay, 60.000 ms")
+            && traded.contains("the chosen model's is 46.000 ms"),
+        "{traded}"
+    );
+    assert!(!warning(0.12, 5e-4).contains("chosen model"));
     let end = warning(-0.2999, 0.004);
     assert!(
         end.contains("end of the widest search") && !end.contains("clocks"),

@@ -115,6 +115,17 @@ fn poles_kept_over_the_even_gain_are_said_with_its_delay() {
         "the poles' lag traded: {tau_s} +- {tau_std_s} against {even_tau_s}"
     );
     assert!(margin > 0.0, "kept because the poles won: {margin}");
+    // The delay outside the usual range is the delay-only model's, and said so beside the
+    // chosen model's own (inside the range).
+    assert!(
+        b.warnings.iter().any(|w| matches!(
+            w,
+            IdentWarning::DelayOutsideUsualRange { tau_s: outside, model_tau_s: Some(own), .. }
+                if (own - s.tau_s).abs() < 1e-12 && (outside - even_tau_s).abs() < 1e-4
+        )),
+        "{:?}",
+        b.warnings
+    );
     assert!(
         words.contains(&format!("{:.3} ms", even_tau_s * 1e3)) && words.contains("fix the order to 0"),
         "{words}"

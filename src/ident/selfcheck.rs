@@ -297,6 +297,7 @@ fn delay_outside_usual_range(
         overlap_loss,
         wider_search: delay_only.is_some_and(|t| outside(&t)),
         aligned_s: spectra.aligned_s(),
+        model_tau_s: (!outside(&fit.tau_s)).then_some(fit.tau_s),
     })
 }
 

@@ -231,11 +231,28 @@ pub(super) fn delay_outside_words(
         overlap_loss,
         wider_search,
         aligned_s,
+        model_tau_s,
     } = *w
     else {
         return Ok(());
     };
     let ms = |s: f64| s * 1e3;
+    // Whose delay: the model's, or the delay-only model's where the model's poles brought its
+    // own back inside the range.
+    let (whose, held) = match model_tau_s {
+        Some(own) => (
+            "the delay-only model's delay, ".to_owned(),
+            format!(
+                "which the delay-only model holds as the block's delay (the chosen model's is \
+                 {:.3} ms, its poles' lag standing in for the rest)",
+                ms(own)
+            ),
+        ),
+        None => (
+            "delay ".to_owned(),
+            "which the model holds as the block's delay".to_owned(),
+        ),
+    };
     if !wider_search {
         return write!(
             f,
@@ -259,10 +276,10 @@ pub(super) fn delay_outside_words(
     } else {
         write!(
             f,
-            "delay {:.3} ms, outside the {:.0} to {:.0} ms a sensor's own delay is \
+            "{whose}{:.3} ms, outside the {:.0} to {:.0} ms a sensor's own delay is \
              searched in (found by the search to +-{:.0} ms): most likely the angles \
              and the outputs are stamped by clocks offset from each other (a logging \
-             or transport latency), which the model holds as the block's delay",
+             or transport latency), {held}",
             ms(tau_s),
             ms(usual_s[0]),
             ms(usual_s[1]),

@@ -192,6 +192,11 @@ pub enum IdentWarning {
         /// estimate smears only the rest of the delay. 0: not moved.
         #[serde(default)]
         aligned_s: f64,
+        /// The chosen model's own delay where it lies inside the range and `tau_s` is the
+        /// delay-only candidate's (its poles brought it back inside), s; `None`: `tau_s` is the
+        /// model's.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        model_tau_s: Option<f64>,
     },
     /// The chosen model has poles and a negative delay where the delay-only model (order 0) has a
     /// positive one: its poles' lag stands in for the delay, the delay is the remainder. Such a

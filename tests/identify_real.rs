@@ -668,6 +668,20 @@ fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() 
         "{traded}"
     );
     assert!(!warning(0.12, 5e-4).contains("chosen model"));
+    // At the widest search's end, the same: the delay there is the delay-only model's.
+    let end_traded = whose(-0.2999, 1e-5, Some(-0.015));
+    assert!(
+        end_traded.contains("the delay-only model's delay, -299.900 ms")
+            && end_traded.contains("end of the widest search")
+            && end_traded.contains("the chosen model's is -15.000 ms"),
+        "{end_traded}"
+    );
+    // A chosen delay longer than the delay-only one is not called the poles' lag.
+    let longer = whose(-0.030, 1e-5, Some(-0.010));
+    assert!(
+        longer.contains("20.000 ms longer") && !longer.contains("lag standing in"),
+        "{longer}"
+    );
     let end = warning(-0.2999, 0.004);
     assert!(
         end.contains("end of the widest search") && !end.contains("clocks"),

@@ -43,13 +43,6 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
         );
         assert_eq!(s.order, 0, "{name} +{samples}: {:?}", s.candidates);
         assert!(
-            !b.warnings
-                .iter()
-                .any(|w| matches!(w, IdentWarning::PolesOrEvenGain { .. })),
-            "{name} +{samples}: {:?}",
-            b.warnings
-        );
-        assert!(
             (3.9..=4.5).contains(&own_ms),
             "{name} +{samples}: own delay {own_ms} ms"
         );
@@ -58,7 +51,7 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
 }
 
 /// broad07 with its gyro 16 samples late (60.2 ms): the first fit is order 3 at 46 ms, its poles
-/// beating the delay-only fit over the even gain by a few units of the criterion, and kept; said
+/// beating the delay-only fit over the even gain by 8.8-9.4 on the criterion, and kept; said
 /// (`poles_or_even_gain`) with the even gain's delay, the right one. Before, said by nothing but
 /// the delay's range. Fixing the order to 0, as the words advise, gives that delay and no such
 /// warning.

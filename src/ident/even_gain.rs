@@ -20,9 +20,9 @@
 //! bends the gain, with phase): the first fit is kept, as fitted. When the first fit's poles win
 //! on the criterion alone, they are kept and `poles_or_even_gain` says so with the delay the fit
 //! over `g` gives: the two differ by the poles' lag, and only the margin tells them apart (the
-//! real run `broad07` with its gyro written 6 samples late, a 25 ms delay: order 3 at 11.4 ms,
-//! its criterion 7 below the fit over `g` at 25.2 ms, said by nothing before; at the recording's
-//! own 4.2 ms the order-3 fit's delay is negative and the rules reject it). A fixed order above
+//! real run `broad07` with its gyro written 16 samples late, a 60.2 ms delay: order 3 at 46.2 ms,
+//! its criterion 8.8 below the fit over `g` at 60.17 ms, said by nothing before; at the
+//! recording's own 4.2 ms the order-3 fit's delay is negative and the rules reject it). A fixed order above
 //! 0 is the user's structure and is left alone.
 //!
 //! Units as [`super::gain_curvature`]: `omega` in rad/s, `K` dimensionless. Nothing here panics
@@ -53,9 +53,10 @@ pub struct OverEvenGain {
     pub first: Option<Arc<StructuralFit>>,
     /// `gain_changes_across_band` where the delay-only model's residual says it: with
     /// `k_at_low_frequency` (and each row's bias as applied) when `fit` is over the gain; as
-    /// fitted when the first fit was delay-only and the fit over the gain was not kept; `None`
-    /// when the first fit has an order above 0 and is kept (the self-check then judges that
-    /// fit's own residual).
+    /// fitted when the first fit was delay-only and the fit over the gain was not kept;
+    /// `poles_or_even_gain` when the first fit's poles are kept on the criterion alone over a
+    /// delay-only fit over the gain; `None` when the first fit has an order above 0 and the fit
+    /// over the gain needs poles too (the self-check then judges that fit's own residual).
     pub warning: Option<IdentWarning>,
 }
 

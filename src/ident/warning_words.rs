@@ -200,8 +200,8 @@ pub(super) fn poles_or_even_gain_words(
     write!(
         f,
         "the gain {} by {} from {:.2} to {:.1} Hz, and the order-{order} model takes the change \
-         for the block's dynamics: its delay is {:.3} ms (+- {:.3} ms), its poles' lag standing in \
-         for the rest; the delay-only model over an even gain (the reference's band limit: angles \
+         for the block's dynamics: its delay is {:.3} ms (+- {:.3} ms), {}; the delay-only model \
+         over an even gain (the reference's band limit: angles \
          interpolated from a slower rate, or smoothed) gives {:.3} ms (+- {:.3} ms) and explains \
          the data less well by {margin:.1} on the information criterion. A band-limited reference \
          and a filter in the block are told apart only by that margin: if the block has no filter \
@@ -213,9 +213,23 @@ pub(super) fn poles_or_even_gain_words(
         band_hz[1],
         tau_s * 1e3,
         tau_std_s * 1e3,
+        traded(tau_s, even_tau_s),
         even_tau_s * 1e3,
         even_tau_std_s * 1e3,
     )
+}
+
+/// How a model's delay `tau_s` stands to another model's `other_s` of the same data: shorter,
+/// the poles' lag stands in for the rest; longer, they lead by the difference.
+fn traded(tau_s: f64, other_s: f64) -> String {
+    if tau_s <= other_s {
+        "its poles' lag standing in for the rest".to_owned()
+    } else {
+        format!(
+            "{:.3} ms longer, its poles leading by that much",
+            (tau_s - other_s) * 1e3
+        )
+    }
 }
 
 /// The words of [`super::warnings::IdentWarning::DelayOutsideUsualRange`] (nothing for another
@@ -244,8 +258,9 @@ pub(super) fn delay_outside_words(
             "the delay-only model's delay, ".to_owned(),
             format!(
                 "which the delay-only model holds as the block's delay (the chosen model's is \
-                 {:.3} ms, its poles' lag standing in for the rest)",
-                ms(own)
+                 {:.3} ms, {})",
+                ms(own),
+                traded(own, tau_s)
             ),
         ),
         None => (
@@ -267,12 +282,15 @@ pub(super) fn delay_outside_words(
     if tau_s.abs() >= reach_s - 1e-3 {
         write!(
             f,
-            "delay {:.3} ms, at the end of the widest search (+-{:.0} ms): the true \
+            "{whose}{:.3} ms, at the end of the widest search (+-{:.0} ms): the true \
              delay may lie beyond it, and the model, K too, is not to be trusted; \
              align the angles and the outputs in time first",
             ms(tau_s),
             ms(reach_s)
         )?;
+        if let Some(own) = model_tau_s {
+            write!(f, " (the chosen model's is {:.3} ms)", ms(own))?;
+        }
     } else {
         write!(
             f,

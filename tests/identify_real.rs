@@ -676,11 +676,11 @@ fn the_delay_outside_the_usual_range_says_the_search_end_and_the_overlap_loss() 
             && end_traded.contains("the chosen model's is -15.000 ms"),
         "{end_traded}"
     );
-    // A chosen delay longer than the delay-only one is not called the poles' lag.
-    let longer = whose(-0.030, 1e-5, Some(-0.010));
+    // A chosen delay later than the delay-only one is not called the poles' lag.
+    let later = whose(-0.030, 1e-5, Some(-0.010));
     assert!(
-        longer.contains("20.000 ms longer") && !longer.contains("lag standing in"),
-        "{longer}"
+        later.contains("20.000 ms later") && !later.contains("lag standing in"),
+        "{later}"
     );
     let end = warning(-0.2999, 0.004);
     assert!(

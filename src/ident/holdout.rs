@@ -207,36 +207,48 @@ mod tests {
             |f: f64, lag: i64| Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * f * lag as f64 / fs);
         let weights = [3.0, 5.0];
         let whole = InputMoments::sum(&[&moments[0], &moments[1]]).expect("sum");
-        for lag in [0_i64, 37, -60] {
-            let parts: Vec<StretchSpectra> = (0..2)
-                .map(|i| StretchSpectra {
-                    span_s: [i as f64, i as f64 + 1.0],
-                    s_uu: vec![Matrix3::identity(); bins],
-                    s_xu: (0..bins)
-                        .map(|b| unturned(i, b) * turn(at(&moments[i], b), lag))
-                        .collect(),
-                    s_xx: vec![Matrix3::identity(); bins],
-                    equivalent_averages: weights[i],
-                    moments: Some(moments[i].clone()),
-                })
-                .collect();
-            let half = merged(&parts, lag, fs).expect("merged");
-            for b in 0..bins {
-                let mean = (unturned(0, b) * Complex64::from(weights[0])
-                    + unturned(1, b) * Complex64::from(weights[1]))
-                    / Complex64::from(weights[0] + weights[1]);
-                let expected = if lag == 0 {
-                    mean
-                } else {
-                    mean * turn(at(&whole, b), lag)
-                };
-                let error = (half.s_xu[b] - expected).norm();
-                assert!(
-                    error < 1e-12 * (1.0 + expected.norm()),
-                    "lag {lag}, bin {b}: {error:e}"
-                );
+        // Both stretches with their moments (compared at the centroids), and the second without
+        // (then every stretch and the half at the bins' centres).
+        for with_moments in [true, false] {
+            for lag in [0_i64, 37, -60] {
+                let parts: Vec<StretchSpectra> = (0..2)
+                    .map(|i| {
+                        let moments = (with_moments || i == 0).then(|| moments[i].clone());
+                        // Given back as the spectral stage gives it back.
+                        let mut s_xu: Vec<_> = (0..bins).map(|b| unturned(i, b)).collect();
+                        crate::ident::alignment::restore_delay(&mut s_xu, lag, fs, |b| {
+                            moments.as_ref().and_then(|m| m.centroid_at(b)).map(|(fc, _)| fc)
+                        });
+                        StretchSpectra {
+                            span_s: [i as f64, i as f64 + 1.0],
+                            s_uu: vec![Matrix3::identity(); bins],
+                            s_xu,
+                            s_xx: vec![Matrix3::identity(); bins],
+                            equivalent_averages: weights[i],
+                            moments,
+                        }
+                    })
+                    .collect();
+                let half = merged(&parts, lag, fs).expect("merged");
+                assert_eq!(half.moments.is_some(), with_moments);
+                for b in 0..bins {
+                    let mean = (unturned(0, b) * Complex64::from(weights[0])
+                        + unturned(1, b) * Complex64::from(weights[1]))
+                        / Complex64::from(weights[0] + weights[1]);
+                    let f_half = if with_moments {
+                        at(&whole, b)
+                    } else {
+                        b as f64 * df
+                    };
+                    let expected = if lag == 0 { mean } else { mean * turn(f_half, lag) };
+                    let error = (half.s_xu[b] - expected).norm();
+                    assert!(
+                        error < 1e-9 * (1.0 + expected.norm()),
+                        "moments {with_moments}, lag {lag}, bin {b}: {error:e}"
+                    );
+                }
+                assert!((half.equivalent_averages - 8.0).abs() < 1e-12);
             }
-            assert!((half.equivalent_averages - 8.0).abs() < 1e-12);
         }
     }
 }

@@ -219,14 +219,14 @@ pub(super) fn poles_or_even_gain_words(
     )
 }
 
-/// How a model's delay `tau_s` stands to another model's `other_s` of the same data: shorter,
-/// the poles' lag stands in for the rest; longer, they lead by the difference.
+/// How a model's delay `tau_s` stands to another model's `other_s` of the same data: earlier,
+/// the poles' lag stands in for the rest; later, they lead by the difference.
 fn traded(tau_s: f64, other_s: f64) -> String {
     if tau_s <= other_s {
         "its poles' lag standing in for the rest".to_owned()
     } else {
         format!(
-            "{:.3} ms longer, its poles leading by that much",
+            "{:.3} ms later, its poles leading by that much",
             (tau_s - other_s) * 1e3
         )
     }

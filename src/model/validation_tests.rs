@@ -121,3 +121,58 @@ fn too_short_a_span_or_an_empty_band_gives_nothing() {
     assert!(validate(&nothing, &run, 0..20_000, FS, 0.0).is_none());
     assert!(fit_percent(&[0.0, 0.0], &[1.0, 1.0]).is_nan());
 }
+
+/// The diagnosis's joint model (`set_effects`: order 0, its own delay) keeps no structural fit's
+/// weighing of poles against an even gain (`poles_or_even_gain`), and `delay_outside_usual_range`
+/// no longer names a chosen model's own delay; other warnings stay as they were.
+#[test]
+fn an_extended_model_drops_the_structural_fit_s_poles_words() {
+    use crate::ident::warnings::IdentWarning;
+    use crate::model::effects::{Identified, ModelEffects};
+    let mut m = delayed_gain(K, 0.046, [0.1, 20.0]);
+    let outside = |model_tau_s| IdentWarning::DelayOutsideUsualRange {
+        tau_s: 0.060,
+        usual_s: [-0.020, 0.050],
+        reach_s: 0.3,
+        overlap_loss: 0.0,
+        wider_search: true,
+        aligned_s: 0.0,
+        model_tau_s,
+    };
+    let kept = IdentWarning::NegativeDelay {
+        tau_s: -0.001,
+        tau_std_s: 1e-4,
+    };
+    m.fit.warnings = vec![
+        IdentWarning::PolesOrEvenGain {
+            order: 3,
+            tau_s: 0.046,
+            tau_std_s: 0.002,
+            even_tau_s: 0.060,
+            even_tau_std_s: 1e-5,
+            rise: 0.1,
+            band_hz: [0.1, 20.0],
+            margin: 8.8,
+        },
+        outside(Some(0.046)),
+        kept.clone(),
+    ];
+    let effects = ModelEffects {
+        accepted: Vec::new(),
+        not_added: Vec::new(),
+        lag_s: None,
+        channel_skew_s: None,
+        resonances: Vec::new(),
+        identified: Identified {
+            k: K,
+            tau_s: 0.046,
+            order: 3,
+        },
+        band_hz: [0.1, 20.0],
+        chi2_per_dof: [1.2, 1.1],
+        gap_db: [[-20.0; 3]; 2],
+    };
+    m.set_effects(effects, K, [[Some(1e-3); 3]; 3], 0.060, Some(1e-5));
+    assert_eq!(m.fit.warnings, vec![outside(None), kept]);
+    assert_eq!(m.order, 0);
+}

@@ -15,7 +15,7 @@ use imu_attest::run::{LoadOptions, Run, load, load_bytes};
 use imu_attest::spectral::WelchSettings;
 #[path = "common/real.rs"]
 mod real_common;
-use real_common::{k_error, real};
+use real_common::{gyro_late, k_error, real};
 
 const RUNS: [&str; 3] = [
     "broad07_fast_rotation",
@@ -167,10 +167,10 @@ fn a_delay_outside_the_usual_range_is_found_and_said() {
     for samples in [14_i32, -8] {
         let mut run = real("broad07_fast_rotation");
         let shift_s = f64::from(samples) * run.dt_s();
-        for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
-            if samples > 0 {
-                c.rotate_right(samples.unsigned_abs() as usize);
-            } else {
+        if samples > 0 {
+            run = gyro_late(run, samples.unsigned_abs() as usize);
+        } else {
+            for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
                 c.rotate_left(samples.unsigned_abs() as usize);
             }
         }

@@ -14,7 +14,7 @@ use imu_attest::ident::settings::{OrderSetting, Settings};
 use imu_attest::ident::warnings::IdentWarning;
 #[path = "common/real.rs"]
 mod real_common;
-use real_common::{k_error, real};
+use real_common::{gyro_late, k_error, real};
 
 #[test]
 fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
@@ -23,13 +23,8 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
         ("broad11_slow_translation", 10),
         ("broad25_tapping", 6),
     ] {
-        let mut run = real(name);
+        let run = gyro_late(real(name), samples);
         let shift_s = samples as f64 * run.dt_s();
-        for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
-            // Each gyro sample `samples` rows later; the first rows take the record's last
-            // (rest at both ends, so no step of motion is made).
-            c.rotate_right(samples);
-        }
         let mut id = identify_run(&run, &Settings::default()).expect("identified");
         let b = id.blocks.remove(0);
         let s = &b.structural;
@@ -58,11 +53,8 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
 #[test]
 fn poles_kept_over_the_even_gain_are_said_with_its_delay() {
     let samples = 16;
-    let mut run = real("broad07_fast_rotation");
+    let run = gyro_late(real("broad07_fast_rotation"), samples);
     let shift_s = samples as f64 * run.dt_s();
-    for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
-        c.rotate_right(samples);
-    }
     let said = |b: &imu_attest::ident::identify::BlockIdentification| {
         b.warnings.iter().find_map(|w| match w {
             IdentWarning::PolesOrEvenGain {

@@ -22,3 +22,12 @@ pub fn k_error(k: &[[f64; 3]; 3]) -> f64 {
         .sqrt()
         / 3f64.sqrt()
 }
+
+/// `run` with its gyro written `samples` rows late (each sample `samples` rows later, the first
+/// rows taking the record's last: rest at both ends, so no step of motion is made).
+pub fn gyro_late(mut run: Run, samples: usize) -> Run {
+    for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
+        c.rotate_right(samples);
+    }
+    run
+}

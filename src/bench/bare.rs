@@ -3,13 +3,13 @@
 //! matrices), parallel over the same chunks of segments as [`crate::spectral::welch`].
 //!
 //! The FFT length is the one the estimator transforms at ([`transform_len`]) for the identifier's
-//! zero-padded grid ([`ZERO_PAD`] times the segment length).
+//! zero-padded grid ([`grid_len`]: [`ZERO_PAD`](crate::ident::spectra::ZERO_PAD) times the segment length unless the settings say otherwise).
 
 use num_complex::Complex64;
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
 
-use crate::ident::spectra::ZERO_PAD;
+use crate::ident::spectra::grid_len;
 use crate::spectral::welch::{MAX_CHUNKS, transform_len};
 use crate::spectral::{SpectralError, WelchSettings};
 
@@ -20,7 +20,7 @@ use crate::spectral::{SpectralError, WelchSettings};
 /// [`SpectralError::Fft`] should the FFT refuse its buffers (it does not for these lengths).
 pub fn welch_sums(channels: &[&[f64]], settings: &WelchSettings) -> Result<Vec<Complex64>, SpectralError> {
     let seg = settings.segment_len;
-    let len = transform_len(seg, settings.fft_len.unwrap_or(ZERO_PAD * seg));
+    let len = transform_len(seg, grid_len(settings));
     let nb = len / 2 + 1;
     let n = channels.len();
     let n_pairs = n * (n + 1) / 2;

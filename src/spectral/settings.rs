@@ -34,7 +34,8 @@ pub struct WelchSettings {
     /// FFT length (scipy's `nfft`): each windowed segment is zero-padded to it. Even and at least
     /// `segment_len`; absent (`None`), it equals `segment_len`. Padding samples the same estimate
     /// on a finer grid: with `fft_len >= 2 segment_len` the grid holds the estimate's whole
-    /// correlation without aliasing.
+    /// correlation without aliasing. The identifier takes it up to a whole number of segments
+    /// (`ident::spectra::grid_len`), so the native bins lie on its grid.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fft_len: Option<usize>,
 }

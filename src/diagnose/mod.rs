@@ -28,6 +28,7 @@ pub mod gate;
 pub mod halves;
 pub mod input_limit;
 pub mod map;
+mod prepared;
 pub mod profile;
 pub mod report;
 pub mod simplex;

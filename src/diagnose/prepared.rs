@@ -1,0 +1,312 @@
+//! What every diagnosis of a run starts from ([`Prepared`]): the order-0 identification over the
+//! diagnosis's band, each block's whole-record design and the paper's model fitted on it.
+
+use std::collections::BTreeMap;
+
+use super::DiagnoseError;
+use super::design::{Design, DesignSignals};
+use super::halves::HalvesSource;
+use super::input_limit::{InputLimit, falling_gain, input_limit};
+use super::state::State;
+use crate::block::Block;
+use crate::ident::band::BandSetting;
+use crate::ident::identify::{BlockIdentification, resolve_band};
+use crate::ident::session::Session;
+use crate::ident::settings::{OrderSetting, Settings};
+use crate::ident::signals::block_signals;
+use crate::ident::stretches::MIN_STRETCHES;
+use crate::model::refused::refused_blocks;
+use crate::model::{RefusedBlock, Source};
+use crate::run::Run;
+use crate::stand::kinematics::EulerSeries;
+
+/// What every diagnosis of a run under one set of settings starts from, computed once: the
+/// order-0 identification over the diagnosis's band, each block's whole-record design and the
+/// paper's model fitted on it. A rejection (the app) or an accepted effect ([`super::extend`])
+/// starts from here again instead of redoing the identification and the record's spectra.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The identifier settings used (order 0, the band fixed, blocks resolved).
+    pub settings: Settings,
+    /// The run.
+    pub source: Source,
+    /// One entry per block, in the order of the settings.
+    pub blocks: Vec<PreparedBlock>,
+    /// The blocks the run cannot identify, beside those it can (not diagnosed).
+    pub refused_blocks: BTreeMap<String, RefusedBlock>,
+    /// What the record's halves are built from, to tell whether each finding is one property
+    /// of the block over the run ([`super::halves`]; `None`: not compared).
+    pub halves: Option<HalvesSource>,
+}
+
+/// One block's starting point.
+#[derive(Clone, Debug)]
+pub struct PreparedBlock {
+    /// The block.
+    pub block: Block,
+    /// The diagnosis's band, Hz.
+    pub band_hz: [f64; 2],
+    /// Where the inputs from the angles are not the motion, at the top of the band asked for
+    /// ([`super::input_limit`]).
+    pub input_limit: Option<InputLimit>,
+    /// A step in the delays of the stretches over the band searched
+    /// ([`crate::ident::delay_step`]): the record's streams slipped, and the report says so.
+    pub delay_step: Option<crate::ident::delay_step::DelayStep>,
+    /// Whether a clock drift is searched: not through a step, unless the slope its two sides
+    /// share is a drift.
+    pub search_drift: bool,
+    /// The paper's model `K e^(-tau s)` fitted on the whole-record design (with the stretches'
+    /// delay trend as the clock-drift hint).
+    pub base: State,
+    /// Real degrees of freedom of the band (all three channels): BIC's `n`.
+    pub dof: f64,
+}
+
+/// [`Prepared`] for `session`'s run under `settings`.
+///
+/// # Errors
+/// As [`diagnose_run`](super::diagnose_run).
+pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, DiagnoseError> {
+    let run = session.run().clone();
+    let run = run.as_ref();
+    // The diagnosis searches the whole band asked for (with "auto", the auto band's search
+    // limits): a missing effect lowers the coherence, so the usable band of the identification
+    // would hide the very misfit the diagnosis looks for.
+    // Only where the inputs are not the motion does an auto band end below the search limits
+    // ([`super::input_limit`]).
+    let given = matches!(settings.band_hz, BandSetting::Fixed(_));
+    let asked = settings.band_hz;
+    let order = settings.order;
+    let band_hz = BandSetting::Fixed(settings.band_hz.search_limits(run.sample_rate_hz));
+    let settings = Settings {
+        order: OrderSetting::Fixed(0).into(),
+        band_hz,
+        ..settings.for_run(run)
+    };
+    let id = session.identify_aside(&settings)?;
+    let span = session.span(&settings)?;
+    let mut blocks = Vec::new();
+    let mut refused = refused_blocks(&id.refused);
+    let mut first_refusal = id.refused.first().map(|r| r.error.clone());
+    for b in &id.blocks {
+        let name = b.block.name();
+        // The identification's refusal of a block without a usable band (a dead block) holds
+        // here too, though the band searched is fixed: the diagnosis of a block the model
+        // refused would be of nothing, and a gyro's refuses the run as it does there.
+        if !given && let Err(e) = resolve_band(&b.spectra, b.block, BandSetting::Auto) {
+            match RefusedBlock::of(&e).filter(|_| e.is_refusal()) {
+                Some(entry) => {
+                    refused.insert(name.to_owned(), entry);
+                    first_refusal.get_or_insert(e);
+                    continue;
+                }
+                None => return Err(e.alone().into()),
+            }
+        }
+        // Only an auto band is ended, and only where the order-0 fit sees the gain fall evenly;
+        // then the identifier, its order selection on, tells the inputs' noise from the block's
+        // own dynamics (a lag's droop): a user's fixed order above 0 is dynamics as given, and
+        // an identification that fails ends nothing.
+        let dynamics = !given
+            && falling_gain(b).is_some()
+            && match order.of(b.block) {
+                OrderSetting::Fixed(n) if n > 0 => true,
+                _ => session
+                    .identify_aside(&Settings {
+                        order: OrderSetting::Auto.into(),
+                        blocks: vec![b.block],
+                        ..settings.clone()
+                    })
+                    .ok()
+                    .and_then(|own| own.blocks.first().map(|o| o.structural.order > 0))
+                    .unwrap_or(true),
+            };
+        let mut input_limit = input_limit(b, b.band_hz, given, dynamics);
+        let mut band = b.band_hz;
+        let mut design = None;
+        if let Some(ended) = input_limit
+            .as_ref()
+            .filter(|l| l.band_ended)
+            .map(InputLimit::band_hz)
+        {
+            design = block_design(run, &id.motion.euler, b, (ended, false), &span);
+            if design.is_some() {
+                band = ended;
+            } else if let Some(l) = input_limit.as_mut() {
+                // Too few bins below the inputs' limit: the band asked for, with the limit said.
+                l.band_ended = false;
+            }
+        }
+        let design = design.or_else(|| block_design(run, &id.motion.euler, b, (band, true), &span));
+        let (design, upper) = design.ok_or(DiagnoseError::TooShort {
+            block: name,
+            low: band[0],
+            high: band[1],
+        })?;
+        let dof = 3.0 * design.dof_per_channel();
+        let mut base =
+            State::base(design, b.structural.tau_s, band).ok_or(DiagnoseError::Degenerate(name))?;
+        // Only stretches on the settings' own segment, and all of them fitted: on a record too
+        // short for them the stationarity comes from a few stretches of a shorter segment (a
+        // floor on the deviations), and with a stretch named without a delay from three, whose
+        // trend is too weak a test to skip the re-timing search on.
+        // Over the band searched: where it was ended, the stretches' delays over the whole band
+        // are biased by the inputs that are not the motion (a real recording's slow run, one
+        // sample slipped: 3.8 and 5.1 ms before the slip, a step no longer seen, a drift read).
+        let stationarity = if band.map(f64::to_bits) == b.band_hz.map(f64::to_bits) {
+            b.stationarity.clone()
+        } else {
+            crate::ident::stretches::cached_stationarity(&b.spectra, band)
+        };
+        base.drift_hint = stationarity
+            .as_deref()
+            .filter(|st| st.segment_len.is_none() && st.stretches.len() >= MIN_STRETCHES)
+            .map(|st| {
+                let (trend, trend_std) = st.drift();
+                [trend, trend_std]
+            });
+        let delay_step = stationarity.as_deref().and_then(|st| st.delay_step);
+        let drifts = stationarity
+            .as_deref()
+            .is_some_and(crate::ident::stretches::Stationarity::drifts);
+        if let Some(upper) = upper {
+            base.set_upper(upper);
+        }
+        blocks.push(PreparedBlock {
+            block: b.block,
+            band_hz: band,
+            input_limit,
+            delay_step,
+            search_drift: delay_step.is_none() || drifts,
+            base,
+            dof,
+        });
+    }
+    // Every block set aside: refused as the identification refuses a run with none left.
+    if blocks.is_empty()
+        && let Some(e) = first_refusal
+    {
+        return Err(e.alone().into());
+    }
+    Ok(Prepared {
+        // The band as asked: each block's band searched is in its report.
+        settings: Settings {
+            band_hz: asked,
+            ..settings
+        },
+        source: Source::of(run),
+        blocks,
+        refused_blocks: refused,
+        halves: Some(HalvesSource {
+            run: session.run().clone(),
+            identification: id,
+            span,
+        }),
+    })
+}
+
+/// Top of the line search above the fit's band, relative to the band's top: tones are searched
+/// inside the band and up to half as far again above it (and below 0.45 of the rate). Further
+/// up, the inputs computed from the measured angles are their noise (the stand's motion reaches
+/// about 60 Hz), and subtracting the model there puts that noise's lines into the residual: on
+/// simulated approach runs, "tones" at 157-205 Hz in the accelerometer.
+const LINE_SEARCH_TOP: f64 = 1.5;
+
+/// The block's whole-record design, its expected disturbance level taken from the
+/// identification's `S_psi`, and its spectra above the band up to [`LINE_SEARCH_TOP`] times
+/// the band's top for the line search (`None` when too few bins remain).
+pub(super) fn block_design(
+    run: &Run,
+    motion: &EulerSeries,
+    b: &BlockIdentification,
+    (band, lines_above): ([f64; 2], bool),
+    span: &std::ops::Range<usize>,
+) -> Option<(Design, Option<Design>)> {
+    let signals = block_signals(run, motion, b.block)?;
+    let cut = |x: &[f64]| x[span.clone()].to_vec();
+    let g = run.sidecar.g_mps2;
+    let auxiliary: Vec<Vec<f64>> = match b.block {
+        Block::Gyro => motion
+            .specific_forces(run.sidecar.gyro_lever_arm_m, g)
+            .into_iter()
+            .collect(),
+        Block::Accel => {
+            let r = run.sidecar.accel_lever_arm_m;
+            let at = motion.specific_forces(r, g);
+            let shifted: Vec<[Vec<f64>; 3]> = (0..3)
+                .map(|l| {
+                    let mut rl = r;
+                    rl[l] += 1.0;
+                    motion.specific_forces(rl, g)
+                })
+                .collect();
+            // d f_i / d r_l at AUX + 3 i + l (f is affine in the lever arm: the difference is exact).
+            (0..3)
+                .flat_map(|i| (0..3).map(move |l| (i, l)))
+                .map(|(i, l)| shifted[l][i].iter().zip(&at[i]).map(|(a, b)| a - b).collect())
+                .collect()
+        }
+    };
+    let expected = smoothed_noise_psd(b);
+    let freq = &b.spectra.frequency_hz;
+    let lookup = |i: usize, f: f64| {
+        let k = freq.partition_point(|&x| x < f).clamp(1, freq.len() - 1);
+        let t = ((f - freq[k - 1]) / (freq[k] - freq[k - 1])).clamp(0.0, 1.0);
+        expected[i][k - 1] * (1.0 - t) + expected[i][k] * t
+    };
+    let output = signals.output.each_ref().map(|x| cut(x));
+    let input = signals.input.each_ref().map(|x| cut(x));
+    let design = Design::new(
+        &DesignSignals {
+            block: b.block,
+            output: &output,
+            input: &input,
+            auxiliary: &auxiliary.iter().map(|x| cut(x)).collect::<Vec<_>>(),
+            sample_rate_hz: run.sample_rate_hz,
+        },
+        band,
+        &lookup,
+    )?;
+    let top = (LINE_SEARCH_TOP * band[1]).min(0.45 * run.sample_rate_hz);
+    // The line search needs a line's neighbourhood on both sides, so neither range finds a line
+    // within its edge margin: the upper range starts that margin below the band's top, and a
+    // line at the top is inside one of the two.
+    let margin =
+        2.0 * super::tone::EDGE_MARGIN_BINS as f64 * run.sample_rate_hz / output[0].len().max(1) as f64;
+    let from = (band[1] - margin).max(band[0]);
+    // Not above a band ended where the inputs stop being the motion: the residual there is the
+    // model driven by the angles' noise, and its roll-off passed for tones (on a `--stand real`
+    // run with a mount resonance, two to four "tones" at 27-38 Hz above a band ended at 26-28
+    // Hz, against none over the whole band).
+    let upper = lines_above
+        .then(|| Design::line_search(b.block, &output, &input, run.sample_rate_hz, [from, top]))
+        .flatten();
+    Some((design, upper))
+}
+
+/// `S_psi,ii` running-median smoothed over about four native Welch bins each side, so that a
+/// line does not raise the level it is tested against; near zero frequency the window shrinks to
+/// a quarter of the bin's index each side, since there the density changes by a large factor
+/// within a few bins (the coloured disturbance below 0.5 Hz) and a wide window would
+/// underestimate it.
+fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
+    let psd = &b.factorisation.noise_psd;
+    let half = 4 * b.spectra.native_step();
+    // S_psi is a regression residual of n_eq averages less the three inputs' degrees of freedom,
+    // so its mean is (n_eq - 3) / n_eq of the disturbance's; the median of its scaled
+    // chi-squared(2 (n_eq - 3)) distribution lies a further (1 - 1/(9 (n_eq - 3)))^3 below
+    // (Wilson-Hilferty). Both are undone.
+    let dof = (b.spectra.equivalent_averages - 3.0).max(1.0);
+    let unbias = (dof + 3.0) / dof / (1.0 - 1.0 / (9.0 * dof)).powi(3);
+    [0, 1, 2].map(|i| {
+        let diag: Vec<f64> = psd.iter().map(|m| m[(i, i)].re.max(0.0) * unbias).collect();
+        (0..diag.len())
+            .map(|k| {
+                let h = half.min(k / 4);
+                let lo = k.saturating_sub(h);
+                let hi = (k + h + 1).min(diag.len());
+                super::tone::median(&mut diag[lo..hi].to_vec())
+            })
+            .collect()
+    })
+}

@@ -25,6 +25,15 @@
 //! is named. Of the splits that pass, the one with the smallest residuals is kept (a largest-step rule
 //! kept a mixed stretch and left out a clean one). Units: s, from the first sample of the
 //! analysed record. Fewer than [`MIN_KEPT`] stretches, or no finite own deviation, give no step.
+//!
+//! Where no step passes, an **excursion** is looked for: the delay steps and comes back to where
+//! it was (a slip and its reverse later; a 600 s simulated run whose gyro slipped for its middle
+//! third came out at a delay between the two, 4.89 ms for 4.3 and 6.3, said by nothing). The
+//! stretches in time order are cut into before, during and after, each of at least one stretch,
+//! with at most one stretch left out at each edge, and `tau = a + step [during]` fitted on the
+//! kept ones (no slope: a drift is a line, the excursion's two sides one level); the same three
+//! tests, the line through the same stretches included. A during or a side of one stretch leaves
+//! the size known to half, as above.
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -66,6 +75,11 @@ pub struct DelayStep {
     /// the step (`None`: too few stretches to fit one, [`MIN_KEPT_FOR_SLOPE`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trend: Option<[f64; 2]>,
+    /// Where the delay comes back to `before_s` when it does: a slip and its reverse later (a
+    /// stream that loses a sample and later repeats one, or each stream losing one), s from the
+    /// first sample analysed. `None`: it stays at `after_s` to the record's end.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub back_between_s: Option<[f64; 2]>,
 }
 
 /// The step's standard deviation (sample periods) below which its size tells a slip of whole
@@ -103,6 +117,7 @@ impl DelayStep {
             samples: self.samples,
             samples_std: self.samples_std,
             drift_fitted: self.trend.is_some(),
+            back_between_s: self.back_between_s,
         }
     }
 
@@ -186,18 +201,9 @@ pub fn delay_step(stretches: &[StretchFit], sample_rate_hz: f64) -> Option<Delay
             };
             let trend = if slope { p[2] } else { 0.0 };
             let step = p[1];
-            let largest = residuals.iter().fold(0.0, |a: f64, r| a.max(r.abs()));
             let about_step = rms(&residuals);
-            // The line through the same stretches.
-            let line = DMatrix::from_fn(
-                kept.len(),
-                2,
-                |r, c| if c == 0 { 1.0 } else { t[kept[r]] - t_mean },
-            );
-            let about_line = least_squares(&line, &yk).map_or(0.0, |(_, r, _)| rms(&r));
-            let material = step.abs() * sample_rate_hz >= MATERIAL_SAMPLES;
-            let steady = step.abs() >= STEADY_RATIO * (largest + own);
-            if !(material && steady && about_step < 0.5 * about_line) {
+            let tk: Vec<f64> = kept.iter().map(|&i| t[i]).collect();
+            if !passes(step, &residuals, own, about_line(&tk, &yk), sample_rate_hz) {
                 continue;
             }
             // The residuals' variance (one degree of freedom or more), floored by the stretches'.
@@ -219,9 +225,85 @@ pub fn delay_step(stretches: &[StretchFit], sample_rate_hz: f64) -> Option<Delay
                 samples: step * sample_rate_hz,
                 samples_std,
                 trend: slope.then(|| [trend, (var * inv[(2, 2)]).sqrt()]),
+                back_between_s: None,
             };
             if best.as_ref().is_none_or(|(r, _)| about_step < *r) {
                 best = Some((about_step, found));
+            }
+        }
+    }
+    best.map(|(_, s)| s)
+        .or_else(|| excursion(stretches, &t, own, sample_rate_hz))
+}
+
+/// The three tests of the module docs on a fitted step: material, steady, not a line.
+fn passes(step: f64, residuals: &[f64], own: f64, about_line: f64, sample_rate_hz: f64) -> bool {
+    let largest = residuals.iter().fold(0.0, |a: f64, r| a.max(r.abs()));
+    step.abs() * sample_rate_hz >= MATERIAL_SAMPLES
+        && step.abs() >= STEADY_RATIO * (largest + own)
+        && rms(residuals) < 0.5 * about_line
+}
+
+/// The rms of `y` about the least-squares line through `(t, y)`.
+fn about_line(t: &[f64], y: &[f64]) -> f64 {
+    let t_mean = t.iter().sum::<f64>() / t.len() as f64;
+    let line = DMatrix::from_fn(t.len(), 2, |r, c| if c == 0 { 1.0 } else { t[r] - t_mean });
+    least_squares(&line, y).map_or(0.0, |(_, r, _)| rms(&r))
+}
+
+/// The excursion whose model fits best (module docs), or `None`. `t` are the stretches' middles,
+/// `own` their median own deviation.
+fn excursion(stretches: &[StretchFit], t: &[f64], own: f64, sample_rate_hz: f64) -> Option<DelayStep> {
+    let m = stretches.len();
+    let mut best: Option<(f64, DelayStep)> = None;
+    for (out_gap, back_gap) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+        // Before: `..out`; during: `out + out_gap..back`; after: `back + back_gap..`.
+        for out in 1..m {
+            for back in out + out_gap + 1..m.saturating_sub(back_gap) {
+                let during = |i: usize| (out + out_gap..back).contains(&i);
+                let kept: Vec<usize> = (0..m)
+                    .filter(|&i| i < out || during(i) || i >= back + back_gap)
+                    .collect();
+                if kept.len() < MIN_KEPT {
+                    continue;
+                }
+                let yk: Vec<f64> = kept.iter().map(|&i| stretches[i].tau_s).collect();
+                let tk: Vec<f64> = kept.iter().map(|&i| t[i]).collect();
+                let x = DMatrix::from_fn(kept.len(), 2, |r, c| {
+                    if c == 0 {
+                        1.0
+                    } else {
+                        f64::from(u8::from(during(kept[r])))
+                    }
+                });
+                let Some((p, residuals, inv)) = least_squares(&x, &yk) else {
+                    continue;
+                };
+                if !passes(p[1], &residuals, own, about_line(&tk, &yk), sample_rate_hz) {
+                    continue;
+                }
+                let dof = (kept.len() - 2) as f64;
+                let var = (residuals.iter().map(|r| r * r).sum::<f64>() / dof).max(own * own);
+                let samples_std = (var * inv[(1, 1)]).sqrt() * sample_rate_hz;
+                // A group of one stretch may be a mix of the two delays (module docs).
+                let single = out == 1 || back - (out + out_gap) == 1 || back + back_gap == m - 1;
+                let found = DelayStep {
+                    before_s: p[0],
+                    after_s: p[0] + p[1],
+                    between_s: [t[out - 1], t[out + out_gap]],
+                    samples: p[1] * sample_rate_hz,
+                    samples_std: if single {
+                        samples_std.max(0.5 * p[1].abs() * sample_rate_hz)
+                    } else {
+                        samples_std
+                    },
+                    trend: None,
+                    back_between_s: Some([t[back - 1], t[back + back_gap]]),
+                };
+                let fit = rms(&residuals);
+                if best.as_ref().is_none_or(|(r, _)| fit < *r) {
+                    best = Some((fit, found));
+                }
             }
         }
     }
@@ -256,7 +338,7 @@ mod tests {
     fn a_one_sample_slip_is_a_step_of_one_sample_where_it_happened() {
         let s = delay_step(&fits(&SLIP, 0.011), 285.714).expect("a step");
         assert!((s.samples - 1.0).abs() < 0.05, "{s:?}");
-        assert!(s.whole_samples());
+        assert!(s.whole_samples() && s.back_between_s.is_none(), "{s:?}");
         let words = s.diagnosis_words("gyro");
         assert!(
             words.contains("from 4.166 ms to 7.670 ms")
@@ -324,6 +406,57 @@ mod tests {
         );
         let s = delay_step(&fits(&[4.15, 4.18, 4.16, 4.17, 7.65], 0.011), 285.714).expect("a step");
         assert!((s.samples - 1.0).abs() < 0.05, "{s:?}");
+    }
+
+    /// A slip that comes back: found with both places, the level before and after one, the
+    /// mixed stretches at the edges left out; in the words, the return and the reverse.
+    #[test]
+    fn a_slip_and_its_reverse_are_an_excursion() {
+        let clean = [4.15, 4.18, 4.16, 7.65, 7.67, 7.64, 7.66, 4.17, 4.15, 4.16];
+        let mixed = [4.15, 4.18, 5.90, 7.65, 7.67, 7.64, 5.50, 4.17, 4.15, 4.16];
+        for (taus, between, back) in [
+            (clean, [55.5, 77.0], [141.5, 163.0]),
+            (mixed, [34.0, 77.0], [120.0, 163.0]),
+        ] {
+            let s = delay_step(&fits(&taus, 0.011), 285.714).expect("an excursion");
+            assert!((s.samples - 1.0).abs() < 0.02 && s.whole_samples(), "{s:?}");
+            assert!((s.before_s - 4.162e-3).abs() < 1e-5, "{s:?}");
+            let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9;
+            assert!(close(s.between_s, between), "{s:?}");
+            assert!(s.back_between_s.is_some_and(|b| close(b, back)), "{s:?}");
+            assert!(s.trend.is_none(), "{s:?}");
+            let words = s.diagnosis_words("gyro");
+            assert!(
+                words.contains("and back to 4.162 ms between")
+                    && words.contains("and the reverse where it comes back"),
+                "{words}"
+            );
+        }
+        // Down and back up: a step of -1 sample.
+        let down = [7.65, 7.66, 7.64, 4.15, 4.18, 4.16, 7.66, 7.65];
+        let s = delay_step(&fits(&down, 0.011), 285.714).expect("an excursion");
+        assert!(
+            (s.samples + 1.0).abs() < 0.02 && s.back_between_s.is_some(),
+            "{s:?}"
+        );
+    }
+
+    /// Not an excursion: a rise and fall (a line each way, not two levels), an excursion the
+    /// stretches' own deviations swamp, one below a quarter of a sample, and a second level that
+    /// does not come back to the first (two steps).
+    #[test]
+    fn an_excursion_must_come_back_to_a_steady_level() {
+        let v = [4.0, 5.0, 6.0, 7.0, 6.0, 5.0, 4.0];
+        assert_eq!(delay_step(&fits(&v, 0.011), 285.714), None);
+        let out_and_back = |d: f64| [4.0, 4.0, 4.0, 4.0 + d, 4.0 + d, 4.0 + d, 4.0, 4.0, 4.0];
+        assert_eq!(delay_step(&fits(&out_and_back(3.5), 0.7), 285.714), None);
+        assert_eq!(delay_step(&fits(&out_and_back(0.7), 0.01), 285.714), None);
+        assert!(delay_step(&fits(&out_and_back(3.5), 0.01), 285.714).is_some());
+        let stairs = [4.0, 4.0, 4.0, 7.5, 7.5, 7.5, 11.0, 11.0, 11.0];
+        assert!(
+            delay_step(&fits(&stairs, 0.01), 285.714).is_none_or(|s| s.back_between_s.is_none()),
+            "two steps up are no excursion"
+        );
     }
 
     /// A drift of 2 ms over the run and a slip at its middle: the step, and the slope beside it

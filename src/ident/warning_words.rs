@@ -95,10 +95,17 @@ pub(super) fn delay_step_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::
         samples,
         samples_std,
         drift_fitted,
+        back_between_s,
     } = w
     else {
         return Ok(());
     };
+    let back = back_between_s.map_or_else(String::new, |[a, b]| {
+        format!(
+            " and back to {:.3} ms between {a:.1} and {b:.1} s",
+            before_s * 1e3
+        )
+    });
     let cause = if super::delay_step::whole_samples(samples, samples_std) {
         let n = samples.round().abs();
         let which = if samples > 0.0 {
@@ -106,8 +113,13 @@ pub(super) fn delay_step_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::
         } else {
             "lost from the outputs or repeated in the angles"
         };
+        let reverse = if back_between_s.is_some() {
+            ", and the reverse where it comes back"
+        } else {
+            ""
+        };
         format!(
-            "{n:.0} whole sample{}: samples {which} (a logger's slip), not a clock drift",
+            "{n:.0} whole sample{}: samples {which} (a logger's slip){reverse}, not a clock drift",
             if n > 1.0 { "s" } else { "" }
         )
     } else if super::delay_step::definite(samples_std) && drift_fitted {
@@ -125,10 +137,10 @@ pub(super) fn delay_step_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::
     };
     write!(
         f,
-        "the delay steps from {:.3} ms to {:.3} ms between {from:.1} and {to:.1} s (from the first \
-         sample analysed): {:+.2} +- {:.2} sample periods, {cause}; the model's delay and gains mix the two \
-         sides and describe neither: analyse one side alone (span_s, in the run's own time \
-         column)",
+        "the delay steps from {:.3} ms to {:.3} ms between {from:.1} and {to:.1} s{back} (from the \
+         first sample analysed): {:+.2} +- {:.2} sample periods, {cause}; the model's delay and gains mix the two \
+         delays and describe neither: analyse a stretch on one of them alone (span_s, in the \
+         run's own time column)",
         before_s * 1e3,
         after_s * 1e3,
         samples,

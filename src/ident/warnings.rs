@@ -284,6 +284,10 @@ pub enum IdentWarning {
         /// would show as a step of a fraction of a sample.
         #[serde(default)]
         drift_fitted: bool,
+        /// Where the delay comes back to `before_s`, when it does (a slip and its reverse), s
+        /// from the first sample analysed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        back_between_s: Option<[f64; 2]>,
     },
     /// Stretches of the record for which no delay was found inside the stationarity check's scan
     /// nor inside the record's own range (`super::stretches`): there the block's response is not

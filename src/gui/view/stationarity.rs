@@ -15,8 +15,11 @@ use crate::model::BlockModel;
 pub fn stationarity_label(block: &str, st: &Stationarity) -> String {
     let (trend, trend_std) = st.drift();
     let step = st.delay_step.map_or_else(String::new, |s| {
+        let back = s.back_between_s.map_or_else(String::new, |[a, b]| {
+            format!(" and back between {a:.1} and {b:.1} s")
+        });
         format!(
-            "; the delay steps by {:+.2} sample periods between {:.1} and {:.1} s (a stream slipped)",
+            "; the delay steps by {:+.2} sample periods between {:.1} and {:.1} s{back} (a stream slipped)",
             s.samples, s.between_s[0], s.between_s[1]
         )
     });
@@ -26,10 +29,12 @@ pub fn stationarity_label(block: &str, st: &Stationarity) -> String {
         ""
     };
     if !trend_std.is_finite() {
-        return format!(
-            "{block} stretches: {}{step}; too few stretches beside the step to tell a drift",
-            st.stretches.len()
-        );
+        let why = if st.delay_step.is_some_and(|s| s.back_between_s.is_some()) {
+            "no drift is fitted beside a step that comes back"
+        } else {
+            "too few stretches beside the step to tell a drift"
+        };
+        return format!("{block} stretches: {}{step}; {why}", st.stretches.len());
     }
     format!(
         "{block} stretches: {}{}{step}; delay trend{beside} {:+.1} ± {:.1} ppm ({})",
@@ -107,9 +112,12 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 plot.line(
                     Line::new("before the step", side(first.span_s[0], a, a, s.before_s)).color(palette(3)),
                 );
-                plot.line(
-                    Line::new("after the step", side(b, last.span_s[1], a, s.after_s)).color(palette(4)),
-                );
+                // Where it comes back: the stepped delay up to there, then the first again.
+                let [c, d] = s.back_between_s.unwrap_or([last.span_s[1]; 2]);
+                plot.line(Line::new("after the step", side(b, c, a, s.after_s)).color(palette(4)));
+                if s.back_between_s.is_some() {
+                    plot.line(Line::new("back", side(d, last.span_s[1], a, s.before_s)).color(palette(3)));
+                }
                 return;
             }
             let line = |t: f64| [t, (tau_mean + st.tau_trend * (t - t_mean)) * 1e3];

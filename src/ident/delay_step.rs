@@ -233,7 +233,7 @@ pub fn delay_step(stretches: &[StretchFit], sample_rate_hz: f64) -> Option<Delay
         }
     }
     best.map(|(_, s)| s)
-        .or_else(|| excursion(stretches, &t, own, sample_rate_hz))
+        .or_else(|| super::delay_excursion::excursion(stretches, &t, own, sample_rate_hz))
 }
 
 /// The three tests of the module docs on a fitted step: material, steady, not a line.
@@ -249,65 +249,6 @@ fn about_line(t: &[f64], y: &[f64]) -> f64 {
     let t_mean = t.iter().sum::<f64>() / t.len() as f64;
     let line = DMatrix::from_fn(t.len(), 2, |r, c| if c == 0 { 1.0 } else { t[r] - t_mean });
     least_squares(&line, y).map_or(0.0, |(_, r, _)| rms(&r))
-}
-
-/// The excursion whose model fits best (module docs), or `None`. `t` are the stretches' middles,
-/// `own` their median own deviation.
-fn excursion(stretches: &[StretchFit], t: &[f64], own: f64, sample_rate_hz: f64) -> Option<DelayStep> {
-    let m = stretches.len();
-    let mut best: Option<(f64, DelayStep)> = None;
-    for (out_gap, back_gap) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-        // Before: `..out`; during: `out + out_gap..back`; after: `back + back_gap..`.
-        for out in 1..m {
-            for back in out + out_gap + 1..m.saturating_sub(back_gap) {
-                let during = |i: usize| (out + out_gap..back).contains(&i);
-                let kept: Vec<usize> = (0..m)
-                    .filter(|&i| i < out || during(i) || i >= back + back_gap)
-                    .collect();
-                if kept.len() < MIN_KEPT {
-                    continue;
-                }
-                let yk: Vec<f64> = kept.iter().map(|&i| stretches[i].tau_s).collect();
-                let tk: Vec<f64> = kept.iter().map(|&i| t[i]).collect();
-                let x = DMatrix::from_fn(kept.len(), 2, |r, c| {
-                    if c == 0 {
-                        1.0
-                    } else {
-                        f64::from(u8::from(during(kept[r])))
-                    }
-                });
-                let Some((p, residuals, inv)) = least_squares(&x, &yk) else {
-                    continue;
-                };
-                if !passes(p[1], &residuals, own, about_line(&tk, &yk), sample_rate_hz) {
-                    continue;
-                }
-                let dof = (kept.len() - 2) as f64;
-                let var = (residuals.iter().map(|r| r * r).sum::<f64>() / dof).max(own * own);
-                let samples_std = (var * inv[(1, 1)]).sqrt() * sample_rate_hz;
-                // A group of one stretch may be a mix of the two delays (module docs).
-                let single = out == 1 || back - (out + out_gap) == 1 || back + back_gap == m - 1;
-                let found = DelayStep {
-                    before_s: p[0],
-                    after_s: p[0] + p[1],
-                    between_s: [t[out - 1], t[out + out_gap]],
-                    samples: p[1] * sample_rate_hz,
-                    samples_std: if single {
-                        samples_std.max(0.5 * p[1].abs() * sample_rate_hz)
-                    } else {
-                        samples_std
-                    },
-                    trend: None,
-                    back_between_s: Some([t[back - 1], t[back + back_gap]]),
-                };
-                let fit = rms(&residuals);
-                if best.as_ref().is_none_or(|(r, _)| fit < *r) {
-                    best = Some((fit, found));
-                }
-            }
-        }
-    }
-    best.map(|(_, s)| s)
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ pub mod band_top;
 pub mod block_orders;
 pub mod causal_stage;
 pub mod coherent_spans;
+mod delay_excursion;
 pub mod delay_step;
 pub mod even_gain;
 pub mod excitation;

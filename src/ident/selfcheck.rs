@@ -258,6 +258,7 @@ pub fn self_check(
         });
     }
     out.extend(zeros_lead(fit));
+    out.extend(zeros_lag(fit));
     if let OrderSetting::Fixed(n) = settings.order.of(block)
         && let Some(reason) = fit
             .candidates
@@ -323,12 +324,7 @@ pub const ZEROS_LEAD_DEVIATIONS: f64 = 3.0;
 /// [`ZEROS_LEAD_DEVIATIONS`] of their deviations' bound ([`StructuralFit::zeros_lag_s`]: as if
 /// every parameter were fully correlated; the parameters' own deviations run short at order 2).
 fn zeros_lead(fit: &StructuralFit) -> Option<IdentWarning> {
-    // A fixed order the rules reject says so (`inadmissible_order`); its zeros are not evidence.
-    let admissible = fit
-        .candidates
-        .iter()
-        .any(|c| c.order == fit.order && c.rejected.is_none());
-    let [lag, std] = fit.zeros_lag_s.filter(|_| admissible)?;
+    let [lag, std] = admissible_zeros_lag(fit)?;
     (-lag > ZEROS_LEAD_DEVIATIONS * std).then(|| IdentWarning::ZerosLead {
         order: fit.order,
         lead_s: -lag,
@@ -336,4 +332,27 @@ fn zeros_lead(fit: &StructuralFit) -> Option<IdentWarning> {
         tau_s: fit.tau_s,
         pole_lag_s: fit.denominator.first().copied().unwrap_or(0.0),
     })
+}
+
+/// `zeros_lag` when the chosen model, admissible, has zeros that lag at low frequency beyond
+/// [`ZEROS_LEAD_DEVIATIONS`] of their deviations' bound, as [`zeros_lead`] for a lead.
+fn zeros_lag(fit: &StructuralFit) -> Option<IdentWarning> {
+    let [lag, std] = admissible_zeros_lag(fit)?;
+    (lag > ZEROS_LEAD_DEVIATIONS * std).then_some(IdentWarning::ZerosLag {
+        order: fit.order,
+        lag_s: lag,
+        lag_std_s: std,
+        tau_s: fit.tau_s,
+        tau_std_s: fit.tau_std_s,
+    })
+}
+
+/// The chosen model's zeros' lag and its deviations' bound, if the model is admissible.
+fn admissible_zeros_lag(fit: &StructuralFit) -> Option<[f64; 2]> {
+    // A fixed order the rules reject says so (`inadmissible_order`); its zeros are not evidence.
+    let admissible = fit
+        .candidates
+        .iter()
+        .any(|c| c.order == fit.order && c.rejected.is_none());
+    fit.zeros_lag_s.filter(|_| admissible)
 }

@@ -163,11 +163,42 @@ pub(super) fn zeros_lead_words(
          (a filter with phase in the angle measurement, not a zero-phase band limit). The model \
          is the block relative to those angles: its net delay at low frequency is {:.3} ms, and \
          its delay and poles alone ({:.3} ms at low frequency) are the block's only if the zeros \
-         are the angles' lag; check the angle sensors' filters and latency",
+         are the angles' lag; check the angle sensors' filters and latency. If the angles do not \
+         lag, the delay and the zeros split the block's delay between them (a sensor filter \
+         without zeros can give such a lead), and the net delay is the block's",
         lead_s * 1e3,
         lead_std_s * 1e3,
         (lag_s - lead_s) * 1e3,
         lag_s * 1e3
+    )
+}
+
+/// The words of [`super::warnings::IdentWarning::ZerosLag`].
+pub(super) fn zeros_lag_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::IdentWarning) -> fmt::Result {
+    let &super::warnings::IdentWarning::ZerosLag {
+        order,
+        lag_s,
+        lag_std_s,
+        tau_s,
+        tau_std_s,
+    } = w
+    else {
+        return Ok(());
+    };
+    write!(
+        f,
+        "the order-{order} model's zeros lag by {:.3} +- {:.3} ms at low frequency: over the band \
+         zeros that lag act as a delay, so the delay ({:.3} +- {:.3} ms) and the zeros split the \
+         block's delay at low frequency, {:.3} ms, between them, and the delay's deviation does \
+         not cover the split; a filter without zeros (most sensors' anti-alias filters) has all \
+         of it in its delay: quote {:.3} ms, or the delay as fitted only if the block's filter is \
+         known to have zeros",
+        lag_s * 1e3,
+        lag_std_s * 1e3,
+        tau_s * 1e3,
+        tau_std_s * 1e3,
+        (tau_s + lag_s) * 1e3,
+        (tau_s + lag_s) * 1e3
     )
 }
 

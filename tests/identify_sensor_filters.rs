@@ -91,7 +91,6 @@ fn a_lag_above_the_band_is_fitted_as_a_pole_not_an_even_gain() {
             );
             assert!(s.even_gain.is_none(), "seed {seed} {:?}", b.block);
             assert_eq!(zeros_lead(&b.warnings), None, "seed {seed} {:?}", b.block);
-            assert_eq!(zeros_lag(&b.warnings), None, "seed {seed} {:?}", b.block);
         }
     }
 }
@@ -124,9 +123,13 @@ fn zeros_that_take_part_of_a_filtered_blocks_delay_are_said() {
         "tau {:.6} +- {:.6}, zeros' lag {lag:.6} +- {lag_std:.6}, true {:.6}",
         s.tau_s, s.tau_std_s, truth.tau_s
     );
+    // The fitted delay alone misses by more than three of its deviations; with the zeros' lag
+    // the delay beside the poles is right to a tenth of the miss.
+    let (alone, beside) = ((s.tau_s - truth.tau_s).abs(), (s.tau_s + lag - truth.tau_s).abs());
+    assert!(alone > 3.0 * s.tau_std_s, "{} against {}", s.tau_s, truth.tau_s);
     assert!(
-        (s.tau_s + lag - truth.tau_s).abs() < 3.0 * (s.tau_std_s + lag_std),
-        "{} + {lag} against {}",
+        beside < 0.1 * alone,
+        "{} + {lag} +- {lag_std} against {}",
         s.tau_s,
         truth.tau_s
     );
@@ -136,10 +139,11 @@ fn zeros_that_take_part_of_a_filtered_blocks_delay_are_said() {
         .find(|w| matches!(w, IdentWarning::ZerosLag { .. }))
         .map(ToString::to_string)
         .unwrap_or_default();
-    assert!(
-        words.contains("zeros lag by") && words.contains("quote"),
-        "{words}"
+    let quoted = format!(
+        "quote {:.3} ms as the delay beside the poles",
+        (s.tau_s + lag) * 1e3
     );
+    assert!(words.contains(&quoted), "{quoted:?} not in {words}");
 }
 
 #[test]
@@ -273,6 +277,8 @@ fn an_anti_alias_filter_at_1_khz_is_a_stable_pair_at_its_corner() {
                 b.block
             );
             assert!(k_error < 0.003, "seed {seed} {:?}: K {k_error}", b.block);
+            // Its delay is its own: no zeros take part of it.
+            assert_eq!(zeros_lag(&b.warnings), None, "seed {seed} {:?}", b.block);
         }
     }
 }

@@ -13,6 +13,9 @@
 //! (none reach here: a stretch without a finite delay is not fitted).
 
 use super::delay_step::{DelayStep, MATERIAL_SAMPLES, MIN_KEPT, STEADY_RATIO};
+
+/// Fewest stretches the level outside an excursion rests on.
+const MIN_OUTSIDE: usize = 3;
 use super::stretches::StretchFit;
 
 /// Sums over a set of stretches: count, `t`, `t^2`, `y`, `t y`, `y^2` (centred values).
@@ -125,7 +128,12 @@ pub(super) fn excursion(
                 let after = back + back_gap;
                 let (outside, during) = (over(0, out).add(over(after, m)), over(first, back));
                 let kept = outside.add(during);
-                if (kept.n as usize) < MIN_KEPT {
+                // The level outside rests on at least `MIN_OUTSIDE` stretches, and a side of one
+                // stretch has no left-out stretch beside it: else a smooth rise and fall (a clock
+                // whose rate reverses) passed for an excursion at 5-8 stretches, its two ends the
+                // "level" (a review's finding: a noiseless parabola did every time).
+                let lone_side_left_out = (out == 1 && out_gap == 1) || (after == m - 1 && back_gap == 1);
+                if (kept.n as usize) < MIN_KEPT || (outside.n as usize) < MIN_OUTSIDE || lone_side_left_out {
                     continue;
                 }
                 let (level, stepped) = (outside.mean(), during.mean());
@@ -136,10 +144,18 @@ pub(super) fn excursion(
                 let squares = outside.about_mean() + during.about_mean();
                 let about_step = (squares / kept.n).sqrt();
                 let about_line = (kept.about_line() / kept.n).sqrt();
-                if step.abs() * sample_rate_hz < MATERIAL_SAMPLES
-                    || step.abs() < STEADY_RATIO * (largest + own)
-                    || about_step >= 0.5 * about_line
-                {
+                // An excursion of one stretch has no residual of its own: its own deviation joins
+                // the bar.
+                let own_bar = if back - first == 1 {
+                    own.max(stretches[first].tau_std_s)
+                } else {
+                    own
+                };
+                // Written so that a NaN anywhere fails.
+                let passes = step.abs() * sample_rate_hz >= MATERIAL_SAMPLES
+                    && step.abs() >= STEADY_RATIO * (largest + own_bar)
+                    && about_step < 0.5 * about_line;
+                if !passes {
                     continue;
                 }
                 let var = (squares / (kept.n - 2.0)).max(own * own);
@@ -195,7 +211,9 @@ mod tests {
                     let kept: Vec<usize> = (0..m)
                         .filter(|&i| i < out || during(i) || i >= back + bg)
                         .collect();
-                    if kept.len() < MIN_KEPT {
+                    let outside = kept.iter().filter(|&&i| !during(i)).count();
+                    let lone_left_out = (out == 1 && og == 1) || (back + bg == m - 1 && bg == 1);
+                    if kept.len() < MIN_KEPT || outside < MIN_OUTSIDE || lone_left_out {
                         continue;
                     }
                     let y: Vec<f64> = kept.iter().map(|&i| stretches[i].tau_s).collect();
@@ -209,8 +227,13 @@ mod tests {
                     let line = DMatrix::from_fn(kept.len(), 2, |r, c| if c == 0 { 1.0 } else { t[kept[r]] });
                     let ((p, r, inv), (_, rl, _)) = (fit(&x, &y), fit(&line, &y));
                     let largest = r.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+                    let own_bar = if back - (out + og) == 1 {
+                        own.max(stretches[out + og].tau_std_s)
+                    } else {
+                        own
+                    };
                     if p[1].abs() * fs < MATERIAL_SAMPLES
-                        || p[1].abs() < STEADY_RATIO * (largest + own)
+                        || p[1].abs() < STEADY_RATIO * (largest + own_bar)
                         || rms(&r) >= 0.5 * rms(&rl)
                     {
                         continue;

@@ -393,6 +393,30 @@ mod tests {
         assert_eq!(delay_step(&fits(&out_and_back(3.5), 0.7), 285.714), None);
         assert_eq!(delay_step(&fits(&out_and_back(0.7), 0.01), 285.714), None);
         assert!(delay_step(&fits(&out_and_back(3.5), 0.01), 285.714).is_some());
+        // A smooth rise and fall (a clock whose rate reverses) at 5-8 stretches, one to four
+        // samples high: no excursion (its two ends passed for the level).
+        for m in 5..=8 {
+            for samples in [0.5, 1.0, 2.0, 4.0] {
+                let taus: Vec<f64> = (0..m)
+                    .map(|i| {
+                        let x = 2.0 * f64::from(i) / f64::from(m - 1) - 1.0;
+                        4.0 + samples * 3.5 * (1.0 - x * x)
+                    })
+                    .collect();
+                let s = delay_step(&fits(&taus, 0.011), 285.714);
+                assert!(
+                    s.is_none_or(|s| s.back_between_s.is_none()),
+                    "{m} stretches, {samples}: {s:?}"
+                );
+            }
+        }
+        // One stretch half a sample off whose own deviation is wide: not an excursion.
+        let mut one = fits(
+            &[4.15, 4.17, 4.16, 4.15, 4.16, 5.9, 4.17, 4.15, 4.16, 4.16],
+            0.011,
+        );
+        one[5].tau_std_s = 0.4e-3;
+        assert_eq!(delay_step(&one, 285.714), None);
         let stairs = [4.0, 4.0, 4.0, 7.5, 7.5, 7.5, 11.0, 11.0, 11.0];
         assert!(
             delay_step(&fits(&stairs, 0.01), 285.714).is_none_or(|s| s.back_between_s.is_none()),

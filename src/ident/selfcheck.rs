@@ -344,6 +344,7 @@ fn zeros_lag(fit: &StructuralFit) -> Option<IdentWarning> {
         lag_std_s: std,
         tau_s: fit.tau_s,
         tau_std_s: fit.tau_std_s,
+        pole_lag_s: fit.denominator.first().copied().unwrap_or(0.0),
     })
 }
 

@@ -156,7 +156,9 @@ pub const ZERO_PAD: usize = 4;
 #[must_use]
 pub fn grid_len(settings: &WelchSettings) -> usize {
     let segment = settings.segment_len.max(1);
-    settings.fft_len.unwrap_or(ZERO_PAD * segment).div_ceil(segment) * segment
+    let asked = settings.fft_len.unwrap_or(ZERO_PAD.saturating_mul(segment));
+    // A length whose next multiple overflows is left as asked (the estimator refuses it).
+    asked.div_ceil(segment).checked_mul(segment).unwrap_or(asked)
 }
 
 /// Computes the block's spectra with `planner` (plans and windows are reused across calls); the

@@ -126,6 +126,10 @@ pub(super) fn delay_step_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::
         "a fraction of a sample: one stream re-timed (a timestamp correction, resampling), not a \
          clock drift"
             .to_owned()
+    } else if super::delay_step::definite(samples_std) && back_between_s.is_some() {
+        "a fraction of a sample: one stream re-timed (a timestamp correction, resampling) and \
+         back, not a clock drift"
+            .to_owned()
     } else if super::delay_step::definite(samples_std) {
         "a fraction of a sample: one stream re-timed (a timestamp correction, resampling), or a \
          slip beside a clock drift, which too few stretches cannot tell apart"
@@ -148,28 +152,31 @@ pub(super) fn delay_step_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::
     )
 }
 
-/// The words of [`super::warnings::IdentWarning::ZerosLead`]; `lag_s` is the delay plus the poles' lag.
+/// The words of [`super::warnings::IdentWarning::ZerosLead`].
 pub(super) fn zeros_lead_words(
     f: &mut fmt::Formatter<'_>,
     order: usize,
     lead_s: f64,
     lead_std_s: f64,
-    lag_s: f64,
+    tau_s: f64,
+    pole_lag_s: f64,
 ) -> fmt::Result {
     write!(
         f,
-        "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency: a sensor's \
-         filters do not lead, so the stand's angles probably lag the motion by about that much \
-         (a filter with phase in the angle measurement, not a zero-phase band limit). The model \
-         is the block relative to those angles: its net delay at low frequency is {:.3} ms, and \
-         its delay and poles alone ({:.3} ms at low frequency) are the block's only if the zeros \
-         are the angles' lag; check the angle sensors' filters and latency. If the angles do not \
-         lag, the delay and the zeros split the block's delay between them (a sensor filter \
-         without zeros can give such a lead), and the net delay is the block's",
+        "the order-{order} model's zeros lead by {:.3} +- {:.3} ms at low frequency, and a \
+         sensor's filters do not lead. Two causes fit: the stand's angles lag the motion by about \
+         that much (a filter with phase in the angle measurement, not a zero-phase band limit), \
+         and the model's delay and poles alone ({:.3} ms at low frequency) are then the block's; \
+         or the delay and the zeros split the block's delay between them (a sensor filter without \
+         zeros can give such a lead), and the delay beside the poles is then {:.3} ms, not the \
+         fitted {:.3} ms. Either way the net delay at low frequency is {:.3} ms; check the angle \
+         sensors' filters and latency",
         lead_s * 1e3,
         lead_std_s * 1e3,
-        (lag_s - lead_s) * 1e3,
-        lag_s * 1e3
+        (tau_s + pole_lag_s) * 1e3,
+        (tau_s - lead_s) * 1e3,
+        tau_s * 1e3,
+        (tau_s + pole_lag_s - lead_s) * 1e3
     )
 }
 
@@ -181,6 +188,7 @@ pub(super) fn zeros_lag_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::I
         lag_std_s,
         tau_s,
         tau_std_s,
+        pole_lag_s,
     } = w
     else {
         return Ok(());
@@ -188,17 +196,19 @@ pub(super) fn zeros_lag_words(f: &mut fmt::Formatter<'_>, w: &super::warnings::I
     write!(
         f,
         "the order-{order} model's zeros lag by {:.3} +- {:.3} ms at low frequency: over the band \
-         zeros that lag act as a delay, so the delay ({:.3} +- {:.3} ms) and the zeros split the \
-         block's delay at low frequency, {:.3} ms, between them, and the delay's deviation does \
-         not cover the split; a filter without zeros (most sensors' anti-alias filters) has all \
-         of it in its delay: quote {:.3} ms, or the delay as fitted only if the block's filter is \
-         known to have zeros",
+         zeros that lag act as a delay, so the fitted delay ({:.3} +- {:.3} ms) and the zeros \
+         split the delay beside the poles, {:.3} ms, between them, and the delay's deviation \
+         does not cover the split; a filter without zeros (most sensors' anti-alias filters) has \
+         all of it in its delay: quote {:.3} ms as the delay beside the poles, or the fitted delay \
+         only if the block's filter is known to have zeros (net delay at low frequency, poles \
+         included: {:.3} ms)",
         lag_s * 1e3,
         lag_std_s * 1e3,
         tau_s * 1e3,
         tau_std_s * 1e3,
         (tau_s + lag_s) * 1e3,
-        (tau_s + lag_s) * 1e3
+        (tau_s + lag_s) * 1e3,
+        (tau_s + pole_lag_s + lag_s) * 1e3
     )
 }
 

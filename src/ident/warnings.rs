@@ -271,6 +271,8 @@ pub enum IdentWarning {
         tau_s: f64,
         /// Its standard deviation, s.
         tau_std_s: f64,
+        /// The poles' lag at low frequency (`d_1`), s.
+        pole_lag_s: f64,
     },
     /// The delay drifts through the record (the stretches' delays have a significant trend): the
     /// block and the stand may log on separate clocks.
@@ -500,7 +502,7 @@ impl fmt::Display for IdentWarning {
                 lead_std_s,
                 tau_s,
                 pole_lag_s,
-            } => zeros_lead_words(f, *order, *lead_s, *lead_std_s, tau_s + pole_lag_s),
+            } => zeros_lead_words(f, *order, *lead_s, *lead_std_s, *tau_s, *pole_lag_s),
             IdentWarning::DelayDrift {
                 trend,
                 trend_std,

@@ -358,12 +358,16 @@ impl BlockModel {
         // part of a gain rise): its gain is given as fitted, without the delay-only model's even
         // gain, and the gain-rise warning says so.
         self.even_gain = None;
-        // A structural fit's poles weighed against an even gain (`poles_or_even_gain`), and its
-        // own delay beside the delay-only model's (`delay_outside_usual_range`), are not this
-        // model's: the joint fit is order 0 and says its own.
-        self.fit
-            .warnings
-            .retain(|w| !matches!(w, IdentWarning::PolesOrEvenGain { .. }));
+        // A structural fit's poles weighed against an even gain (`poles_or_even_gain`), its delay
+        // split with its zeros (`zeros_lag`), and its own delay beside the delay-only model's
+        // (`delay_outside_usual_range`), are not this model's: the joint fit is order 0 and says
+        // its own. (`zeros_lead` stays: angles that lag are the data's.)
+        self.fit.warnings.retain(|w| {
+            !matches!(
+                w,
+                IdentWarning::PolesOrEvenGain { .. } | IdentWarning::ZerosLag { .. }
+            )
+        });
         for w in &mut self.fit.warnings {
             if let IdentWarning::DelayOutsideUsualRange { model_tau_s, .. } = w {
                 *model_tau_s = None;

@@ -156,6 +156,14 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
         },
         outside(Some(0.046)),
         kept.clone(),
+        IdentWarning::ZerosLag {
+            order: 3,
+            lag_s: 0.005,
+            lag_std_s: 0.001,
+            tau_s: 0.046,
+            tau_std_s: 0.002,
+            pole_lag_s: 0.01,
+        },
     ];
     let effects = ModelEffects {
         accepted: Vec::new(),

@@ -20,7 +20,7 @@
 //! deviations off, said by nothing; at 100 ms an interior local maximum at 1 ms was taken. The
 //! evidence bar keeps the range's best where a periodic motion (one sine) gives lobes of equal
 //! height beyond it. Each scan point costs one complex product per bin for its phase factor (a
-//! recurrence in the delay, exact every [`SCAN_RESYNC`] points) and nine pairs of real
+//! recurrence in the delay, exact every `phasor::RESYNC` points, as over bins) and nine pairs of real
 //! multiply-adds per bin; the scan allocates two vectors of phase factors.
 
 use nalgebra::Matrix3;
@@ -30,10 +30,6 @@ use super::model::{ELEMENTS, Model, Prepared};
 
 /// The most points of the delay scan.
 const MAX_SCAN: usize = 20_000;
-
-/// Scan points between exact phase factors (the recurrence's rounding grows by about an ulp a
-/// point: below `SCAN_RESYNC * 2^-52` relative, far below any difference between points).
-const SCAN_RESYNC: usize = 32;
 
 /// How far from zero the delay is also searched, s, beyond the settings' range ([`scan`]): the
 /// reach of the stationarity stretches' own scan, wide enough for a logging or transport latency
@@ -265,7 +261,7 @@ fn best_delay(sums: &Sums, tau_min: f64, tau_max: f64, step: f64) -> f64 {
         }
     };
     // The points' phase factors by a recurrence in the delay, `e^(-j w (tau + step)) = e^(-j w
-    // tau) e^(-j w step)`, exact again every `SCAN_RESYNC` points: the fit's frequencies are
+    // tau) e^(-j w step)`, exact again every `super::phasor::RESYNC` points: the fit's frequencies are
     // the bins' input power centroids, not equally spaced, so the recurrence over bins
     // (`super::phasor`) does not apply, and a `sin_cos` per bin and point was most of a retune.
     let omega = &sums.data.omega;
@@ -280,7 +276,7 @@ fn best_delay(sums: &Sums, tau_min: f64, tau_max: f64, step: f64) -> f64 {
     let mut phases = Vec::with_capacity(omega.len());
     let (mut best_i, mut best_f) = (0, f64::NEG_INFINITY);
     for i in 0..points {
-        if i % SCAN_RESYNC == 0 || i + 1 == points {
+        if i % super::phasor::RESYNC == 0 || i + 1 == points {
             exact(at(i), &mut phases);
         } else {
             phases.iter_mut().zip(&turn).for_each(|(z, t)| *z *= t);

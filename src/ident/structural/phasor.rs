@@ -13,7 +13,7 @@
 use num_complex::Complex64;
 
 /// Bins between exact evaluations.
-const RESYNC: usize = 32;
+pub(super) const RESYNC: usize = 32;
 
 /// Largest relative departure of a spacing from the mean spacing of "equally spaced" bins.
 const SPACING_TOLERANCE: f64 = 1e-9;

@@ -13,6 +13,7 @@ use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::{OrderSetting, Settings};
 use imu_attest::ident::warnings::IdentWarning;
 #[path = "common/real.rs"]
+#[expect(dead_code, reason = "this test needs only `real`, `k_error` and `gyro_late`")]
 mod real_common;
 use real_common::{gyro_late, k_error, real};
 

@@ -1,8 +1,10 @@
-//! The real recordings in `tests/data/real` (BROAD, CC BY 4.0; README there) and the figure the
-//! tests judge their gain by.
+//! The real recordings in `tests/data/real` (BROAD, CC BY 4.0; README there), the figure the
+//! tests judge their gain by, and their gyro block identified with the kinds of its warnings.
 
 use std::path::PathBuf;
 
+use imu_attest::ident::identify::{BlockIdentification, identify_run};
+use imu_attest::ident::settings::Settings;
 use imu_attest::run::{LoadOptions, Run, load};
 
 /// The recording `name` (`tests/data/real/{name}.csv.gz` and its sidecar), loaded as a user would.
@@ -30,4 +32,24 @@ pub fn gyro_late(mut run: Run, samples: usize) -> Run {
         c.rotate_right(samples);
     }
     run
+}
+
+/// The gyro block of `run` identified with `settings` (the real runs have no other block).
+pub fn gyro(run: &Run, settings: &Settings) -> BlockIdentification {
+    let mut id = identify_run(run, settings).expect("identified");
+    assert_eq!(id.blocks.len(), 1, "the real runs have the gyro block only");
+    id.blocks.remove(0)
+}
+
+/// The `kind` of each of `b`'s warnings, as its JSON names it.
+pub fn kinds(b: &BlockIdentification) -> Vec<String> {
+    b.warnings
+        .iter()
+        .map(|w| {
+            serde_json::to_value(w).expect("serialisable")["kind"]
+                .as_str()
+                .expect("a kind")
+                .to_owned()
+        })
+        .collect()
 }

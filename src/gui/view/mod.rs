@@ -9,6 +9,7 @@ pub mod disturbance;
 pub mod errors;
 pub mod grid;
 pub mod heatmap;
+pub mod key;
 pub mod results;
 pub mod runs;
 pub mod spectra;

@@ -3,8 +3,9 @@
 //! delay and the fitted trend. A clock that drifts shows as a sloping line of delays.
 
 use eframe::egui;
-use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points};
+use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoints, Points};
 
+use super::key::{self, Swatch};
 use super::palette;
 use crate::ident::stretches::Stationarity;
 use crate::model::BlockModel;
@@ -66,12 +67,19 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
     ui.label(stationarity_label(name, st));
     let mid = |s: &crate::ident::stretches::StretchFit| 0.5 * (s.span_s[0] + s.span_s[1]);
     let link = egui::Id::unique(("stretches", name));
+    // The stretches are fitted at order 0: the whole record's delay beside them is its order-0
+    // fit's. A richer model's delay leaves its poles' lag out (a 100 Hz filter's order-2 delay sat
+    // 2.2 ms below every stretch, as if they all disagreed with it).
+    let (whole_label, whole_tau_s) = match m.fit.candidates.first() {
+        Some(zero) if m.order > 0 => ("whole record, order 0", zero.tau_s),
+        _ => ("whole record", m.tau_s),
+    };
+    let whole_colour = egui::Color32::GRAY;
     Plot::new(("stretch-delay", name))
         .x_grid_spacer(super::grid::nice_grid_spacer())
         .x_axis_formatter(super::grid::nice_label)
         .height(110.0)
         .link_axis(link, [true, false])
-        .legend(Legend::default())
         .y_axis_label("τ, ms")
         .allow_scroll(false)
         .show(ui, |plot| {
@@ -87,14 +95,11 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                     .radius(3.0)
                     .color(palette(2)),
             );
-            // The stretches are fitted at order 0: the whole record's delay beside them is its
-            // order-0 fit's. A richer model's delay leaves its poles' lag out (a 100 Hz filter's
-            // order-2 delay sat 2.2 ms below every stretch, as if they all disagreed with it).
-            let (label, tau_s) = match m.fit.candidates.first() {
-                Some(zero) if m.order > 0 => ("whole record, order 0", zero.tau_s),
-                _ => ("whole record", m.tau_s),
-            };
-            plot.hline(HLine::new(label, tau_s * 1e3).style(LineStyle::dashed_loose()));
+            plot.hline(
+                HLine::new(whole_label, whole_tau_s * 1e3)
+                    .style(LineStyle::dashed_loose())
+                    .color(whole_colour),
+            );
             let n = st.stretches.len() as f64;
             let t_mean = st.stretches.iter().map(mid).sum::<f64>() / n;
             let tau_mean = st.stretches.iter().map(|s| s.tau_s).sum::<f64>() / n;
@@ -129,12 +134,26 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 .color(palette(3)),
             );
         });
+    let mut entries = vec![
+        (palette(2), Swatch::DotWithBar, "stretch delay ±2σ"),
+        (whole_colour, Swatch::Dashed, whole_label),
+    ];
+    match st.delay_step {
+        Some(s) => {
+            entries.push((palette(3), Swatch::Line, "before the step"));
+            entries.push((palette(4), Swatch::Line, "after the step"));
+            if s.back_between_s.is_some() {
+                entries.push((palette(3), Swatch::Line, "back"));
+            }
+        }
+        None => entries.push((palette(3), Swatch::Line, "trend")),
+    }
+    key::show(ui, &entries);
     Plot::new(("stretch-gain", name))
         .x_grid_spacer(super::grid::nice_grid_spacer())
         .x_axis_formatter(super::grid::nice_label)
         .height(110.0)
         .link_axis(link, [true, false])
-        .legend(Legend::default())
         .y_axis_label("scale error, ppm")
         .x_axis_label("t, s")
         .allow_scroll(false)
@@ -148,4 +167,8 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
                 plot.line(Line::new(m.outputs[i].as_str(), PlotPoints::new(points)).color(palette(3 + i)));
             }
         });
+    let outputs: Vec<_> = (0..3)
+        .map(|i| (palette(3 + i), Swatch::Line, m.outputs[i].as_str()))
+        .collect();
+    key::show(ui, &outputs);
 }

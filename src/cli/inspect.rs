@@ -5,6 +5,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::{Args, CliError};
+use crate::ident::dead_output::moves;
+use crate::ident::signals::channel_names;
 use crate::run::Run;
 
 pub(super) fn run(args: &Args) -> Result<(), CliError> {
@@ -36,5 +38,30 @@ fn summarise(run: &Run, out: &mut String) {
     );
     for notice in &run.notices {
         let _ = writeln!(out, "  note: {notice}");
+    }
+    // Columns that never move: what `identify` will refuse, said before it is run.
+    for block in run.blocks() {
+        let names = channel_names(block).1;
+        for (column, name) in run.outputs(block).into_iter().flatten().zip(names) {
+            if !moves(column) {
+                let _ = writeln!(
+                    out,
+                    "  warning: {name} never moves (always {}): a dead or disconnected channel; \
+                     identify refuses the {} block",
+                    column[0],
+                    block.name()
+                );
+            }
+        }
+    }
+    for (column, name) in run.angles.iter().zip(["roll", "yaw", "pitch"]) {
+        if !moves(column) {
+            let _ = writeln!(
+                out,
+                "  warning: {name} never moves (always {}): that stand axis is held still, and no \
+                 block's response to it can be identified from this run",
+                column[0]
+            );
+        }
     }
 }

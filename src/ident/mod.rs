@@ -12,6 +12,7 @@ pub mod band_top;
 pub mod block_orders;
 pub mod causal_stage;
 pub mod coherent_spans;
+pub mod dead_output;
 mod delay_excursion;
 pub mod delay_step;
 pub mod even_gain;
@@ -114,6 +115,23 @@ pub enum IdentError {
         /// Whether other blocks are identified beside this one ([`IdentError::alone`]).
         others: bool,
     },
+    /// An output channel holds one value over every sample analysed: a dead or disconnected
+    /// sensor axis ([`dead_output`]). Nothing of the block's response is in it.
+    #[error(
+        "{block} block: {} over the samples analysed (a dead or disconnected channel, a stuck \
+         sensor axis or a column the logger never wrote): nothing of the block's response is in \
+         it; check the sensor and the logger's channel map{}",
+        dead_output::channel_words(channels),
+        or_leave_out(*others, "record the run again")
+    )]
+    DeadOutput {
+        /// The block.
+        block: &'static str,
+        /// Each flat channel (`gz`, ...) with the one value it holds.
+        channels: Vec<(&'static str, f64)>,
+        /// Whether other blocks are identified beside this one ([`IdentError::alone`]).
+        others: bool,
+    },
     /// A matrix that must be inverted is singular.
     #[error("{0} is singular")]
     Singular(&'static str),
@@ -169,7 +187,10 @@ impl IdentError {
     /// leave it out (nothing would be left).
     #[must_use]
     pub fn alone(mut self) -> Self {
-        if let IdentError::NoUsableBand { others, .. } | IdentError::NotExcited { others, .. } = &mut self {
+        if let IdentError::NoUsableBand { others, .. }
+        | IdentError::NotExcited { others, .. }
+        | IdentError::DeadOutput { others, .. } = &mut self
+        {
             *others = false;
         }
         self
@@ -191,6 +212,8 @@ impl IdentError {
             IdentError::NoUsableBand { block, .. } | IdentError::NotExcited { block, .. } => {
                 *block != crate::block::Block::Gyro.name()
             }
+            // The channel's own fault, whichever block: the stand's motion is untouched.
+            IdentError::DeadOutput { .. } => true,
             _ => false,
         }
     }
@@ -207,6 +230,7 @@ impl IdentError {
             | IdentError::EmptyBand { .. }
             | IdentError::NotExcited { .. }
             | IdentError::NoUsableBand { .. }
+            | IdentError::DeadOutput { .. }
             | IdentError::Observer(_) => true,
             IdentError::Singular(what) => *what == "weight_A" || *what == "auto-lambda system",
             IdentError::Spectra(e) => !matches!(e, S::Fft(_) | S::ShapeMismatch { .. } | S::BadParts { .. }),

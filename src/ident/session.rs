@@ -31,6 +31,7 @@ use rayon::prelude::*;
 
 use super::IdentError;
 use super::causal_stage::causal_stage;
+use super::dead_output::{dead_output, moves};
 use super::factorisation::{Factorisation, FactorisationSettings, factorise_from};
 use super::identify::{
     BlockIdentification, FitStart, IdentStep, Refusal, RunIdentification, identify_block_from,
@@ -117,7 +118,13 @@ impl Session {
             ..ObserverSettings::default()
         };
         let angles = bridged(self.run.angles.clone());
-        let witness = self.run.outputs(Block::Gyro).map(|gyro| bridged(gyro.clone()));
+        // A gyro with a channel that never moves is no witness: its flat axis would read every
+        // motion of the stand about it as angle noise ([`super::dead_output`]).
+        let witness = self
+            .run
+            .outputs(Block::Gyro)
+            .filter(|gyro| gyro.iter().all(|c| moves(c)))
+            .map(|gyro| bridged(gyro.clone()));
         let m = Arc::new(observe_with_witness(
             angles.each_ref().map(Vec::as_slice),
             self.run.sample_rate_hz,
@@ -305,7 +312,18 @@ impl Session {
         {
             return Ok(id.clone());
         }
-        let blocks = settings.blocks.clone();
+        // A block with an output channel that never moves is refused before its spectra (its
+        // noise weights would be infinite); the others go on.
+        let motion = self.motion()?;
+        let span = self.span(&settings)?;
+        let mut dead = Vec::new();
+        let mut blocks = Vec::with_capacity(settings.blocks.len());
+        for &block in &settings.blocks {
+            match dead_output(&*self.span_signals(block, &span)?) {
+                Some(refusal) => dead.push((block, refusal)),
+                None => blocks.push(block),
+            }
+        }
         let total = 1 + 3 * blocks.len();
         let mut done = 0;
         let mut step = |stage, block, count: usize| {
@@ -318,7 +336,6 @@ impl Session {
             done += count;
         };
         step("observer", None, 1);
-        let motion = self.motion()?;
         for &block in &blocks {
             step("spectra", Some(block), 1);
             self.spectra(&settings, &[block])?;
@@ -341,8 +358,20 @@ impl Session {
                 identify_block_from(block, spectra, factorisation, &settings, previous.as_deref())
             })
             .collect();
+        // In the settings' order again, the blocks refused for a flat channel among them.
+        let mut identified = identified.into_iter();
+        let identified: Vec<_> = settings
+            .blocks
+            .iter()
+            .map(|block| match dead.iter().position(|(b, _)| b == block) {
+                Some(i) => Err(dead[i].1.clone()),
+                None => identified
+                    .next()
+                    .unwrap_or(Err(IdentError::MissingBlock(block.name()))),
+            })
+            .collect();
         // A refusal decided on a warm start (fit or factorisation) is redone from scratch.
-        let (mut identified, refused) = split_refusals(&blocks, identified, start == Start::Cold)?;
+        let (mut identified, refused) = split_refusals(&settings.blocks, identified, start == Start::Cold)?;
         if let Some(w) = angle_noise_overstated(&motion, self.run.sidecar.angle_noise_rad) {
             // What the gyro says of the declared angle noise concerns every block's inputs.
             for b in &mut identified {

@@ -19,6 +19,8 @@ pub enum RefusalKind {
     NotExcited,
     /// The outputs are nowhere coherent with the inputs computed from the angles.
     NoUsableBand,
+    /// An output channel holds one value throughout (a dead or disconnected sensor axis).
+    DeadOutput,
 }
 
 /// A refused block's entry in the model file.
@@ -26,7 +28,8 @@ pub enum RefusalKind {
 pub struct RefusedBlock {
     /// Why.
     pub kind: RefusalKind,
-    /// The input axis held still (`fy`, `wz`, ...), for `not_excited`.
+    /// The input axis held still (`fy`, `wz`, ...), for `not_excited`; the flat output channels
+    /// (`gz`, or `gy,gz`), for `dead_output`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<String>,
     /// The refusal in words, with what to do about it: what the command line prints.
@@ -40,6 +43,10 @@ impl RefusedBlock {
         let (kind, axis) = match error {
             IdentError::NotExcited { axis, .. } => (RefusalKind::NotExcited, Some((*axis).to_owned())),
             IdentError::NoUsableBand { .. } => (RefusalKind::NoUsableBand, None),
+            IdentError::DeadOutput { channels, .. } => {
+                let names: Vec<&str> = channels.iter().map(|(name, _)| *name).collect();
+                (RefusalKind::DeadOutput, Some(names.join(",")))
+            }
             _ => return None,
         };
         Some(Self {

@@ -23,6 +23,11 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
         ("broad07_fast_rotation", 6_usize),
         ("broad11_slow_translation", 10),
         ("broad25_tapping", 6),
+        // 38.5 and 42 ms: the tapped triad's motion is at 4-13 Hz, where the lag turns the phase
+        // by radians; its mounting was read as turned (its x axis reversed) and K came out 3.4 %
+        // high at order 0, order 3 by default, said by nothing (`stand::mount::best_lag`).
+        ("broad25_tapping", 11),
+        ("broad25_tapping", 12),
     ] {
         let run = gyro_late(real(name), samples);
         let shift_s = samples as f64 * run.dt_s();

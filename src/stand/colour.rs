@@ -168,29 +168,57 @@ fn witness_angles(rates: &[f64], sample_rate_hz: f64) -> Vec<f64> {
     remove_line(&angle, sample_rate_hz).2
 }
 
-/// Half-width, Hz, of the window over which [`align`] smooths the coherency (a delay of 0.3 s
-/// turns the phase across it by a fifth of a radian), as whole bins of the stretch's transform
-/// between [`ALIGN_MIN_BINS`] and [`ALIGN_MAX_BINS`].
-const ALIGN_HALF_WIDTH_HZ: f64 = 0.05;
-/// Fewest bins on either side of [`align`]'s window (the coherency of fewer is mostly noise).
-const ALIGN_MIN_BINS: usize = 2;
-/// Most bins on either side of [`align`]'s window.
-const ALIGN_MAX_BINS: usize = 15;
+/// Independent bins in the window over which [`align`] smooths the coherency: enough for chance
+/// to stay below [`align_weight`]'s level (0.44 at one false alarm in a hundred) where the two
+/// signals are unrelated. A delay turns the phase across the window (the window is its width in
+/// bins times the grid's spacing, about `1.5 ALIGN_INDEPENDENT / T` for a stretch of `T` s): at
+/// the search's end, half a second, it shrinks a coherent bin's coherency by 7 % on a stretch of
+/// 25 s, nothing that brings it near chance.
+const ALIGN_INDEPENDENT: f64 = 8.0;
+
+/// The weight [`align`] gives a bin of squared coherency `coherency2` estimated over a window of
+/// `independent` independent bins: how far it stands above what two unrelated signals reach
+/// there, `((coherency2 - c0) / (1 - c0))_+`, `c0 = 1 - ALIGN_FALSE_ALARM^(1 / (independent - 1))`
+/// the level they exceed with probability [`ALIGN_FALSE_ALARM`] (`P(coherency2 > x) = (1 - x)^(M -
+/// 1)` for `M` independent bins of unrelated signals). Fewer than two independent bins: none.
+fn align_weight(coherency2: f64, independent: f64) -> f64 {
+    if independent <= 1.0 {
+        return 0.0;
+    }
+    let c0 = 1.0 - ALIGN_FALSE_ALARM.powf(1.0 / (independent - 1.0));
+    ((coherency2 - c0) / (1.0 - c0)).max(0.0)
+}
+
+/// How often two unrelated signals pass [`align_weight`]'s level in a bin: one bin in a hundred.
+const ALIGN_FALSE_ALARM: f64 = 0.01;
 
 /// Advances the witness's spectra `w` by its bulk delay behind the angles' `y`: the peak of their
-/// summed cross-correlation with each bin weighted by the squared coherency over
-/// [`ALIGN_HALF_WIDTH_HZ`] on either side and divided by the two signals' smoothed power
-/// (a generalised cross-correlation, "SCOT" with coherence weighting), refined by a parabola. A
-/// delay left in would turn the phase across a smoothing window and leak motion into the
-/// unexplained part. The plain cross-correlation is dominated by the slowest motion, whose peak
-/// is seconds wide: on our simulator's approach runs with the angles 100 ms late it put the delay
-/// at 115-300 ms (the gyro's `K` then 1.2-4.5 % off); weighted, every bin where the two agree
-/// counts alike and the peak is as narrow as their common band allows. Returns the delay, s.
-fn align(w: &mut [Vec<Complex64>; 3], y: &[Vec<Complex64>; 3], fft: &mut RecordFft) -> f64 {
+/// summed cross-correlation with each bin divided by the two signals' smoothed power over
+/// [`ALIGN_INDEPENDENT`] independent bins around it and weighted by how far their squared coherency there
+/// stands above chance ([`align_weight`]; a generalised cross-correlation, "SCOT" with coherence
+/// weighting), refined by a parabola. `independent_per_bin`: the independent bins per bin of the
+/// transform (a Hann-windowed stretch of `n` samples on `len` bins: `2n / 3 / len`). A delay left
+/// in would turn the phase across a smoothing window and leak motion into the unexplained part.
+/// The plain cross-correlation is dominated by the slowest motion, whose peak is seconds wide: on
+/// our simulator's approach runs with the angles 100 ms late it put the delay at 115-300 ms (the
+/// gyro's `K` then 1.2-4.5 % off); weighted, every bin where the two agree counts alike and the
+/// peak is as narrow as their common band allows. Weighted by the squared coherency itself, the
+/// bins where the two are unrelated counted too: over a window of three or four independent bins
+/// chance alone gives a squared coherency of about 0.3, and above the motion's band they
+/// are most of the bins. On a real recording (the gyro 38.5 ms behind the motion capture, its
+/// taps' broadband noise above 20 Hz) they outweighed the motion's band, the correlation's peaks
+/// came 7 ms apart at nearly equal heights, and three of five stretches were aligned at 9.8,
+/// -140.6 and 78.1 ms: their unexplained motion was taken for angle noise and the gyro's `K`
+/// came out 3.4 % high, said by nothing. Returns the delay, s.
+fn align(
+    w: &mut [Vec<Complex64>; 3],
+    y: &[Vec<Complex64>; 3],
+    fft: &mut RecordFft,
+    independent_per_bin: f64,
+) -> f64 {
     let rate = fft.sample_rate_hz();
     let bins = fft.n_bins();
-    let df = rate / fft.len() as f64;
-    let half = ((ALIGN_HALF_WIDTH_HZ / df).round() as usize).clamp(ALIGN_MIN_BINS, ALIGN_MAX_BINS);
+    let half = (ALIGN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
     let raw: Vec<Complex64> = (0..bins)
         .map(|k| (0..3).map(|a| y[a][k] * w[a][k].conj()).sum())
         .collect();
@@ -214,7 +242,8 @@ fn align(w: &mut [Vec<Complex64>; 3], y: &[Vec<Complex64>; 3], fft: &mut RecordF
                 return Complex64::default();
             }
             let coherency = c.norm() / scale;
-            raw[k] * ((hi - lo) as f64 / scale) * coherency * coherency
+            let weight = align_weight(coherency * coherency, (hi - lo) as f64 * independent_per_bin);
+            raw[k] * ((hi - lo) as f64 / scale) * weight
         })
         .collect();
     let correlation = fft.inverse(cross);
@@ -426,16 +455,16 @@ fn stretch_noise(
     // no longer matches the angles' by the delay over the stretch's length: with the angles
     // 250 ms late on stretches of 24 s, a thousandth of the angles' power left unexplained, taken
     // for their noise, and the gyro's `K` 0.8 % high), then any rest by a phase turn.
-    let mut first = spectra(fft, angles, 0.0);
-    let delay_s = align(&mut first, &y, fft);
-    drop(first);
-    let late = angles.map(|a| delayed(a, delay_s * rate));
-    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice), -delay_s * rate);
-    align(&mut w, &y, fft);
     // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
     // stretch's equivalent number of independent samples, spread over the grid's bins.
     let power_norm = 3.0 * n as f64 / 8.0;
     let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
+    let mut first = spectra(fft, angles, 0.0);
+    let delay_s = align(&mut first, &y, fft, independent_per_bin);
+    drop(first);
+    let late = angles.map(|a| delayed(a, delay_s * rate));
+    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice), -delay_s * rate);
+    align(&mut w, &y, fft, independent_per_bin);
     let bins_per_hz = fft.len() as f64 / rate;
     let min_half = (MIN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
     // The windows hold at least 2 min_half bins: the model is evaluated per cell of a quarter of

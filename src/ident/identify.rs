@@ -18,6 +18,7 @@ use super::band::{
     usable_band,
 };
 use super::band_top::misfit_edge;
+use super::delay_scatter::delay_scatter;
 use super::even_gain::over_even_gain;
 use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings};
@@ -348,6 +349,7 @@ fn identify_excited(
     if let Some(step) = stationarity.as_deref().and_then(|st| st.delay_step) {
         warnings.push(step.warning());
     }
+    warnings.extend(stationarity.as_deref().and_then(delay_scatter));
     if let Some(st) = stationarity.as_deref().filter(|st| !st.no_delay_s.is_empty()) {
         warnings.push(IdentWarning::StretchesWithoutDelay {
             spans_s: st.no_delay_s.clone(),

@@ -14,6 +14,7 @@ pub mod causal_stage;
 pub mod coherent_spans;
 pub mod dead_output;
 mod delay_excursion;
+pub mod delay_scatter;
 pub mod delay_step;
 pub mod even_gain;
 pub mod excitation;

@@ -308,6 +308,22 @@ pub enum IdentWarning {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         back_between_s: Option<[f64; 2]>,
     },
+    /// The stretches' delays disagree beyond their own deviations in a way neither a drift nor
+    /// a step describes ([`super::delay_scatter`]): the delay's deviation is their spread.
+    DelayScatter {
+        /// The stretches tested.
+        stretches: usize,
+        /// The smallest stretch delay, s.
+        min_s: f64,
+        /// The largest, s.
+        max_s: f64,
+        /// The median of the stretches' own deviations, s.
+        own_std_s: f64,
+        /// Their scatter about the weighted mean, chi2 per degree of freedom.
+        chi2_per_dof: f64,
+        /// The record's delay deviation their spread implies, s.
+        spread_std_s: f64,
+    },
     /// Stretches of the record for which no delay was found inside the stationarity check's scan
     /// nor inside the record's own range (`super::stretches`): there the block's response is not
     /// the record's. They are left out of the check, which rests on the others.
@@ -518,6 +534,7 @@ impl fmt::Display for IdentWarning {
             ),
             w @ IdentWarning::DelayStep { .. } => delay_step_words(f, w),
             w @ IdentWarning::ZerosLag { .. } => zeros_lag_words(f, w),
+            w @ IdentWarning::DelayScatter { .. } => super::delay_scatter::delay_scatter_words(f, w),
             IdentWarning::StretchesWithoutDelay { spans_s, fitted } => {
                 write_stretches_without_delay(f, spans_s, *fitted)
             }

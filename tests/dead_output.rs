@@ -22,10 +22,13 @@ use imu_attest::model::refused::RefusalKind;
 use imu_attest::run::Run;
 use imu_attest::sim::regime::Regime;
 
-/// A 60 s cruise run of `seed` with its gyro's `gz` written as zeros throughout.
+/// A 60 s cruise run of `seed` with its gyro's `gz` written as zeros throughout but for one spike
+/// (a channel "all equal but one" passed the first version of the check).
 fn with_dead_gz(seed: u64) -> Run {
     let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, seed, &[]);
-    run.gyro.as_mut().expect("a gyro")[2].fill(0.0);
+    let gz = &mut run.gyro.as_mut().expect("a gyro")[2];
+    gz.fill(0.0);
+    gz[12_345] = 0.5;
     run
 }
 

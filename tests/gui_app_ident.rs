@@ -603,7 +603,7 @@ fn a_typed_path_opens_a_run_and_writes_an_export() {
 
 /// The stretches are fitted at order 0, so the whole record's delay drawn beside them is its
 /// order-0 fit's when the chosen model has poles (whose delay leaves their lag out): the accel
-/// fixed at order 1 on the sample gets "whole record, order 0" in its stretch plot's legend, the
+/// fixed at order 1 on the sample gets "whole record, order 0" in its stretch plot's key, the
 /// gyro (order 0) keeps "whole record".
 #[test]
 fn the_stretch_plot_compares_a_model_with_poles_at_order_0() {

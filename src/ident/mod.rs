@@ -199,10 +199,12 @@ impl IdentError {
 
     /// Whether the error refuses one block for what its own data lack, leaving the run's other
     /// blocks to be identified: such a block goes to [`identify::RunIdentification::refused`]
-    /// beside the others. Only the accelerometer's refusals are: no usable band (outputs not
-    /// coherent with the inputs: a dead or disconnected block), or an input axis not excited
-    /// (its inputs depend on its lever arm: a zero or undeclared arm leaves the vertical one
-    /// flat while the motion is fine). The gyro's refuse the run: its inputs are the stand's
+    /// beside the others. A dead output channel of either block is ([`dead_output`]: the
+    /// channel's own fault, and a gyro with one is not the angle noise's witness). Of the others
+    /// only the accelerometer's are: no usable band (outputs not coherent with the inputs: a
+    /// dead or disconnected block), or an input axis not excited (its inputs depend on its lever
+    /// arm: a zero or undeclared arm leaves the vertical one flat while the motion is fine). The
+    /// gyro's refuse the run: its inputs are the stand's
     /// angular motion itself (a stand axis held still takes every block's inputs with it; an
     /// accelerometer fitted beside it came out with gains 50 % off), and its outputs witness the
     /// stand's angle noise for every block (`Session::motion`; a dead gyro as witness left the

@@ -103,7 +103,8 @@ impl Session {
 
     /// The observer's estimate of the platform motion (the sidecar's declared angle noise, else
     /// estimated, as the white floor; coloured per frequency by what the gyro's outputs do not
-    /// explain when the run has a gyro block), from the measured angles with their isolated
+    /// explain when the run has a gyro block whose channels all move, [`super::dead_output`]),
+    /// from the measured angles with their isolated
     /// glitches bridged ([`bridged`]: a spike in an angle would be differentiated twice into
     /// every block's input).
     ///
@@ -123,8 +124,8 @@ impl Session {
         let witness = self
             .run
             .outputs(Block::Gyro)
-            .filter(|gyro| gyro.iter().all(|c| moves(c)))
-            .map(|gyro| bridged(gyro.clone()));
+            .map(|gyro| bridged(gyro.clone()))
+            .filter(|gyro| gyro.iter().all(|c| moves(c)));
         let m = Arc::new(observe_with_witness(
             angles.each_ref().map(Vec::as_slice),
             self.run.sample_rate_hz,
@@ -319,7 +320,7 @@ impl Session {
         let mut dead = Vec::new();
         let mut blocks = Vec::with_capacity(settings.blocks.len());
         for &block in &settings.blocks {
-            match dead_output(&*self.span_signals(block, &span)?) {
+            match dead_output(&*self.signals(block)?, &span) {
                 Some(refusal) => dead.push((block, refusal)),
                 None => blocks.push(block),
             }
@@ -371,7 +372,12 @@ impl Session {
             })
             .collect();
         // A refusal decided on a warm start (fit or factorisation) is redone from scratch.
-        let (mut identified, refused) = split_refusals(&settings.blocks, identified, start == Start::Cold)?;
+        let (mut identified, mut refused) =
+            split_refusals(&settings.blocks, identified, start == Start::Cold)?;
+        // A flat channel is no start's doing: its refusal stands, warm or cold.
+        for r in &mut refused {
+            r.from_scratch |= matches!(r.error, IdentError::DeadOutput { .. });
+        }
         if let Some(w) = angle_noise_overstated(&motion, self.run.sidecar.angle_noise_rad) {
             // What the gyro says of the declared angle noise concerns every block's inputs.
             for b in &mut identified {

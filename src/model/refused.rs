@@ -1,6 +1,6 @@
 //! The blocks of a run that its model does not hold because the run cannot identify them (an
 //! accelerometer with no band where its outputs follow the inputs, or an input axis not
-//! excited: `IdentError::is_refusal`), each with the refusal in words: written beside the identified
+//! excited; either block with a dead output channel: `IdentError::is_refusal`), each with the refusal in words: written beside the identified
 //! blocks, so that one block the run cannot identify does not take the others with it
 //! (`Model::refused_blocks`).
 

@@ -169,11 +169,11 @@ fn witness_angles(rates: &[f64], sample_rate_hz: f64) -> Vec<f64> {
 }
 
 /// Independent bins in the window over which [`align`] smooths the coherency: enough for chance
-/// to stay below [`align_weight`]'s level (0.44 at one false alarm in a hundred) where the two
+/// to stay below [`align_weight`]'s level (0.48 at one false alarm in a hundred) where the two
 /// signals are unrelated. A delay turns the phase across the window (the window is its width in
-/// bins times the grid's spacing, about `1.5 ALIGN_INDEPENDENT / T` for a stretch of `T` s): at
-/// the search's end, half a second, it shrinks a coherent bin's coherency by 7 % on a stretch of
-/// 25 s, nothing that brings it near chance.
+/// bins times the grid's spacing, about `1.6 ALIGN_INDEPENDENT / T` for a stretch of `T` s): at
+/// the search's end, half a second, it shrinks a coherent bin's coherency by about a tenth on a
+/// stretch of 25 s, nothing that brings it near chance.
 const ALIGN_INDEPENDENT: f64 = 8.0;
 
 /// The weight [`align`] gives a bin of squared coherency `coherency2` estimated over a window of

@@ -14,8 +14,8 @@
 //! whole record, both averaged over blocks of 20 ms (the angle noise that differentiation raises
 //! at high frequency stays out; means removed), the outputs taken whole blocks later by their
 //! lag behind the rates (found first, by a measure no mounting changes: `best_lag`), with the
-//! rates' own changes as three more regressors (they take up the rest of the delay). The first three coefficients are a rough static gain
-//! `G`: on simulated runs its orthogonal factor is within about a degree of the mounting (the
+//! rates' own changes as three more regressors (they take up the rest of the delay). The first
+//! three coefficients are a rough static gain `G`: on simulated runs its orthogonal factor is within about a degree of the mounting (the
 //! gyro's slow disturbance meets the slow motion by chance), which is why only a turn beyond
 //! [`TURNED`] is taken out. Its nearest orthogonal matrix
 //! `Q = U V^T` (polar decomposition, from the singular value decomposition `G = U S V^T`) is the
@@ -59,7 +59,7 @@ pub fn turned_mounting(
 ) -> Option<Matrix3<f64>> {
     let (rates, outputs, block_rate) = block_means(angles, outputs, sample_rate_hz)?;
     let reach = (LAG_REACH_S * block_rate).round() as usize;
-    let lag = best_lag(&rates, &outputs, reach);
+    let lag = best_lag(&rates, &outputs, reach)?;
     let (rates, outputs) = aligned(rates, outputs, lag);
     let n = rates[0].len();
     if n < 8 {
@@ -135,7 +135,7 @@ const LAG_REACH_S: f64 = 0.5;
 /// `C(l) = sum_i y(i + l) w(i)^T` (means removed, per block of overlap) has the largest sum of
 /// singular values, the Procrustes fit's, which no rotation or reflection of the outputs changes,
 /// so the lag is found before the mounting is. Searched over `[-reach, reach]`, within a quarter
-/// of the record.
+/// of the record; `None` when the best is at the search's end (the lag may lie beyond).
 ///
 /// Why: the rates' changes take up a delay only while it is short beside the motion's time scale.
 /// A real gyro written 38.5 ms behind its motion capture (a tapped triad, the motion's power at
@@ -143,7 +143,7 @@ const LAG_REACH_S: f64 = 0.5;
 /// witness turned into the wrong axes explained little of the angles, the rest was taken for
 /// angle noise and the gyro's `K` came out 3.4 % high, said by nothing. With the lag taken out
 /// first, the changes take up only its fraction of a block.
-fn best_lag(rates: &[Vec<f64>; 3], outputs: &[Vec<f64>; 3], reach: usize) -> isize {
+fn best_lag(rates: &[Vec<f64>; 3], outputs: &[Vec<f64>; 3], reach: usize) -> Option<isize> {
     let n = rates[0].len();
     let reach = reach.min(n / 4) as isize;
     let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
@@ -164,10 +164,16 @@ fn best_lag(rates: &[Vec<f64>; 3], outputs: &[Vec<f64>; 3], reach: usize) -> isi
         }
         c.singular_values().sum() / m.max(1) as f64
     };
-    (-reach..=reach)
-        .map(|lag| (lag, score(lag)))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map_or(0, |(lag, _)| lag)
+    // Nearest lags first, so that a tie (a flat output scores zero everywhere) keeps the nearest.
+    let mut best = (0, score(0));
+    for lag in (1..=reach).flat_map(|l| [l, -l]) {
+        let s = score(lag);
+        if s > best.1 {
+            best = (lag, s);
+        }
+    }
+    // At the search's end the lag may lie beyond it: no mounting is read from a misaligned fit.
+    (reach == 0 || best.0.abs() < reach).then_some(best.0)
 }
 
 /// Where the rates and the outputs `lag` blocks later overlap: the first rate block, the first

@@ -144,7 +144,7 @@ fn a_late_gyro_behind_a_quick_motion_is_not_read_as_turned() {
         // The lag in blocks of 20 ms, to a block.
         let (block_rates, outputs, block_rate) =
             block_means(views(&angles), views(&gyro), RATE).expect("blocks");
-        let lag = best_lag(&block_rates, &outputs, 25);
+        let lag = best_lag(&block_rates, &outputs, 25).expect("inside the search");
         let due = late as f64 / RATE * block_rate;
         assert!(
             (lag as f64 - due).abs() <= 1.0,

@@ -75,6 +75,9 @@ pub struct Session {
     /// Every block's latest structural fit: warm starts.
     fits: PerBlock<FitStart>,
     identification: Option<(Settings, Arc<RunIdentification>)>,
+    /// Each block's dead-channel verdict ([`dead_output`]) over the span it was made on: one pass
+    /// over every output sample, not to be repeated on each retune.
+    dead: Vec<(Block, Range<usize>, Option<IdentError>)>,
 }
 
 impl Session {
@@ -92,6 +95,7 @@ impl Session {
             previous_factorisations: Vec::new(),
             fits: Vec::new(),
             identification: None,
+            dead: Vec::new(),
         }
     }
 
@@ -319,8 +323,16 @@ impl Session {
         let span = self.span(&settings)?;
         let mut dead = Vec::new();
         let mut blocks = Vec::with_capacity(settings.blocks.len());
+        self.dead.retain(|(_, on, _)| *on == span);
         for &block in &settings.blocks {
-            match dead_output(&*self.signals(block)?, &span) {
+            let verdict = if let Some((_, _, verdict)) = self.dead.iter().find(|(b, _, _)| *b == block) {
+                verdict.clone()
+            } else {
+                let verdict = dead_output(&*self.signals(block)?, &span);
+                self.dead.push((block, span.clone(), verdict.clone()));
+                verdict
+            };
+            match verdict {
                 Some(refusal) => dead.push((block, refusal)),
                 None => blocks.push(block),
             }

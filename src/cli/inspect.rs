@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::{Args, CliError};
-use crate::ident::dead_output::moves;
+use crate::ident::dead_output::held_value;
 use crate::ident::signals::channel_names;
 use crate::run::Run;
 
@@ -40,28 +40,26 @@ fn summarise(run: &Run, out: &mut String) {
         let _ = writeln!(out, "  note: {notice}");
     }
     // Columns that never move: what `identify` will refuse, said before it is run.
-    for block in run.blocks() {
-        let names = channel_names(block).1;
-        for (column, name) in run.outputs(block).into_iter().flatten().zip(names) {
-            if !moves(column) {
-                let _ = writeln!(
-                    out,
-                    "  warning: {name} never moves (always {}): a dead or disconnected channel; \
-                     identify refuses the {} block",
-                    column[0],
-                    block.name()
-                );
-            }
-        }
-    }
-    for (column, name) in run.angles.iter().zip(["roll", "yaw", "pitch"]) {
-        if !moves(column) {
-            let _ = writeln!(
-                out,
-                "  warning: {name} never moves (always {}): that stand axis is held still, and no \
-                 block's response to it can be identified from this run",
-                column[0]
-            );
+    let outputs = run.blocks().into_iter().flat_map(|block| {
+        let why = format!(
+            "a dead or disconnected channel; identify refuses the {} block",
+            block.name()
+        );
+        let columns = run.outputs(block).into_iter().flatten();
+        columns
+            .zip(channel_names(block).1)
+            .map(move |(c, name)| (c, name, why.clone()))
+    });
+    let still = "that stand axis is held still, and no block's response to it can be identified \
+                 from this run";
+    let angles = run
+        .angles
+        .iter()
+        .zip(["roll", "yaw", "pitch"])
+        .map(|(c, name)| (c, name, still.to_owned()));
+    for (column, name, why) in outputs.chain(angles) {
+        if let Some(value) = held_value(column) {
+            let _ = writeln!(out, "  warning: {name} never moves (always {value}): {why}");
         }
     }
 }

@@ -15,9 +15,9 @@
 //! at high frequency stays out; means removed), the outputs taken whole blocks later by their
 //! lag behind the rates (found first, by a measure no mounting changes: `best_lag`), with the
 //! rates' own changes as three more regressors (they take up the rest of the delay). The first
-//! three coefficients are a rough static gain `G`: on simulated runs its orthogonal factor is within about a degree of the mounting (the
-//! gyro's slow disturbance meets the slow motion by chance), which is why only a turn beyond
-//! [`TURNED`] is taken out. Its nearest orthogonal matrix
+//! three coefficients are a rough static gain `G`: on simulated runs its orthogonal factor is
+//! within about a degree of the mounting (the gyro's slow disturbance meets the slow motion by
+//! chance), which is why only a turn beyond [`TURNED`] is taken out. Its nearest orthogonal matrix
 //! `Q = U V^T` (polar decomposition, from the singular value decomposition `G = U S V^T`) is the
 //! mounting. Where `Q` is more than [`TURNED`] from the identity, the witness uses `Q^T y`, the
 //! outputs in platform axes; otherwise the outputs as they are (every run mounted as the
@@ -187,13 +187,20 @@ fn overlap(n: usize, lag: isize) -> (usize, usize, usize) {
     }
 }
 
-/// The rates and the outputs `lag` blocks later, over their overlap.
-fn aligned(rates: [Vec<f64>; 3], outputs: [Vec<f64>; 3], lag: isize) -> ([Vec<f64>; 3], [Vec<f64>; 3]) {
+/// The rates and the outputs `lag` blocks later, cut in place to their overlap.
+fn aligned(
+    mut rates: [Vec<f64>; 3],
+    mut outputs: [Vec<f64>; 3],
+    lag: isize,
+) -> ([Vec<f64>; 3], [Vec<f64>; 3]) {
     let (r0, y0, m) = overlap(rates[0].len(), lag);
-    (
-        rates.map(|c| c[r0..r0 + m].to_vec()),
-        outputs.map(|c| c[y0..y0 + m].to_vec()),
-    )
+    for (columns, first) in [(&mut rates, r0), (&mut outputs, y0)] {
+        for c in columns.iter_mut() {
+            c.drain(..first);
+            c.truncate(m);
+        }
+    }
+    (rates, outputs)
 }
 
 /// Three body-rate columns, three output columns, per block, and the blocks' rate, Hz.

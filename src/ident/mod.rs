@@ -22,6 +22,7 @@ pub mod factorisation;
 pub mod gain_curvature;
 pub mod holdout;
 pub mod identify;
+pub mod odd_gain;
 pub mod selfcheck;
 pub mod session;
 pub mod settings;

@@ -34,6 +34,8 @@
 //!   simulator's gyro behind angles low-passed at 20 Hz: order 3, zeros leading by 11.28 ms
 //!   where the filter's group delay is 11.25 ms, the delay and poles giving the sensor's 3 ms).
 //! - **Inadmissible order**: a fixed order that breaks a rule of [`super::structural::admissible`].
+//! - **Gain depends on the amplitude** (added by the session, which holds the signals the test
+//!   needs): an output odd-quadratic in its input beyond `K`'s deviation ([`super::odd_gain`]).
 //! - **Few segments**: fewer Welch segments or equivalent averages than [`leaves_enough`] asks (a
 //!   segment or overlap given by the user on a short record): weights on few averages, maybe no
 //!   held-out check of the order.

@@ -36,8 +36,9 @@ use super::factorisation::{Factorisation, FactorisationSettings, factorise_from}
 use super::identify::{
     BlockIdentification, FitStart, IdentStep, Refusal, RunIdentification, identify_block_from,
 };
+use super::odd_gain::{OddSpectra, amplitude_dependent, odd_spectra};
 use super::settings::{Estimate, Settings};
-use super::signals::{BlockSignals, block_signals, bridged};
+use super::signals::{BlockSignals, block_signals, bridged, channel_names};
 use super::spectra::{BlockSpectra, block_spectra};
 use super::warnings::{ANGLE_NOISE_OVERSTATED, IdentWarning};
 use crate::block::Block;
@@ -78,6 +79,9 @@ pub struct Session {
     /// Each block's dead-channel verdict ([`dead_output`]) over the span it was made on: one pass
     /// over every output sample, not to be repeated on each retune.
     dead: Vec<(Block, Range<usize>, Option<IdentError>)>,
+    /// Each block's amplitude test spectra ([`odd_spectra`]) under `spectra_key`: a retune only
+    /// pools them again over its band.
+    odd: PerBlock<OddSpectra>,
 }
 
 impl Session {
@@ -96,6 +100,7 @@ impl Session {
             fits: Vec::new(),
             identification: None,
             dead: Vec::new(),
+            odd: Vec::new(),
         }
     }
 
@@ -193,6 +198,7 @@ impl Session {
         let key = (welch, self.span(settings)?);
         if self.spectra_key.as_ref() != Some(&key) {
             self.spectra.clear();
+            self.odd.clear();
             if !self.factorisations.is_empty() {
                 self.previous_factorisations = std::mem::take(&mut self.factorisations);
             }
@@ -390,6 +396,10 @@ impl Session {
         for r in &mut refused {
             r.from_scratch |= matches!(r.error, IdentError::DeadOutput { .. });
         }
+        for b in &mut identified {
+            let said = self.amplitude_dependence(&settings, b);
+            b.warnings.extend(said);
+        }
         if let Some(w) = angle_noise_overstated(&motion, self.run.sidecar.angle_noise_rad) {
             // What the gyro says of the declared angle noise concerns every block's inputs.
             for b in &mut identified {
@@ -424,6 +434,42 @@ impl Session {
         }
         self.identification = Some((settings, id.clone()));
         Ok(id)
+    }
+
+    /// `gain_depends_on_amplitude` for an identified block ([`super::odd_gain`]), from its test
+    /// spectra (computed once per Welch settings and span); `None` when it is not said or the
+    /// test cannot be made (a span Welch refuses: the identification already stood on it).
+    fn amplitude_dependence(&mut self, settings: &Settings, b: &BlockIdentification) -> Option<IdentWarning> {
+        let odd = if let Some(odd) = of_block(&self.odd, b.block) {
+            odd
+        } else {
+            let span = self.span(settings).ok()?;
+            let signals = self.span_signals(b.block, &span).ok()?;
+            let odd = Arc::new(
+                odd_spectra(
+                    &mut self.planner,
+                    &signals,
+                    self.run.sample_rate_hz,
+                    &settings.welch,
+                    b.spectra.equivalent_averages,
+                )
+                .ok()?,
+            );
+            self.odd.push((b.block, odd.clone()));
+            odd
+        };
+        let s = &b.structural;
+        let outputs = amplitude_dependent(
+            &odd,
+            b.band_hz,
+            b.spectra.bin_correlation,
+            channel_names(b.block).1,
+            (&s.k, &s.k_std, s.tau_s),
+        );
+        (!outputs.is_empty()).then_some(IdentWarning::GainDependsOnAmplitude {
+            outputs,
+            band_hz: b.band_hz,
+        })
     }
 
     /// The latest identification and its settings, if any.

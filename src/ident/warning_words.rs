@@ -12,6 +12,38 @@ fn relative(x: f64) -> String {
     }
 }
 
+/// The words of [`super::warnings::IdentWarning::GainDependsOnAmplitude`].
+pub(super) fn gain_depends_on_amplitude_words(
+    f: &mut fmt::Formatter<'_>,
+    outputs: &[super::odd_gain::OddOutput],
+    band_hz: [f64; 2],
+) -> fmt::Result {
+    let each: Vec<String> = outputs
+        .iter()
+        .map(|o| {
+            format!(
+                "{} (k2 {:.2e} +- {:.1e}, K's diagonal {} {} the scale factor, its deviation {})",
+                o.output,
+                o.k2,
+                o.k2_std,
+                relative(o.gain_shift.abs()),
+                if o.gain_shift >= 0.0 { "above" } else { "below" },
+                relative(o.k_relative_std)
+            )
+        })
+        .collect();
+    write!(
+        f,
+        "the gain depends on the motion's amplitude: over {:.2}-{:.1} Hz the output holds a part \
+         odd-quadratic in its own input (k2 u|u|) that no linear model carries, so K is the gain \
+         at this run's motion and another run with larger motion reads a larger one: {}; \
+         `discrepancy` sizes it (scale_nonlinearity) and `identify --effects` fits it beside K",
+        band_hz[0],
+        band_hz[1],
+        each.join("; ")
+    )
+}
+
 /// The words of [`super::warnings::IdentWarning::GainChangesAcrossBand`].
 pub(super) fn gain_change_words(
     rise: f64,

@@ -20,12 +20,13 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::factorisation::{Factorisation, FactorisationSettings, input_floor, residual_loading};
+use super::odd_gain::OddOutput;
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::warning_words::{
     angle_noise_colour_unknown_words, angle_noise_overstated_words, delay_absorbed_words,
-    delay_outside_words, delay_step_words, gain_change_words, poles_or_even_gain_words,
-    write_stretches_without_delay, zeros_lag_words, zeros_lead_words,
+    delay_outside_words, delay_step_words, gain_change_words, gain_depends_on_amplitude_words,
+    poles_or_even_gain_words, write_stretches_without_delay, zeros_lag_words, zeros_lead_words,
 };
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
@@ -395,6 +396,15 @@ pub enum IdentWarning {
         /// How many times finer than the spectra's the grid was.
         refinement: usize,
     },
+    /// Outputs holding a part odd-quadratic in their own input (`k2 u |u|`) that moves `K`'s
+    /// diagonal beyond its deviation: `K` is the gain at this run's motion amplitude
+    /// ([`super::odd_gain`]).
+    GainDependsOnAmplitude {
+        /// The outputs concerned, with `k2` and the gain it adds.
+        outputs: Vec<OddOutput>,
+        /// The band tested (the model's), Hz.
+        band_hz: [f64; 2],
+    },
 }
 
 impl fmt::Display for IdentWarning {
@@ -578,6 +588,9 @@ impl fmt::Display for IdentWarning {
                      overlap"
                 }
             ),
+            IdentWarning::GainDependsOnAmplitude { outputs, band_hz } => {
+                gain_depends_on_amplitude_words(f, outputs, *band_hz)
+            }
             IdentWarning::FactorNotCausal {
                 negative_lags,
                 refinement,

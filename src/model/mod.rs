@@ -362,11 +362,16 @@ impl BlockModel {
         // split with its zeros (`zeros_lag`), and its own delay beside the delay-only model's
         // (`delay_outside_usual_range`), are not this model's: the joint fit is order 0 and says
         // its own. (`zeros_lead` stays: angles that lag are the data's.)
-        self.fit.warnings.retain(|w| {
-            !matches!(
-                w,
-                IdentWarning::PolesOrEvenGain { .. } | IdentWarning::ZerosLag { .. }
-            )
+        // A gain that depends on the amplitude is no longer the model's problem once the
+        // nonlinearity is fitted beside `K`.
+        let odd_fitted = effects
+            .accepted
+            .iter()
+            .any(|a| a.effect == crate::effect::Effect::ScaleNonlinearity);
+        self.fit.warnings.retain(|w| match w {
+            IdentWarning::PolesOrEvenGain { .. } | IdentWarning::ZerosLag { .. } => false,
+            IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
+            _ => true,
         });
         for w in &mut self.fit.warnings {
             if let IdentWarning::DelayOutsideUsualRange { model_tau_s, .. } = w {

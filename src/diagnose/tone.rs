@@ -46,6 +46,17 @@ pub struct Tone {
     pub basis: Option<Arc<[Vec<Complex64>; 2]>>,
     /// Whether it was found above the fit's band (on the state's upper outputs).
     pub upper: bool,
+    /// Per channel, the standard deviation of the amplitude per unit of the taper's variance
+    /// factor: `sqrt(level_i / (2 G_i))`, `level_i` the channel's own local continuum (in units
+    /// of its expected level) and `G_i` the basis's weighted energy per unit amplitude. Each
+    /// channel's own: the channels' noise differs (an accelerometer's vertical and lateral
+    /// channels carry the lever-arm motion the forward one does not), and one figure for all
+    /// three, from their joint evidence, was ten times too small on the noisier ones.
+    pub unit_std: [f64; 3],
+    /// Per channel, what the tone explains against that channel's own continuum (untapered
+    /// units, the channels counted apart): their sum, taken for the channels' correlation, sets
+    /// the frequency's deviation.
+    pub channel_chi2: [f64; 3],
 }
 
 impl Tone {
@@ -149,9 +160,22 @@ struct ChannelFit {
     /// Each channel's two projections whitened by its own Gram matrix (Cholesky): per quadrature,
     /// a 3-vector over the channels; `|y_i|^2` is channel `i`'s explained power.
     whitened: [Vector3<f64>; 2],
+    /// Each channel's basis energy per unit amplitude, the Gram matrix's mean diagonal.
+    energy: [f64; 3],
 }
 
 impl ChannelFit {
+    /// Per channel, the amplitude's unit deviation and the power explained against the channel's
+    /// own `levels` (see [`Tone::unit_std`], [`Tone::channel_chi2`]).
+    fn per_channel(&self, levels: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+        let unit = [0, 1, 2].map(|i| (levels[i] / (2.0 * self.energy[i]).max(f64::MIN_POSITIVE)).sqrt());
+        let chi2 = [0, 1, 2].map(|i| {
+            2.0 * (self.whitened[0][i].powi(2) + self.whitened[1][i].powi(2))
+                / levels[i].max(f64::MIN_POSITIVE)
+        });
+        (unit, chi2)
+    }
+
     /// The power explained, the channels counted as independent.
     fn explained(&self) -> f64 {
         self.whitened.iter().map(Vector3::norm_squared).sum()
@@ -177,6 +201,7 @@ fn fit_channels(
         cos: [0.0; 3],
         sin: [0.0; 3],
         whitened: [Vector3::zeros(), Vector3::zeros()],
+        energy: [0.0; 3],
     };
     for i in 0..3 {
         let [a, b, d, r1, r2] = projections(design, residual, (c, s), range, i);
@@ -184,6 +209,7 @@ fn fit_channels(
         if det.abs() <= f64::MIN_POSITIVE || a <= f64::MIN_POSITIVE {
             continue;
         }
+        fit.energy[i] = 0.5 * (a + d);
         fit.cos[i] = (d * r1 - b * r2) / det;
         fit.sin[i] = (a * r2 - b * r1) / det;
         let (l11, l21) = (a.sqrt(), b / a.sqrt());
@@ -333,6 +359,7 @@ fn line_at(
     let (c, s) = sinusoid_dft(design, frequency_hz, range.clone());
     let fit = fit_channels(design, residual, (&c, &s), &range);
     let delta_chi2 = 2.0 * fit.explained_correlated(&corr) / background / WINDOW_ENBW;
+    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, |i, k| residual[i][k]));
     let constant = Tone {
         frequency_hz,
         cos: fit.cos,
@@ -341,6 +368,8 @@ fn line_at(
         gate: None,
         basis: None,
         upper: false,
+        unit_std,
+        channel_chi2,
     };
     let Some(gate) = estimate_gate(design, residual, peak, frequency_hz) else {
         return constant;
@@ -364,6 +393,9 @@ fn line_at(
         })
         .collect();
     let background = background_level(design, median(&mut without));
+    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, |i, k| {
+        residual[i][k] - basis[0][k] * cos[i] - basis[1][k] * sin[i]
+    }));
     Tone {
         frequency_hz,
         cos,
@@ -372,7 +404,33 @@ fn line_at(
         gate: Some(gate),
         basis: Some(Arc::new(basis)),
         upper: false,
+        unit_std,
+        channel_chi2,
     }
+}
+
+/// Each channel's own disturbance level around band bin `peak`, in units of its expected level:
+/// the median of `|r_i(k)|^2 / expected` over the continuum's window ([`MEDIAN_HALF`] bins each
+/// side, shifted inwards at the ends) over `ln 2` (the median of an exponential), never below
+/// the expected level inside the fit's band ([`background_level`]'s rule). `r(i, k)` is the
+/// residual the level is read from (without a gated tone's sidebands).
+fn channel_levels(design: &Design, peak: usize, r: impl Fn(usize, usize) -> Complex64) -> [f64; 3] {
+    let n = design.n_bins();
+    let lo = peak
+        .saturating_sub(MEDIAN_HALF)
+        .min(n.saturating_sub(2 * MEDIAN_HALF + 1));
+    let hi = (lo + 2 * MEDIAN_HALF).min(n - 1);
+    [0, 1, 2].map(|i| {
+        let mut p: Vec<f64> = (lo..=hi)
+            .map(|k| r(i, k).norm_sqr() / design.expected[i][k])
+            .collect();
+        let level = median(&mut p) / std::f64::consts::LN_2;
+        if design.groups.is_empty() {
+            level.max(f64::MIN_POSITIVE)
+        } else {
+            level.max(1.0)
+        }
+    })
 }
 
 /// The disturbance level a line is measured against, in units of the design's expected level,

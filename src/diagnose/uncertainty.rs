@@ -24,8 +24,10 @@
 //!
 //! Tones are fitted apart (`tone.rs`): their frequency's standard deviation is the Cramér-Rao
 //! bound of a sinusoid, `sqrt(12 / chi2) / (2 pi N) fs` with `chi2` what the tone explains in the
-//! untapered record (all channels, one frequency), times the taper's factor for a frequency
-//! ([`TAPER_FREQUENCY_VARIANCE`]), and each channel's amplitude's is `|A| sqrt(35/18 / chi2)`.
+//! untapered record (all channels, one frequency, each against its own continuum, the sum taken
+//! for their correlation), times the taper's factor for a frequency
+//! ([`TAPER_FREQUENCY_VARIANCE`]), and each channel's amplitude's is its own,
+//! `sqrt(35/18 level_i / (2 G_i))` ([`super::tone::Tone::unit_std`]).
 //! A clock drift's is not computed (its search
 //! re-times the record at each point; `null` in the files).
 //!
@@ -34,7 +36,6 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::design::WINDOW_ENBW;
 use super::fit::{pack, unpack};
 use super::profile::{group_shares, normal_equations};
 use super::state::State;
@@ -275,25 +276,27 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
         }
         Effect::ClockDrift => json!({"drift_ppm": null, "delay_change_s": null}),
         Effect::VibrationTone => state.tones.get(index).map_or(Value::Null, |t| {
-            // The tone's chi2 is measured against the local continuum (so already widened by it)
-            // and counted in tapered bins: the untapered record's is WINDOW_ENBW times it.
-            // The three channels count as n_eff independent ones where their disturbance is
-            // correlated (the angle noise reaches all three): the chi2 summed over them is worth
-            // n_eff / 3 of its face value.
+            // Each channel's chi2 is measured against its own local continuum (so already
+            // widened by it), in untapered units. The three channels count as n_eff independent
+            // ones where their disturbance is correlated (the angle noise reaches all three): the
+            // chi2 summed over them is worth n_eff / 3 of its face value. Not the evidence's
+            // chi2, which weighs the channels by the inverse of their correlation: right for
+            // telling a line from a peak of motion all three share, ten times too large for a
+            // size's deviation where the channels are nearly collinear.
             let (design, residual) = match (t.upper, state.upper.as_deref()) {
                 (true, Some(upper)) => (upper, &state.upper_residual),
                 _ => (&state.design, &state.residual),
             };
-            let chi2 = (WINDOW_ENBW * t.delta_chi2 * effective_channels(design, residual, t.frequency_hz)
+            let chi2 = (t.channel_chi2.iter().sum::<f64>()
+                * effective_channels(design, residual, t.frequency_hz)
                 / 3.0)
                 .max(f64::MIN_POSITIVE);
             let n = state.design.n_samples as f64;
             let frequency = (12.0 * TAPER_FREQUENCY_VARIANCE / chi2).sqrt()
                 / (2.0 * std::f64::consts::PI * n)
                 * state.design.sample_rate_hz;
-            let norm = t.amplitude().iter().map(|a| a * a).sum::<f64>().sqrt();
-            let amplitude = norm * (TAPER_VARIANCE / chi2).sqrt();
-            json!({"frequency_hz": frequency, "amplitude": [amplitude, amplitude, amplitude]})
+            let amplitude = t.unit_std.map(|u| u * TAPER_VARIANCE.sqrt());
+            json!({"frequency_hz": frequency, "amplitude": amplitude})
         }),
     }
 }

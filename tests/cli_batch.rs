@@ -61,7 +61,8 @@ fn a_bad_run_is_its_own_row_and_the_numbers_are_identifys() {
 
     let table = dir.path().join("table.csv");
     let o = imu_attest(&["batch", runs.to_str().unwrap(), "--out", table.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A failed run: the whole table written, exit status 2 for a script to notice.
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("3 runs, 5 rows, 1 failed"),
         "{}",

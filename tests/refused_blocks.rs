@@ -148,6 +148,35 @@ fn the_diagnosis_batch_and_certificate_say_the_block_was_refused() {
 
 /// A stand axis held still is not one block's fault: the gyro's inputs are the stand's angular
 /// motion, and the accelerometer fitted beside it had gains 50 % off. The run is refused.
+/// A specification's limits on a block the run does not hold are undecided, said as such: a
+/// gyro-only run against a two-block specification printed "nothing checked" for the
+/// accelerometer's limits.
+#[test]
+fn a_specification_s_block_the_run_lacks_is_undecided() {
+    let mut config = imu_attest::sim::SimConfig::new(Regime::Cruise);
+    config.seed = 9;
+    config.duration_s = 60.0;
+    config.blocks = vec![Block::Gyro];
+    let (_, run) = sim_common::simulated_run(&config);
+    let run = Arc::new(run);
+    let settings = Settings::default().for_run(&run);
+    let spec = Spec::parse(
+        br#"{"accel": {"tau_s": 0.1, "scale_factor_error_ppm": 500}}"#,
+        "s.json",
+    )
+    .unwrap();
+    let r = run_report(&mut Session::new(run), &settings, None).unwrap();
+    let checks = spec::check(&spec, &r.model);
+    assert_eq!(checks.len(), 2, "{checks:?}");
+    assert!(
+        checks
+            .iter()
+            .all(|c| c.verdict == Verdict::Undecided && c.element == "block not in the run"),
+        "{checks:?}"
+    );
+    assert_eq!(spec::summary(&checks), "2 undecided");
+}
+
 #[test]
 fn a_still_stand_axis_refuses_the_run() {
     let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, 21, &[]);

@@ -1,6 +1,8 @@
 //! `imu-attest batch DIR|RUN... [--settings S.json] [--diagnose] --out TABLE.csv|.json`: a
-//! campaign (see `crate::batch`). Bad runs are rows with their reason; the command exits 0 when
-//! the table is written (a summary line on stderr counts them), 2 for bad arguments.
+//! campaign (see `crate::batch`). Bad runs are rows with their reason, and the table is written
+//! with every row; the command exits 0 when every run was identified (blocks refused beside
+//! identified ones included), 2 when a run failed (its row says why; the summary line on stderr
+//! counts them) or for bad arguments.
 
 use std::path::{Path, PathBuf};
 
@@ -55,11 +57,19 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     } else {
         String::new()
     };
-    eprintln!(
-        "imu-attest: batch: {} runs, {} rows, {failed} failed{refused}; table written to {}",
+    let summary = format!(
+        "batch: {} runs, {} rows, {failed} failed{refused}; table written to {}",
         paths.len(),
         rows.len(),
         out.display()
     );
+    if failed > 0 {
+        // The table holds every row, the failed runs' with their reasons; the status tells a
+        // script that not every run was identified.
+        return Err(CliError::Input(format!(
+            "{summary} (exit status 2: the failed runs' rows say why)"
+        )));
+    }
+    eprintln!("imu-attest: {summary}");
     Ok(())
 }

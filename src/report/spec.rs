@@ -261,22 +261,26 @@ pub fn check(spec: &Spec, model: &Model) -> Vec<Check> {
     let mut out = Vec::new();
     for (&block, limits) in &spec.limits {
         let Some(b) = model.blocks.get(block.name()) else {
-            // A block the run could not identify is not passed by saying nothing: each figure
-            // the specification limits is undecided, its element saying why.
-            if model.refused_blocks.contains_key(block.name()) {
-                for (&quantity, &limit) in limits {
-                    out.push(Check {
-                        run: model.source.file.clone(),
-                        block,
-                        quantity: quantity.id_on(block).to_owned(),
-                        element: "block not identified".to_owned(),
-                        value: f64::NAN,
-                        band: None,
-                        limit,
-                        unit: String::new(),
-                        verdict: Verdict::Undecided,
-                    });
-                }
+            // A block the run could not identify, or does not hold, is not passed by saying
+            // nothing ("nothing checked" for a gyro-only run against an accelerometer's limits):
+            // each figure the specification limits is undecided, its element saying why.
+            let why = if model.refused_blocks.contains_key(block.name()) {
+                "block not identified"
+            } else {
+                "block not in the run"
+            };
+            for (&quantity, &limit) in limits {
+                out.push(Check {
+                    run: model.source.file.clone(),
+                    block,
+                    quantity: quantity.id_on(block).to_owned(),
+                    element: why.to_owned(),
+                    value: f64::NAN,
+                    band: None,
+                    limit,
+                    unit: String::new(),
+                    verdict: Verdict::Undecided,
+                });
             }
             continue;
         };

@@ -24,6 +24,8 @@ pub enum Extension {
     ClockCorrected {
         /// Clock rate error, s per s.
         drift: f64,
+        /// Its standard deviation (`None`: the cost's curvature was not found positive).
+        drift_std: Option<f64>,
         /// The design with the re-timed outputs.
         design: Box<Design>,
         /// The current structure refitted on it.

@@ -30,6 +30,8 @@ pub struct State {
     pub residual: [Vec<Complex64>; 3],
     /// The block clock's rate error the outputs are corrected for (`None`: not in the model).
     pub clock_drift: Option<f64>,
+    /// Its standard deviation (`None`: not in the model, or not determined).
+    pub clock_drift_std: Option<f64>,
     /// The identification stretches' delay trend and its standard deviation, s per s: where the
     /// search for a clock drift starts (`None`: the record was too short to cut).
     pub drift_hint: Option<[f64; 2]>,
@@ -64,6 +66,7 @@ impl State {
             outputs,
             residual,
             clock_drift: None,
+            clock_drift_std: None,
             drift_hint: None,
             upper: None,
             upper_residual: [Vec::new(), Vec::new(), Vec::new()],
@@ -78,6 +81,7 @@ impl State {
             Extension::Structural(fitted) => next.fitted = (**fitted).clone(),
             Extension::ClockCorrected {
                 drift,
+                drift_std,
                 design,
                 fitted,
             } => {
@@ -86,6 +90,7 @@ impl State {
                 next.grams = next.design.grams(&next.outputs);
                 next.fitted = (**fitted).clone();
                 next.clock_drift = Some(*drift);
+                next.clock_drift_std = *drift_std;
             }
             Extension::Tone(tone) if tone.upper => {
                 let upper = self.upper.as_deref()?;

@@ -28,8 +28,8 @@
 //! for their correlation), times the taper's factor for a frequency
 //! ([`TAPER_FREQUENCY_VARIANCE`]), and each channel's amplitude's is its own,
 //! `sqrt(35/18 level_i / (2 G_i))` ([`super::tone::Tone::unit_std`]).
-//! A clock drift's is not computed (its search
-//! re-times the record at each point; `null` in the files).
+//! A clock drift's is the curvature of its search's profiled cost (`clock::drift_deviation`;
+//! `null` when the search did not bracket a minimum).
 //!
 //! Units: as the parameters (s, Hz, output units); `None` where the Hessian is not positive
 //! definite (a parameter the data do not determine).
@@ -274,7 +274,11 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
                 "damping": cov.and_then(|c| c.nonlinear_std(at + 1)).map(|v| v * zeta),
             })
         }
-        Effect::ClockDrift => json!({"drift_ppm": null, "delay_change_s": null}),
+        Effect::ClockDrift => {
+            let duration = state.design.n_samples as f64 / state.design.sample_rate_hz;
+            let sd = state.clock_drift_std;
+            json!({"drift_ppm": sd.map(|v| v * 1e6), "delay_change_s": sd.map(|v| v * duration)})
+        }
         Effect::VibrationTone => state.tones.get(index).map_or(Value::Null, |t| {
             // Each channel's chi2 is measured against its own local continuum (so already
             // widened by it), in untapered units. The three channels count as n_eff independent

@@ -146,8 +146,6 @@ fn the_diagnosis_batch_and_certificate_say_the_block_was_refused() {
     assert!(page.contains(": the accel block was not identified (its run's section says why)."));
 }
 
-/// A stand axis held still is not one block's fault: the gyro's inputs are the stand's angular
-/// motion, and the accelerometer fitted beside it had gains 50 % off. The run is refused.
 /// A specification's limits on a block the run does not hold are undecided, said as such: a
 /// gyro-only run against a two-block specification printed "nothing checked" for the
 /// accelerometer's limits.
@@ -171,12 +169,14 @@ fn a_specification_s_block_the_run_lacks_is_undecided() {
     assert!(
         checks
             .iter()
-            .all(|c| c.verdict == Verdict::Undecided && c.element == "block not in the run"),
+            .all(|c| c.verdict == Verdict::Undecided && c.element == "block not in the model"),
         "{checks:?}"
     );
     assert_eq!(spec::summary(&checks), "2 undecided");
 }
 
+/// A stand axis held still is not one block's fault: the gyro's inputs are the stand's angular
+/// motion, and the accelerometer fitted beside it had gains 50 % off. The run is refused.
 #[test]
 fn a_still_stand_axis_refuses_the_run() {
     let (_, mut run) = sim_common::simulated_run_of(60.0, Regime::Cruise, 21, &[]);

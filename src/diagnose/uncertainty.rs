@@ -28,8 +28,10 @@
 //! for their correlation), times the taper's factor for a frequency
 //! ([`TAPER_FREQUENCY_VARIANCE`]), and each channel's amplitude's is its own,
 //! `sqrt(35/18 level_i / (2 G_i))` ([`super::tone::Tone::unit_std`]).
-//! A clock drift's is the curvature of its search's profiled cost (`clock::drift_deviation`;
-//! `null` when the search did not bracket a minimum).
+//! A clock drift's is the stretches' delay trend's, times what the whole record's taper loses of
+//! a drift (`clock::TAPERED_DRIFT_STD`), or the two estimates' difference where larger; without
+//! stretches, the curvature of the search's profiled cost (`clock::drift_deviation`; `null` when
+//! that curvature is not positive).
 //!
 //! Units: as the parameters (s, Hz, output units); `None` where the Hessian is not positive
 //! definite (a parameter the data do not determine).

@@ -20,8 +20,11 @@
 //! with every function of the estimate for Gaussian motion). Each bin's `Re(beta e^(i w tau))`
 //! has variance `S_xx.uq / (2 (n_eq - 4) S_qq.u)` (`S_xx.uq` what neither explains, `n_eq` the
 //! equivalent independent averages, four regressors fitted), so the band's inverse-variance mean
-//! is `k2_i`, its deviation widened by the neighbouring bins' correlation. Self-normalising: a
-//! misfit of the linear model elsewhere does not narrow it.
+//! is `k2_i`, its deviation widened by the neighbouring bins' correlation and by `nu / (nu - 2)`
+//! (`nu = 2 (n_eq - 4)`: each bin's variance is itself an estimate, and weighting by its inverse
+//! overstates the information). The outputs are first moved earlier by the block's own alignment
+//! ([`super::alignment`]), the delay turned back being what is left of the model's.
+//! Self-normalising: a misfit of the linear model elsewhere does not narrow it.
 //!
 //! Said (`gain_depends_on_amplitude`) per output when `k2_i` is [`SAID_SIGMAS`] of its deviations
 //! from 0 **and** the gain it adds to `K_ii` (`k2_i` times `a`'s diagonal pooled over the band as
@@ -65,6 +68,8 @@ pub struct OddSpectra {
     pub residual: [Vec<f64>; 3],
     /// Equivalent independent averages of the estimate.
     pub equivalent_averages: f64,
+    /// How far the outputs were moved earlier before the estimate, s (the block's own alignment).
+    pub lag_s: f64,
 }
 
 /// One output's figures when its gain depends on the amplitude.
@@ -76,14 +81,16 @@ pub struct OddOutput {
     pub k2: f64,
     /// Its standard deviation.
     pub k2_std: f64,
-    /// The gain `k2` adds to `K_ii` at this run's amplitude, relative to `K_ii`.
+    /// The gain `k2` adds to `K_ii` at this run's amplitude, relative to `K_ii` (positive: `K_ii`
+    /// larger in magnitude than its small-motion value).
     pub gain_shift: f64,
     /// `K_ii`'s own relative deviation.
     pub k_relative_std: f64,
 }
 
 /// The spectra of the test for `signals` (the span's) under the block's Welch settings, with
-/// `equivalent_averages` those of the block's own estimate (same segment and overlap).
+/// `equivalent_averages` those of the block's own estimate (same segment and overlap) and its
+/// outputs moved earlier by `lag` samples as the block's spectra were (negative: later).
 ///
 /// # Errors
 /// What Welch refuses (a segment longer than the span, a non-finite sample).
@@ -91,19 +98,29 @@ pub fn odd_spectra(
     planner: &mut WelchPlanner,
     signals: &BlockSignals,
     sample_rate_hz: f64,
-    welch: &WelchSettings,
-    equivalent_averages: f64,
+    (welch, equivalent_averages, lag): (&WelchSettings, f64, i64),
 ) -> Result<OddSpectra, SpectralError> {
     let q = signals
         .input
         .each_ref()
         .map(|u| u.iter().map(|v| v * v.abs()).collect::<Vec<f64>>());
+    // The outputs moved earlier by `lag` samples, as the block's own spectra were
+    // ([`super::alignment`]): a delay long beside the segment would smear the cross-spectra.
+    let n = signals.input[0].len();
+    let shift = (lag.unsigned_abs() as usize).min(n);
+    let (input_start, output_start) = if lag >= 0 { (0, shift) } else { (shift, 0) };
+    let len = n - shift;
     let channels: Vec<&[f64]> = signals
         .input
         .iter()
-        .chain(&signals.output)
-        .chain(&q)
-        .map(Vec::as_slice)
+        .map(|c| &c[input_start..input_start + len])
+        .chain(
+            signals
+                .output
+                .iter()
+                .map(|c| &c[output_start..output_start + len]),
+        )
+        .chain(q.iter().map(|c| &c[input_start..input_start + len]))
         .collect();
     let native = WelchSettings {
         fft_len: None,
@@ -113,6 +130,7 @@ pub fn odd_spectra(
     let mut out = OddSpectra {
         frequency_hz: m.frequency_hz.clone(),
         equivalent_averages,
+        lag_s: lag as f64 / sample_rate_hz,
         ..OddSpectra::default()
     };
     let dof = (equivalent_averages - 4.0).max(1.0);
@@ -167,15 +185,21 @@ pub fn pooled(
                 continue;
             }
             let omega = 2.0 * std::f64::consts::PI * f;
-            let k2 = (odd.beta[i][k] * Complex64::from_polar(1.0, omega * tau_s)).re;
+            let k2 = (odd.beta[i][k] * Complex64::from_polar(1.0, omega * (tau_s - odd.lag_s))).re;
             sw += 1.0 / var;
             swk += k2 / var;
             qu += odd.s_qu[i][k] / Complex64::from(r);
             uu += odd.s_uu[k] / Complex64::from(r);
         }
         let absorbed = uu.try_inverse().map(|inv| (qu.transpose() * inv)[(0, i)].re)?;
-        (sw > 0.0 && absorbed.is_finite())
-            .then(|| (swk / sw, (bin_correlation.max(1.0) / sw).sqrt(), absorbed))
+        // Each bin's variance is itself estimated, on `nu = 2 (n_eq - 4)` degrees of freedom:
+        // weights `1 / var` overstate the sum's by `nu / (nu - 2)` on average.
+        let nu = 2.0 * (odd.equivalent_averages - 4.0);
+        let information = if nu > 2.0 { sw * (nu - 2.0) / nu } else { 0.0 };
+        (information > 0.0 && absorbed.is_finite()).then(|| {
+            let sd = (bin_correlation.max(1.0) / information).sqrt();
+            (swk / sw, sd, absorbed)
+        })
     })
 }
 
@@ -197,15 +221,22 @@ pub fn amplitude_dependent(
         .enumerate()
         .filter_map(|(i, p)| {
             let (k2, k2_std, absorbed) = (*p)?;
-            let kii = k[i][i].abs().max(f64::MIN_POSITIVE);
+            // Relative to `K_ii` with its sign: a positive shift makes the diagonal larger in
+            // magnitude, whatever its sign.
+            let kii = k[i][i];
             let gain_shift = k2 * absorbed / kii;
-            let k_relative_std = k_std[i][i] / kii;
-            (k2.abs() >= SAID_SIGMAS * k2_std && gain_shift.abs() > k_relative_std).then(|| OddOutput {
-                output: outputs[i].to_owned(),
-                k2,
-                k2_std,
-                gain_shift,
-                k_relative_std,
+            let k_relative_std = k_std[i][i] / kii.abs();
+            let finite = [k2, k2_std, gain_shift, k_relative_std]
+                .iter()
+                .all(|v| v.is_finite());
+            (finite && k2.abs() >= SAID_SIGMAS * k2_std && gain_shift.abs() > k_relative_std).then(|| {
+                OddOutput {
+                    output: outputs[i].to_owned(),
+                    k2,
+                    k2_std,
+                    gain_shift,
+                    k_relative_std,
+                }
             })
         })
         .collect()

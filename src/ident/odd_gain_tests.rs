@@ -68,7 +68,7 @@ fn test_of(s: &BlockSignals) -> (OddSpectra, f64) {
     let window = Window::Hann.coefficients(512);
     let n_seg = welch.n_segments(s.input[0].len());
     let n_eq = equivalent_averages(&window, welch.step(), n_seg);
-    let odd = odd_spectra(&mut WelchPlanner::new(), s, FS, &welch, n_eq).unwrap();
+    let odd = odd_spectra(&mut WelchPlanner::new(), s, FS, (&welch, n_eq, 0)).unwrap();
     (odd, bin_correlation(&window))
 }
 
@@ -195,9 +195,41 @@ fn said_only_when_k_moves_beyond_its_deviation() {
 #[test]
 fn a_band_without_bins_concludes_nothing() {
     let (odd, corr) = test_of(&block(3, 20_000, [0.02, 0.0, 0.0], 0.05));
+    // Bins lie every 200/512 Hz: none between 10.0 and 10.1 Hz, one at 10.156 Hz.
+    assert!(pooled(&odd, [10.0, 10.1], 0.0, corr).iter().all(Option::is_none));
+    assert!(pooled(&odd, [10.0, 10.2], 0.0, corr).iter().all(Option::is_some));
+}
+
+/// Outputs late by many samples, moved back by the block's alignment before the test: the same
+/// `k2` as on time, within its deviation; without the alignment the smeared cross-spectra read
+/// less of it.
+#[test]
+fn late_outputs_are_aligned_first() {
+    let on_time = block(13, 120_000, [0.02, 0.0, 0.0], 0.05);
+    let late_by = 120;
+    let mut late = on_time.clone();
+    for x in &mut late.output {
+        let mut moved = vec![0.0; late_by];
+        moved.extend_from_slice(&x[..x.len() - late_by]);
+        *x = moved;
+    }
+    let welch = WelchSettings {
+        segment_len: 512,
+        ..WelchSettings::default()
+    };
+    let window = Window::Hann.coefficients(512);
+    let n_eq = equivalent_averages(&window, welch.step(), welch.n_segments(120_000));
+    let corr = bin_correlation(&window);
+    let tau = (DELAY + late_by) as f64 / FS;
+    let test = |lag: i64| {
+        let odd = odd_spectra(&mut WelchPlanner::new(), &late, FS, (&welch, n_eq, lag)).unwrap();
+        pooled(&odd, [0.5, 40.0], tau, corr)[0].unwrap()
+    };
+    let (aligned, sd, _) = test(late_by as i64);
+    assert!((aligned - 0.02).abs() < 4.0 * sd, "aligned: {aligned} +- {sd}");
+    let (smeared, _, _) = test(0);
     assert!(
-        pooled(&odd, [150.0, 160.0], 0.0, corr)
-            .iter()
-            .all(Option::is_none)
+        smeared < 0.02 - 4.0 * sd,
+        "unaligned: {smeared} (aligned {aligned} +- {sd})"
     );
 }

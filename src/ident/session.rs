@@ -7,6 +7,7 @@
 //! | spectra | block, Welch settings, span | the Welch settings or the span (`span_s`) change |
 //! | factorisation | block, spectra | the spectra change |
 //! | its causal stage (`D_u`, `W0`) | block, spectra | the spectra change, if the estimate is causal |
+//! | the amplitude test's spectra (`odd_gain`) | block, Welch settings, span | as the spectra |
 //! | Wiener and structural fit | settings | any other setting changes |
 //!
 //! Each stage's preconditions are checked in one place: the settings against the run
@@ -450,8 +451,11 @@ impl Session {
                     &mut self.planner,
                     &signals,
                     self.run.sample_rate_hz,
-                    &settings.welch,
-                    b.spectra.equivalent_averages,
+                    (
+                        &settings.welch,
+                        b.spectra.equivalent_averages,
+                        b.spectra.aligned_samples,
+                    ),
                 )
                 .ok()?,
             );

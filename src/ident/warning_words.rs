@@ -22,12 +22,16 @@ pub(super) fn gain_depends_on_amplitude_words(
         .iter()
         .map(|o| {
             format!(
-                "{} (k2 {:.2e} +- {:.1e}, K's diagonal {} {} the scale factor, its deviation {})",
+                "{} (k2 {:.2e} +- {:.1e}, K's diagonal {} {} its small-motion value, K's deviation {})",
                 o.output,
                 o.k2,
                 o.k2_std,
                 relative(o.gain_shift.abs()),
-                if o.gain_shift >= 0.0 { "above" } else { "below" },
+                if o.gain_shift >= 0.0 {
+                    "larger than"
+                } else {
+                    "smaller than"
+                },
                 relative(o.k_relative_std)
             )
         })
@@ -36,8 +40,9 @@ pub(super) fn gain_depends_on_amplitude_words(
         f,
         "the gain depends on the motion's amplitude: over {:.2}-{:.1} Hz the output holds a part \
          odd-quadratic in its own input (k2 u|u|) that no linear model carries, so K is the gain \
-         at this run's motion and another run with larger motion reads a larger one: {}; \
-         `discrepancy` sizes it (scale_nonlinearity) and `identify --effects` fits it beside K",
+         at this run's motion and a run with other motion reads another: {}; a quadratic scale \
+         factor reads so (`discrepancy` sizes it as scale_nonlinearity, `identify --effects` fits \
+         it beside K), and so may an output that clips or saturates",
         band_hz[0],
         band_hz[1],
         each.join("; ")

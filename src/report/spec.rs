@@ -261,13 +261,14 @@ pub fn check(spec: &Spec, model: &Model) -> Vec<Check> {
     let mut out = Vec::new();
     for (&block, limits) in &spec.limits {
         let Some(b) = model.blocks.get(block.name()) else {
-            // A block the run could not identify, or does not hold, is not passed by saying
-            // nothing ("nothing checked" for a gyro-only run against an accelerometer's limits):
+            // A block the run could not identify, or the model does not hold (a gyro-only run, or
+            // a block left out of the settings), is not passed by saying nothing ("nothing
+            // checked" for a gyro-only run against an accelerometer's limits):
             // each figure the specification limits is undecided, its element saying why.
             let why = if model.refused_blocks.contains_key(block.name()) {
                 "block not identified"
             } else {
-                "block not in the run"
+                "block not in the model"
             };
             for (&quantity, &limit) in limits {
                 out.push(Check {

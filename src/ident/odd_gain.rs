@@ -39,6 +39,7 @@ use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use super::alignment::aligned;
 use super::signals::BlockSignals;
 use crate::spectral::{SpectralError, WelchPlanner, WelchSettings};
 
@@ -106,22 +107,15 @@ pub fn odd_spectra(
         .map(|u| u.iter().map(|v| v * v.abs()).collect::<Vec<f64>>());
     // The outputs moved earlier by `lag` samples, as the block's own spectra were
     // ([`super::alignment`]): a delay long beside the segment would smear the cross-spectra.
-    let n = signals.input[0].len();
-    let shift = (lag.unsigned_abs() as usize).min(n);
-    let (input_start, output_start) = if lag >= 0 { (0, shift) } else { (shift, 0) };
-    let len = n - shift;
-    let channels: Vec<&[f64]> = signals
+    let whole: Vec<&[f64]> = signals
         .input
         .iter()
-        .map(|c| &c[input_start..input_start + len])
-        .chain(
-            signals
-                .output
-                .iter()
-                .map(|c| &c[output_start..output_start + len]),
-        )
-        .chain(q.iter().map(|c| &c[input_start..input_start + len]))
+        .chain(&signals.output)
+        .map(Vec::as_slice)
         .collect();
+    let (mut channels, input_start) = aligned(&whole, lag);
+    let len = channels.first().map_or(0, |c| c.len());
+    channels.extend(q.iter().map(|c| &c[input_start..input_start + len]));
     let native = WelchSettings {
         fft_len: None,
         ..*welch

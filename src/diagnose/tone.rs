@@ -181,15 +181,26 @@ impl ChannelFit {
         self.whitened.iter().map(Vector3::norm_squared).sum()
     }
 
-    /// The power explained with the channels' background correlation `corr`
-    /// ([`channel_correlation`]): `sum y^T corr^-1 y` over the two quadratures ([`Self::explained`]
-    /// when `corr = I`). Where the channels are nearly collinear (an accelerometer above the
-    /// reference's band limit) the inverse multiplies a line across the shared direction by up to
-    /// the ridge's thousand: false tones at 43-45 Hz on a `--stand real` run (README, 29 Nov). Capping
-    /// it at [`Self::explained`] removed them but lost a true tone on a 120 s run; not mended.
-    fn explained_correlated(&self, corr: &Matrix3<f64>) -> f64 {
+    /// The line's evidence, a chi2 against the channels' background covariance: `sum v^T corr^-1 v`
+    /// over the two quadratures with `v_i = y_i / sqrt(level_i)`, each channel's whitened
+    /// projection over its own disturbance level ([`channel_levels`]), `corr` their correlation
+    /// ([`channel_correlation`]); the channels counted apart when `corr = I`. The levels belong
+    /// inside: the covariance is `D corr D` with `D = diag(sqrt(level))`. Weighing the unscaled
+    /// projections by `corr^-1` and dividing by the channels' mean level (as was done) turned a
+    /// random peak of the motion every channel carries (the common direction, with each channel's
+    /// own scale) out of that direction wherever the levels differ, into the nearly collinear
+    /// channels' weakest direction, and multiplied it by up to `1 / ridge`: four false tones at
+    /// 43-45 Hz on a `--stand real` accelerometer, chi2 157-342 (README, 29 Nov).
+    fn evidence(&self, corr: &Matrix3<f64>, levels: [f64; 3]) -> f64 {
         let inverse = corr.try_inverse().unwrap_or_else(Matrix3::identity);
-        self.whitened.iter().map(|v| v.dot(&(inverse * v))).sum()
+        let scale = Vector3::from(levels.map(|l| l.max(f64::MIN_POSITIVE).sqrt().recip()));
+        self.whitened
+            .iter()
+            .map(|y| {
+                let v = y.component_mul(&scale);
+                v.dot(&(inverse * v))
+            })
+            .sum()
     }
 }
 
@@ -304,7 +315,7 @@ pub fn strongest_line(
         let in_residual = explain(design, residual, frequency_hz, &range).2;
         let in_outputs = explain(design, outputs, frequency_hz, &range).2;
         if in_outputs >= OUTPUT_SHARE * in_residual {
-            return Some(line_at(design, residual, peak, frequency_hz, continuum[peak]));
+            return Some(line_at(design, residual, peak, frequency_hz));
         }
     }
     None
@@ -348,21 +359,15 @@ fn line_frequency(
 
 /// The line at band bin `peak` and `frequency_hz` fitted (gated if it comes and goes);
 /// `continuum` is the running median of the whitened residual power there.
-fn line_at(
-    design: &Design,
-    residual: &[Vec<Complex64>; 3],
-    peak: usize,
-    frequency_hz: f64,
-    continuum: f64,
-) -> Tone {
+fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, frequency_hz: f64) -> Tone {
     let n = design.n_bins();
-    let background = background_level(design, continuum);
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
     let corr = channel_correlation(design, residual, peak);
     let (c, s) = sinusoid_dft(design, frequency_hz, range.clone());
     let fit = fit_channels(design, residual, (&c, &s), &range);
-    let delta_chi2 = 2.0 * fit.explained_correlated(&corr) / background / WINDOW_ENBW;
-    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, |i, k| residual[i][k]));
+    let levels = channel_levels(design, peak, |i, k| residual[i][k]);
+    let delta_chi2 = 2.0 * fit.evidence(&corr, levels) / WINDOW_ENBW;
+    let (unit_std, channel_chi2) = fit.per_channel(levels);
     let constant = Tone {
         frequency_hz,
         cos: fit.cos,
@@ -381,29 +386,19 @@ fn line_at(
     let basis = gated_basis(design, frequency_hz, &gate);
     let all = 0..n;
     let fit = fit_channels(design, residual, (&basis[0], &basis[1]), &all);
-    let (cos, sin, explained) = (fit.cos, fit.sin, fit.explained_correlated(&corr));
-    // A gated tone's sidebands fill the bins around its line, so the continuum there is
+    let (cos, sin) = (fit.cos, fit.sin);
+    // A gated tone's sidebands fill the bins around its line, so the channels' levels there are
     // measured on the residual without it.
-    let lo = peak.saturating_sub(MEDIAN_HALF).min(n - 2 * MEDIAN_HALF - 1);
-    let mut without: Vec<f64> = (lo..=lo + 2 * MEDIAN_HALF)
-        .map(|k| {
-            (0..3)
-                .map(|i| {
-                    (residual[i][k] - basis[0][k] * cos[i] - basis[1][k] * sin[i]).norm_sqr()
-                        / design.expected[i][k]
-                })
-                .sum()
-        })
-        .collect();
-    let background = background_level(design, median(&mut without));
-    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, |i, k| {
+    let levels = channel_levels(design, peak, |i, k| {
         residual[i][k] - basis[0][k] * cos[i] - basis[1][k] * sin[i]
-    }));
+    });
+    let explained = fit.evidence(&corr, levels);
+    let (unit_std, channel_chi2) = fit.per_channel(levels);
     Tone {
         frequency_hz,
         cos,
         sin,
-        delta_chi2: 2.0 * explained / background / WINDOW_ENBW,
+        delta_chi2: 2.0 * explained / WINDOW_ENBW,
         gate: Some(gate),
         basis: Some(Arc::new(basis)),
         upper: false,
@@ -415,7 +410,9 @@ fn line_at(
 /// Each channel's own disturbance level around band bin `peak`, in units of its expected level:
 /// the median of `|r_i(k)|^2 / expected` over the continuum's window ([`MEDIAN_HALF`] bins each
 /// side, shifted inwards at the ends) over `ln 2` (the median of an exponential), never below
-/// the expected level inside the fit's band ([`background_level`]'s rule). `r(i, k)` is the
+/// the expected level inside the fit's band (there the expected level is the model's disturbance,
+/// and a line is never measured against less; above it, [`Design::line_search`] without groups,
+/// the expected level is only the range's median, and the local level is the level). `r(i, k)` is the
 /// residual the level is read from (without a gated tone's sidebands).
 fn channel_levels(design: &Design, peak: usize, r: impl Fn(usize, usize) -> Complex64) -> [f64; 3] {
     let n = design.n_bins();
@@ -434,20 +431,6 @@ fn channel_levels(design: &Design, peak: usize, r: impl Fn(usize, usize) -> Comp
             level.max(1.0)
         }
     })
-}
-
-/// The disturbance level a line is measured against, in units of the design's expected level,
-/// from the running median `continuum` of the three channels' whitened power (about 3 * 0.89
-/// times the level). Inside the fit's band the expected level is the model's disturbance, and
-/// a line is never measured against less; above it ([`Design::line_search`], no groups) the
-/// expected level is only the range's median, and the local continuum is the level.
-fn background_level(design: &Design, continuum: f64) -> f64 {
-    let level = continuum / (3.0 * 0.891);
-    if design.groups.is_empty() {
-        level.max(f64::MIN_POSITIVE)
-    } else {
-        level.max(1.0)
-    }
 }
 
 /// The running median of `power` over [`MEDIAN_HALF`] bins each side (shifted inwards at the

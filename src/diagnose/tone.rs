@@ -181,26 +181,21 @@ impl ChannelFit {
         self.whitened.iter().map(Vector3::norm_squared).sum()
     }
 
-    /// The line's evidence, a chi2 against the channels' background covariance: `sum v^T corr^-1 v`
-    /// over the two quadratures with `v_i = y_i / sqrt(level_i)`, each channel's whitened
-    /// projection over its own disturbance level ([`channel_levels`]), `corr` their correlation
-    /// ([`channel_correlation`]); the channels counted apart when `corr = I`. The levels belong
-    /// inside: the covariance is `D corr D` with `D = diag(sqrt(level))`. Weighing the unscaled
-    /// projections by `corr^-1` and dividing by the channels' mean level (as was done) turned a
-    /// random peak of the motion every channel carries (the common direction, with each channel's
-    /// own scale) out of that direction wherever the levels differ, into the nearly collinear
-    /// channels' weakest direction, and multiplied it by up to `1 / ridge`: four false tones at
-    /// 43-45 Hz on a `--stand real` accelerometer, chi2 157-342 (README, 29 Nov).
-    fn evidence(&self, corr: &Matrix3<f64>, levels: [f64; 3]) -> f64 {
-        let inverse = corr.try_inverse().unwrap_or_else(Matrix3::identity);
-        let scale = Vector3::from(levels.map(|l| l.max(f64::MIN_POSITIVE).sqrt().recip()));
-        self.whitened
-            .iter()
-            .map(|y| {
-                let v = y.component_mul(&scale);
-                v.dot(&(inverse * v))
-            })
-            .sum()
+    /// The line's evidence, a chi2 against the channels' background covariance `cov`
+    /// ([`channel_covariance`]): `sum y^T cov^-1 y` over the two quadratures, `y` the channels'
+    /// whitened projections (the channels counted apart when `cov` is diagonal). Weighing the
+    /// projections by the inverse of the channels' correlation and dividing by their mean level
+    /// (as was done) turned a random peak of the motion every channel carries (the common
+    /// direction, with each channel's own scale) out of that direction wherever the levels
+    /// differ, into the nearly collinear channels' weakest direction, and multiplied it by up to
+    /// the ridge's thousand: four false accelerometer tones at 43-45 Hz on a `--stand real` run,
+    /// chi2 157-342. Each channel scaled by its own median level inside that inverse was not
+    /// enough: a median and the correlation's mean differ by a few percent between channels, and
+    /// at a peak of the common motion that few percent, turned into the weakest direction, still
+    /// scored 259 (README, 29 Nov). So the scales are the covariance's own.
+    fn evidence(&self, cov: &Matrix3<f64>) -> f64 {
+        let inverse = cov.try_inverse().unwrap_or_else(Matrix3::identity);
+        self.whitened.iter().map(|y| y.dot(&(inverse * y))).sum()
     }
 }
 
@@ -234,27 +229,43 @@ fn fit_channels(
     fit
 }
 
-/// The correlation of the channels' whitened residuals around bin `peak`: over the continuum's
-/// window ([`MEDIAN_HALF`] bins each side), the line's own [`HALF_WINDOW`] bins each side left
-/// out; a ridge of 1e-3 keeps it invertible. Above the reference's band limit the residual is
-/// the platform motion the angles no longer carry, the same in every channel: a random peak of
-/// it is in all three at once, and counted as three independent channels it would pass for a
-/// tone.
-fn channel_correlation(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize) -> Matrix3<f64> {
+/// The covariance of the channels' whitened residual `r(i, k)` around bin `peak`, in units of the
+/// design's expected level: over the continuum's window ([`MEDIAN_HALF`] bins each side), the
+/// line's own [`HALF_WINDOW`] bins each side left out (`Re` of the cross-periodograms: each
+/// quadrature's); the correlations shrunk by a ridge of 1e-3, which keeps it invertible; inside
+/// the fit's band each channel's variance never below the expected level (the model's
+/// disturbance: a line is never measured against less; above the band, [`Design::line_search`]
+/// without groups, the expected level is only the range's median and the local level is the
+/// level). Above the reference's band limit the residual is the platform motion the angles no
+/// longer carry, the same in every channel: a random peak of it is in all three at once, and
+/// counted as three independent channels it would pass for a tone.
+fn channel_covariance(design: &Design, peak: usize, r: impl Fn(usize, usize) -> Complex64) -> Matrix3<f64> {
+    const RIDGE: f64 = 1e-3;
     let n = design.n_bins();
     let lo = peak.saturating_sub(MEDIAN_HALF);
     let hi = (peak + MEDIAN_HALF + 1).min(n);
     let mut sum = Matrix3::<f64>::zeros();
+    let mut count = 0.0_f64;
     for k in (lo..hi).filter(|k| k.abs_diff(peak) > HALF_WINDOW) {
-        let w = [0, 1, 2].map(|i| residual[i][k] / design.expected[i][k].sqrt());
+        let w = [0, 1, 2].map(|i| r(i, k) / design.expected[i][k].sqrt());
         for i in 0..3 {
             for j in 0..3 {
                 sum[(i, j)] += (w[i] * w[j].conj()).re;
             }
         }
+        count += 1.0;
     }
-    let scale = [0, 1, 2].map(|i| sum[(i, i)].max(f64::MIN_POSITIVE).sqrt());
-    Matrix3::from_fn(|i, j| sum[(i, j)] / (scale[i] * scale[j])) * (1.0 - 1e-3) + Matrix3::identity() * 1e-3
+    let floor = if design.groups.is_empty() {
+        f64::MIN_POSITIVE
+    } else {
+        1.0
+    };
+    let mut cov = sum / count.max(1.0) * (1.0 - RIDGE);
+    for i in 0..3 {
+        let variance = cov[(i, i)] / (1.0 - RIDGE);
+        cov[(i, i)] = variance.max(floor);
+    }
+    cov
 }
 
 /// The strongest line in `residual` (band bins, per channel), fitted; `None` when the band is
@@ -362,12 +373,11 @@ fn line_frequency(
 fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, frequency_hz: f64) -> Tone {
     let n = design.n_bins();
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
-    let corr = channel_correlation(design, residual, peak);
     let (c, s) = sinusoid_dft(design, frequency_hz, range.clone());
     let fit = fit_channels(design, residual, (&c, &s), &range);
-    let levels = channel_levels(design, peak, |i, k| residual[i][k]);
-    let delta_chi2 = 2.0 * fit.evidence(&corr, levels) / WINDOW_ENBW;
-    let (unit_std, channel_chi2) = fit.per_channel(levels);
+    let cov = channel_covariance(design, peak, |i, k| residual[i][k]);
+    let delta_chi2 = 2.0 * fit.evidence(&cov) / WINDOW_ENBW;
+    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, |i, k| residual[i][k]));
     let constant = Tone {
         frequency_hz,
         cos: fit.cos,
@@ -387,13 +397,11 @@ fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, frequen
     let all = 0..n;
     let fit = fit_channels(design, residual, (&basis[0], &basis[1]), &all);
     let (cos, sin) = (fit.cos, fit.sin);
-    // A gated tone's sidebands fill the bins around its line, so the channels' levels there are
-    // measured on the residual without it.
-    let levels = channel_levels(design, peak, |i, k| {
-        residual[i][k] - basis[0][k] * cos[i] - basis[1][k] * sin[i]
-    });
-    let explained = fit.evidence(&corr, levels);
-    let (unit_std, channel_chi2) = fit.per_channel(levels);
+    // A gated tone's sidebands fill the bins around its line, so the channels' background there
+    // is measured on the residual without it.
+    let without = |i: usize, k: usize| residual[i][k] - basis[0][k] * cos[i] - basis[1][k] * sin[i];
+    let explained = fit.evidence(&channel_covariance(design, peak, without));
+    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, without));
     Tone {
         frequency_hz,
         cos,

@@ -170,6 +170,7 @@ fn a_random_peak_of_motion_all_channels_share_is_no_tone() {
     // of sampling error against the correlation's own scales, at a peak of the motion.
     let (fs, n) = (200.0, 20_000);
     let u: [Vec<f64>; 3] = collinear_record([1.0, 0.5, 0.2], 0.0, n, 99);
+    let mut draws = 0;
     for own in [0.01, 0.001, 0.0002] {
         for seed in 0..16 {
             let x = collinear_record([0.05, 1.0, 0.6], own, n, seed);
@@ -178,6 +179,7 @@ fn a_random_peak_of_motion_all_channels_share_is_no_tone() {
             let Some(tone) = strongest_line(&d, &outputs, &outputs) else {
                 continue;
             };
+            draws += 1;
             assert!(
                 tone.delta_chi2 < 45.0,
                 "own {own}, seed {seed}: chi2 {}",
@@ -185,6 +187,8 @@ fn a_random_peak_of_motion_all_channels_share_is_no_tone() {
             );
         }
     }
+    // Every draw offers its strongest peak to be weighed.
+    assert_eq!(draws, 48);
 }
 
 #[test]

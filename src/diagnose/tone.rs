@@ -4,8 +4,9 @@
 //! power a sinusoid explains, and its amplitude per channel solved by least squares against the
 //! exact DFT of a sampled sinusoid (a Dirichlet kernel, so leakage is modelled, not suffered).
 //!
-//! The explained power is measured against the local continuum, not the model's disturbance
-//! level, so that broadband misfit left by another effect cannot pass for a line.
+//! The explained power is measured against the local background (the three channels' covariance
+//! around the line, never below the model's disturbance level inside the band), not the model's
+//! disturbance level alone, so that broadband misfit left by another effect cannot pass for a line.
 //!
 //! The three channels are fitted together against their background's correlation (a random peak
 //! of motion every channel sees, above the reference's band limit, is one draw, not three), and
@@ -38,7 +39,7 @@ pub struct Tone {
     pub cos: [f64; 3],
     /// Sine coefficient per channel.
     pub sin: [f64; 3],
-    /// `chi2` reduction against the local continuum.
+    /// `chi2` reduction against the local background's covariance (`ChannelFit::evidence`).
     pub delta_chi2: f64,
     /// When the tone is on (`None`: throughout).
     pub gate: Option<Gate>,
@@ -231,8 +232,8 @@ fn fit_channels(
 
 /// The covariance of the channels' whitened residual `r(i, k)` around bin `peak`, in units of the
 /// design's expected level: over the continuum's window ([`MEDIAN_HALF`] bins each side), the
-/// line's own [`HALF_WINDOW`] bins each side left out (`Re` of the cross-periodograms: each
-/// quadrature's); the correlations shrunk by a ridge of 1e-3, which keeps it invertible; inside
+/// line's own [`HALF_WINDOW`] bins each side left out (`Re` of the cross-periodograms, the sum of
+/// the two quadratures' covariances: hence the 2 in the evidence's chi2); the correlations shrunk by a ridge of 1e-3, which keeps it invertible; inside
 /// the fit's band each channel's variance never below the expected level (the model's
 /// disturbance: a line is never measured against less; above the band, [`Design::line_search`]
 /// without groups, the expected level is only the range's median and the local level is the
@@ -368,8 +369,8 @@ fn line_frequency(
     0.5 * (lo + hi)
 }
 
-/// The line at band bin `peak` and `frequency_hz` fitted (gated if it comes and goes);
-/// `continuum` is the running median of the whitened residual power there.
+/// The line at band bin `peak` and `frequency_hz` fitted (gated if it comes and goes), its
+/// evidence against the background's covariance there ([`channel_covariance`]).
 fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, frequency_hz: f64) -> Tone {
     let n = design.n_bins();
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);

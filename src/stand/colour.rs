@@ -143,12 +143,12 @@ fn hann_windowed(x: &[f64], len: usize) -> Vec<f64> {
     out
 }
 
-/// `x` late by `samples(i)` at sample `i` (linear interpolation, held at the ends).
-fn delayed(x: &[f64], samples: impl Fn(usize) -> f64) -> Vec<f64> {
+/// `x` late by `samples` (linear interpolation, held at the ends).
+fn delayed(x: &[f64], samples: f64) -> Vec<f64> {
     let n = x.len();
     (0..n)
         .map(|i| {
-            let t = (i as f64 - samples(i)).clamp(0.0, (n - 1) as f64);
+            let t = (i as f64 - samples).clamp(0.0, (n - 1) as f64);
             let j = (t.floor() as usize).min(n.saturating_sub(2));
             let frac = t - j as f64;
             x[j] * (1.0 - frac) + x[(j + 1).min(n - 1)] * frac
@@ -429,58 +429,6 @@ fn keep_the_gyro_s_drift_out(out: &mut [[f64; 3]], grid: &RecordFft, white: [f64
     }
 }
 
-/// The witness's delay behind the angles over a stretch (their spectra `y` on `fft`'s grid), from
-/// the gyro's rates converted at the angles of the same instant ([`align`]).
-fn first_delay(
-    angles: [&[f64]; 3],
-    body_rates: [&[f64]; 3],
-    y: &[Vec<Complex64>; 3],
-    fft: &mut RecordFft,
-) -> f64 {
-    let n = angles[0].len();
-    let rate = fft.sample_rate_hz();
-    let len = fft.len();
-    let euler = witness_euler_rates(angles, body_rates);
-    let mut w = euler.map(|r| fft.forward(&hann_windowed(&witness_angles(&r, rate), len)));
-    let independent_per_bin = (2.0 * n as f64 / 3.0 / len as f64).min(1.0);
-    align(&mut w, y, fft, independent_per_bin)
-}
-
-/// The phase a delay's change through a stretch must turn at the top of [`BOUND_BAND_HZ`] before
-/// it is followed ([`drift`]): 0.05 rad, a change of 0.2 ms at 40 Hz. Below it the witness's
-/// lost coherence (about the turn squared over 12) is under a thousandth, [`MIN_SHARE`].
-const DRIFT_PHASE_RAD: f64 = 0.05;
-
-/// The change of the witness's delay per second through a stretch (its clock drifts against the
-/// angles'): the delays of the stretch's two halves ([`first_delay`] on each) apart, over the time
-/// between their middles; 0 where the change over the stretch turns the phase at the top of
-/// [`BOUND_BAND_HZ`] by less than [`DRIFT_PHASE_RAD`]. A constant delay left on a drifting
-/// witness turns its phase through the stretch, the coherence falls by about the turn squared
-/// over 12, and that share of the angles' power was taken for their noise: the observer shrank
-/// the inputs by it, most at high frequency, and a gyro drifting by 55 ppm gave the
-/// accelerometer a false `lever_arm_error` of 1.4-3.3 mm (approach, 300 s, seeds 2 and 3;
-/// README, 29 Nov).
-fn drift(angles: [&[f64]; 3], body_rates: [&[f64]; 3], rate: f64) -> f64 {
-    let n = angles[0].len();
-    let half = n / 2;
-    if half < 64 {
-        return 0.0;
-    }
-    let delays = [0..half, half..2 * half].map(|r| {
-        let a = angles.map(|x| &x[r.clone()]);
-        let w = body_rates.map(|x| &x[r.clone()]);
-        let mut fft = RecordFft::new(fast_len(half), rate);
-        let y = a.map(|x| fft.forward(&hann_windowed(&remove_line(x, rate).2, fft.len())));
-        first_delay(a, w, &y, &mut fft)
-    });
-    let change = delays[1] - delays[0];
-    let over_stretch = change * n as f64 / half as f64;
-    if 2.0 * std::f64::consts::PI * BOUND_BAND_HZ[1] * over_stretch.abs() < DRIFT_PHASE_RAD {
-        return 0.0;
-    }
-    change / (half as f64 / rate)
-}
-
 /// One stretch's model on its own grid, per cell of bins: (cell width in Hz, per-cell variances;
 /// cell `c` covers `[c, c + 1)` cell widths).
 fn stretch_noise(
@@ -494,31 +442,28 @@ fn stretch_noise(
     let mut fft = RecordFft::new(fast_len(n), rate);
     let fft = &mut fft;
     let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, rate).2, fft.len())));
+    // `shift`: samples by which the witness is moved later before it is windowed.
+    let spectra = |fft: &mut RecordFft, angles: [&[f64]; 3], shift: f64| {
+        let euler = witness_euler_rates(angles, body_rates);
+        let len = fft.len();
+        euler.map(|r| fft.forward(&hann_windowed(&delayed(&witness_angles(&r, rate), shift), len)))
+    };
     // The gyro's rates are late by its delay: converted at the angles of the same instant, a fast
     // rotation turns the attitude within the delay and the conversion itself leaks. So: the
     // delay from a first conversion, then the conversion at the angles that much earlier, the
     // witness moved by the delay before it is windowed (moved after, by a phase turn, its window
     // no longer matches the angles' by the delay over the stretch's length: with the angles
     // 250 ms late on stretches of 24 s, a thousandth of the angles' power left unexplained, taken
-    // for their noise, and the gyro's `K` 0.8 % high), then any rest by a phase turn. A delay
-    // that changes through the stretch (the gyro's clock drifts) is followed: see [`drift`].
+    // for their noise, and the gyro's `K` 0.8 % high), then any rest by a phase turn.
     // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
     // stretch's equivalent number of independent samples, spread over the grid's bins.
     let power_norm = 3.0 * n as f64 / 8.0;
     let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
-    let delay_s = first_delay(angles, body_rates, &y, fft);
-    let slope = drift(angles, body_rates, rate);
-    // Seconds late at sample `i`: the stretch's delay at its middle, the drift's slope around it.
-    let late_s = |i: usize| delay_s + slope * (i as f64 - 0.5 * n as f64) / rate;
-    let late = angles.map(|a| delayed(a, |i| late_s(i) * rate));
-    let euler = witness_euler_rates(late.each_ref().map(Vec::as_slice), body_rates);
-    let len = fft.len();
-    let mut w = euler.map(|r| {
-        fft.forward(&hann_windowed(
-            &delayed(&witness_angles(&r, rate), |i| -late_s(i) * rate),
-            len,
-        ))
-    });
+    let mut first = spectra(fft, angles, 0.0);
+    let delay_s = align(&mut first, &y, fft, independent_per_bin);
+    drop(first);
+    let late = angles.map(|a| delayed(a, delay_s * rate));
+    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice), -delay_s * rate);
     align(&mut w, &y, fft, independent_per_bin);
     let bins_per_hz = fft.len() as f64 / rate;
     let min_half = (MIN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;

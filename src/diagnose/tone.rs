@@ -233,8 +233,8 @@ fn fit_channels(
 /// The covariance of the channels' whitened residual `r(i, k)` around bin `peak`, in units of the
 /// design's expected level: over the continuum's window ([`MEDIAN_HALF`] bins each side), the
 /// line's own [`HALF_WINDOW`] bins each side left out (`Re` of the cross-periodograms, the sum of
-/// the two quadratures' covariances: hence the 2 in the evidence's chi2); the correlations shrunk by a ridge of 1e-3, which keeps it invertible; inside
-/// the fit's band each channel's variance never below the expected level (the model's
+/// the two quadratures' covariances: hence the 2 in the evidence's chi2); the correlations
+/// shrunk by a ridge of 1e-3, which keeps it invertible; inside the fit's band each channel's variance never below the expected level (the model's
 /// disturbance: a line is never measured against less; above the band, [`Design::line_search`]
 /// without groups, the expected level is only the range's median and the local level is the
 /// level). Above the reference's band limit the residual is the platform motion the angles no
@@ -261,12 +261,10 @@ fn channel_covariance(design: &Design, peak: usize, r: impl Fn(usize, usize) -> 
     } else {
         1.0
     };
-    let mut cov = sum / count.max(1.0) * (1.0 - RIDGE);
-    for i in 0..3 {
-        let variance = cov[(i, i)] / (1.0 - RIDGE);
-        cov[(i, i)] = variance.max(floor);
-    }
-    cov
+    Matrix3::from_fn(|i, j| {
+        let c = sum[(i, j)] / count.max(1.0);
+        if i == j { c.max(floor) } else { c * (1.0 - RIDGE) }
+    })
 }
 
 /// The strongest line in `residual` (band bins, per channel), fitted; `None` when the band is
@@ -376,9 +374,9 @@ fn line_at(design: &Design, residual: &[Vec<Complex64>; 3], peak: usize, frequen
     let range = peak.saturating_sub(HALF_WINDOW)..(peak + HALF_WINDOW + 1).min(n);
     let (c, s) = sinusoid_dft(design, frequency_hz, range.clone());
     let fit = fit_channels(design, residual, (&c, &s), &range);
-    let cov = channel_covariance(design, peak, |i, k| residual[i][k]);
-    let delta_chi2 = 2.0 * fit.evidence(&cov) / WINDOW_ENBW;
-    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, |i, k| residual[i][k]));
+    let plain = |i: usize, k: usize| residual[i][k];
+    let delta_chi2 = 2.0 * fit.evidence(&channel_covariance(design, peak, plain)) / WINDOW_ENBW;
+    let (unit_std, channel_chi2) = fit.per_channel(channel_levels(design, peak, plain));
     let constant = Tone {
         frequency_hz,
         cos: fit.cos,

@@ -143,12 +143,12 @@ fn hann_windowed(x: &[f64], len: usize) -> Vec<f64> {
     out
 }
 
-/// `x` late by `samples` (linear interpolation, held at the ends).
-fn delayed(x: &[f64], samples: f64) -> Vec<f64> {
+/// `x` late by `samples(i)` at sample `i` (linear interpolation, held at the ends).
+fn delayed(x: &[f64], samples: impl Fn(usize) -> f64) -> Vec<f64> {
     let n = x.len();
     (0..n)
         .map(|i| {
-            let t = (i as f64 - samples).clamp(0.0, (n - 1) as f64);
+            let t = (i as f64 - samples(i)).clamp(0.0, (n - 1) as f64);
             let j = (t.floor() as usize).min(n.saturating_sub(2));
             let frac = t - j as f64;
             x[j] * (1.0 - frac) + x[(j + 1).min(n - 1)] * frac
@@ -209,13 +209,17 @@ const ALIGN_FALSE_ALARM: f64 = 0.01;
 /// taps' broadband noise above 20 Hz) they outweighed the motion's band, the correlation's peaks
 /// came 7 ms apart at nearly equal heights, and three of five stretches were aligned at 9.8,
 /// -140.6 and 78.1 ms: their unexplained motion was taken for angle noise and the gyro's `K`
-/// came out 3.4 % high, said by nothing. Returns the delay, s.
+/// came out 3.4 % high, said by nothing. Returns the delay, s, and its standard deviation, s:
+/// the Cramér-Rao bound for a delay between two signals of squared coherence `g` per independent
+/// bin, `(sum 2 w^2 g / (1 - g))^-1/2` (Carter, 1987), with `g` the weight above chance (so the
+/// bins chance fills do not count) capped at [`MAX_COHERENCE`]; the three axes' summed coherency
+/// counts once, which errs on the wide side. A bound, reached where the peak is the right one.
 fn align(
     w: &mut [Vec<Complex64>; 3],
     y: &[Vec<Complex64>; 3],
     fft: &mut RecordFft,
     independent_per_bin: f64,
-) -> f64 {
+) -> (f64, f64) {
     let rate = fft.sample_rate_hz();
     let bins = fft.n_bins();
     let half = (ALIGN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
@@ -229,6 +233,8 @@ fn align(
         let (c, py, pw) = sums[k];
         sums[k + 1] = (c + raw[k], py + power(y, k), pw + power(w, k));
     }
+    // Fisher's information on the delay, s^-2 (below).
+    let mut information = 0.0;
     let cross: Vec<Complex64> = (0..bins)
         .map(|k| {
             let (lo, hi) = (k.saturating_sub(half), (k + half + 1).min(bins));
@@ -243,6 +249,9 @@ fn align(
             }
             let coherency = c.norm() / scale;
             let weight = align_weight(coherency * coherency, (hi - lo) as f64 * independent_per_bin);
+            let omega = 2.0 * std::f64::consts::PI * fft.frequency_hz(k);
+            let g = weight.min(MAX_COHERENCE);
+            information += independent_per_bin * 2.0 * omega * omega * g / (1.0 - g);
             raw[k] * ((hi - lo) as f64 / scale) * weight
         })
         .collect();
@@ -274,8 +283,12 @@ fn align(
             *v *= Complex64::from_polar(1.0, omega * delay_s);
         }
     }
-    delay_s
+    (delay_s, information.sqrt().recip())
 }
+
+/// The largest squared coherency [`align`]'s information counts (`g / (1 - g)` grows without
+/// bound as `g` nears 1, where the smoothed estimate is least sure of it).
+const MAX_COHERENCE: f64 = 0.99;
 
 /// Records shorter than this many seconds per stretch are not split (see [`coloured_noise`]).
 const MIN_STRETCH_S: f64 = 20.0;
@@ -342,7 +355,7 @@ pub(super) fn coloured_noise(
             let range = j * n / count..(j + 1) * n / count;
             let a = angles.map(|x| &x[range.clone()]);
             let w = body_rates.map(|x| &x[range.clone()]);
-            stretch_noise(a, w, rate, smoothing, white)
+            stretch_noise(a, w, rate, smoothing, white).0
         })
         .collect();
     let mut values = Vec::with_capacity(count);
@@ -392,6 +405,8 @@ pub(super) fn coloured_noise(
 struct Cell {
     model: [f64; 3],
     bound: [f64; 3],
+    /// The angles' power `S_yy`.
+    total: [f64; 3],
 }
 
 /// The gyro's own noise taken out of the unexplained part. In rate units (`w^2 N`) a gyro's noise
@@ -429,42 +444,161 @@ fn keep_the_gyro_s_drift_out(out: &mut [[f64; 3]], grid: &RecordFft, white: [f64
     }
 }
 
+/// The witness's delay behind the angles over a stretch (their spectra `y` on `fft`'s grid), from
+/// the gyro's rates converted at the angles of the same instant, and its standard deviation, s
+/// ([`align`]).
+fn first_delay(
+    angles: [&[f64]; 3],
+    body_rates: [&[f64]; 3],
+    y: &[Vec<Complex64>; 3],
+    fft: &mut RecordFft,
+) -> (f64, f64) {
+    let n = angles[0].len();
+    let rate = fft.sample_rate_hz();
+    let len = fft.len();
+    let euler = witness_euler_rates(angles, body_rates);
+    let mut w = euler.map(|r| fft.forward(&hann_windowed(&witness_angles(&r, rate), len)));
+    let independent_per_bin = (2.0 * n as f64 / 3.0 / len as f64).min(1.0);
+    align(&mut w, y, fft, independent_per_bin)
+}
+
+/// The phase a delay's change through a stretch must turn at the top of [`BOUND_BAND_HZ`] before
+/// it is followed ([`drift`]): 0.05 rad, a change of 0.2 ms at 40 Hz. Below it the witness's
+/// lost coherence (about the turn squared over 12) is under a thousandth, [`MIN_SHARE`].
+const DRIFT_PHASE_RAD: f64 = 0.05;
+
+/// How many of its standard deviations the change of delay between a stretch's halves must be
+/// before [`drift`] reads a drift from it: 5, about one false drift in two million stretches of a
+/// steady gyro where the delays' errors are Gaussian at their bound.
+const DRIFT_SIGMAS: f64 = 5.0;
+
+/// The change of the witness's delay per second through a stretch (its clock drifts against the
+/// angles'): the delays of the stretch's two halves ([`first_delay`] on each) apart, over the time
+/// between their middles; 0 where the change over the stretch turns the phase at the top of
+/// [`BOUND_BAND_HZ`] by less than [`DRIFT_PHASE_RAD`] or is within [`DRIFT_SIGMAS`] of its
+/// standard deviation ([`align`]'s bound on each half's). A constant delay left on a drifting
+/// witness turns its phase through the stretch, the coherence falls by about the turn squared
+/// over 12, and that share of the angles' power was taken for their noise: the observer shrank
+/// the inputs by it, most at high frequency, and a gyro drifting by 55 ppm gave the
+/// accelerometer a false `lever_arm_error` of 1.4-3.3 mm (approach, 300 s, seeds 2 and 3;
+/// README, 29 Nov).
+fn drift(angles: [&[f64]; 3], body_rates: [&[f64]; 3], rate: f64) -> f64 {
+    let n = angles[0].len();
+    let half = n / 2;
+    if half < 64 {
+        return 0.0;
+    }
+    let delays = [0..half, half..2 * half].map(|r| {
+        let a = angles.map(|x| &x[r.clone()]);
+        let w = body_rates.map(|x| &x[r.clone()]);
+        let mut fft = RecordFft::new(fast_len(half), rate);
+        let y = a.map(|x| fft.forward(&hann_windowed(&remove_line(x, rate).2, fft.len())));
+        first_delay(a, w, &y, &mut fft)
+    });
+    let change = delays[1].0 - delays[0].0;
+    let change_std = delays[0].1.hypot(delays[1].1);
+    let over_stretch = change * n as f64 / half as f64;
+    if 2.0 * std::f64::consts::PI * BOUND_BAND_HZ[1] * over_stretch.abs() < DRIFT_PHASE_RAD
+        || change.abs() <= DRIFT_SIGMAS * change_std
+    {
+        return 0.0;
+    }
+    change / (half as f64 / rate)
+}
+
 /// One stretch's model on its own grid, per cell of bins: (cell width in Hz, per-cell variances;
-/// cell `c` covers `[c, c + 1)` cell widths).
+/// cell `c` covers `[c, c + 1)` cell widths), and the witness's drift followed (s per s, 0 where
+/// its delay is held constant).
+///
+/// The gyro's rates are late by its delay: converted at the angles of the same instant, a fast
+/// rotation turns the attitude within the delay and the conversion itself leaks. So: the delay
+/// from a first conversion, then the conversion at the angles that much earlier, the witness
+/// moved by the delay before it is windowed (moved after, by a phase turn, its window no longer
+/// matches the angles' by the delay over the stretch's length: with the angles 250 ms late on
+/// stretches of 24 s, a thousandth of the angles' power left unexplained, taken for their noise,
+/// and the gyro's `K` 0.8 % high), then any rest by a phase turn. A delay that changes through
+/// the stretch (the gyro's clock drifts, [`drift`]) is followed where following it leaves less of
+/// the angles unexplained than the constant delay does ([`unexplained_share`]): the halves'
+/// delays are noisy where the motion is weak (on a real recording with its gyro 16 samples late,
+/// halves 7 and 59 ms apart), and a drift read from that noise misaligns the witness.
 fn stretch_noise(
     angles: [&[f64]; 3],
     body_rates: [&[f64]; 3],
     rate: f64,
     smoothing: (f64, f64),
     white: [f64; 3],
-) -> (f64, Vec<Cell>) {
+) -> ((f64, Vec<Cell>), f64) {
     let n = angles[0].len();
     let mut fft = RecordFft::new(fast_len(n), rate);
     let fft = &mut fft;
     let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, rate).2, fft.len())));
-    // `shift`: samples by which the witness is moved later before it is windowed.
-    let spectra = |fft: &mut RecordFft, angles: [&[f64]; 3], shift: f64| {
-        let euler = witness_euler_rates(angles, body_rates);
-        let len = fft.len();
-        euler.map(|r| fft.forward(&hann_windowed(&delayed(&witness_angles(&r, rate), shift), len)))
-    };
-    // The gyro's rates are late by its delay: converted at the angles of the same instant, a fast
-    // rotation turns the attitude within the delay and the conversion itself leaks. So: the
-    // delay from a first conversion, then the conversion at the angles that much earlier, the
-    // witness moved by the delay before it is windowed (moved after, by a phase turn, its window
-    // no longer matches the angles' by the delay over the stretch's length: with the angles
-    // 250 ms late on stretches of 24 s, a thousandth of the angles' power left unexplained, taken
-    // for their noise, and the gyro's `K` 0.8 % high), then any rest by a phase turn.
+    let (delay_s, _) = first_delay(angles, body_rates, &y, fft);
+    let steady = stretch_cells(angles, body_rates, &y, fft, smoothing, white, &|_| delay_s);
+    let slope = drift(angles, body_rates, rate);
+    if slope == 0.0 {
+        return (steady, 0.0);
+    }
+    // Seconds late at sample `i`: the stretch's delay at its middle, the drift's slope around it.
+    let late_s = |i: usize| delay_s + slope * (i as f64 - 0.5 * n as f64) / rate;
+    let drifted = stretch_cells(angles, body_rates, &y, fft, smoothing, white, &late_s);
+    if unexplained_share(&drifted) < unexplained_share(&steady) {
+        (drifted, slope)
+    } else {
+        (steady, 0.0)
+    }
+}
+
+/// How much of the angles a stretch's witness leaves unexplained: the mean over the cells inside
+/// [`BOUND_BAND_HZ`] and the axes of `min(N_c, S_yy) / S_yy` (each cell counts alike: the
+/// angles' power falls by decades across the band, and a misaligned witness loses most at its
+/// top). Cells where the witness says nothing count as all unexplained.
+fn unexplained_share((cell_hz, cells): &(f64, Vec<Cell>)) -> f64 {
+    let in_band: Vec<f64> = cells
+        .iter()
+        .enumerate()
+        .filter(|(c, _)| (BOUND_BAND_HZ[0]..=BOUND_BAND_HZ[1]).contains(&((*c as f64 + 0.5) * cell_hz)))
+        .flat_map(|(_, cell)| {
+            [0, 1, 2].map(|a| {
+                let share = cell.bound[a] / cell.total[a];
+                if share.is_finite() {
+                    share.clamp(0.0, 1.0)
+                } else {
+                    1.0
+                }
+            })
+        })
+        .collect();
+    in_band.iter().sum::<f64>() / in_band.len().max(1) as f64
+}
+
+/// A stretch's cells (see [`stretch_noise`]) with the witness aligned `late_s(i)` seconds behind
+/// the angles at sample `i` (then any rest by a phase turn, [`align`]); `y`: the angles' spectra
+/// on `fft`'s grid.
+fn stretch_cells(
+    angles: [&[f64]; 3],
+    body_rates: [&[f64]; 3],
+    y: &[Vec<Complex64>; 3],
+    fft: &mut RecordFft,
+    smoothing: (f64, f64),
+    white: [f64; 3],
+    late_s: &dyn Fn(usize) -> f64,
+) -> (f64, Vec<Cell>) {
+    let n = angles[0].len();
+    let rate = fft.sample_rate_hz();
     // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
     // stretch's equivalent number of independent samples, spread over the grid's bins.
     let power_norm = 3.0 * n as f64 / 8.0;
     let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
-    let mut first = spectra(fft, angles, 0.0);
-    let delay_s = align(&mut first, &y, fft, independent_per_bin);
-    drop(first);
-    let late = angles.map(|a| delayed(a, delay_s * rate));
-    let mut w = spectra(fft, late.each_ref().map(Vec::as_slice), -delay_s * rate);
-    align(&mut w, &y, fft, independent_per_bin);
+    let late = angles.map(|a| delayed(a, |i| late_s(i) * rate));
+    let euler = witness_euler_rates(late.each_ref().map(Vec::as_slice), body_rates);
+    let len = fft.len();
+    let mut w = euler.map(|r| {
+        fft.forward(&hann_windowed(
+            &delayed(&witness_angles(&r, rate), |i| -late_s(i) * rate),
+            len,
+        ))
+    });
+    align(&mut w, y, fft, independent_per_bin);
     let bins_per_hz = fft.len() as f64 / rate;
     let min_half = (MIN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
     // The windows hold at least 2 min_half bins: the model is evaluated per cell of a quarter of
@@ -477,7 +611,7 @@ fn stretch_noise(
             let mut sums = Sums::zero();
             let range = c * cell..((c + 1) * cell).min(bins);
             for k in range.clone() {
-                sums.add(&bin(&y, k), &bin(&w, k));
+                sums.add(&bin(y, k), &bin(&w, k));
             }
             (sums, range.len())
         })
@@ -548,6 +682,7 @@ fn unexplained(sums: &Sums, count: f64, independent_per_bin: f64, power_norm: f6
         model,
         // Where the witness says nothing the floor is no bound: NaN, left out of the median.
         bound: witnessed.map_or([f64::NAN; 3], |w| [0, 1, 2].map(|a| w[a].min(total[a]))),
+        total,
     }
 }
 

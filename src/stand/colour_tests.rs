@@ -258,3 +258,39 @@ fn the_alignment_weight_passes_unrelated_signals_once_in_a_hundred() {
     }
     assert!(align_weight(0.9, 1.0) == 0.0, "one bin tells nothing");
 }
+
+/// `x` sampled `ppm` parts per million fast: sample `i` holds `x` at `i (1 + ppm 1e-6)` (linear
+/// interpolation; its delay behind the angles falls by `ppm` microseconds per second).
+fn clock_fast(x: &[f64], ppm: f64) -> Vec<f64> {
+    delayed(x, |i| -(i as f64) * ppm * 1e-6)
+}
+
+/// One stretch's drift is followed only where the witness's clock drifts: a steady gyro (its
+/// delay constant, on a stand with real imperfections: coloured angle noise, a band-limited and
+/// late reference) is held at one delay on every seed, and a gyro whose clock runs 165 ppm fast
+/// (its delay 10 ms shorter at the end of the minute) is followed at about that rate.
+#[test]
+fn a_drift_is_followed_only_where_the_gyro_s_clock_drifts() {
+    let s = ObserverSettings::default();
+    let (smoothing, white) = ((s.smoothing_hz, s.smoothing_fraction), [1e-10; 3]);
+    let ppm = 165.0;
+    for seed in 1..=4 {
+        let r = sim(StandImperfections::real(), seed);
+        let n = (60.0 * RATE) as usize;
+        let angles = r.angles.each_ref().map(|a| &a[..n]);
+        let gyro = r.gyro.as_ref().unwrap().each_ref().map(|g| &g[..n]);
+        let (_, steady) = stretch_noise(angles, gyro, RATE, smoothing, white);
+        assert_eq!(
+            steady.to_bits(),
+            0.0_f64.to_bits(),
+            "seed {seed}: a steady gyro drifted by {steady:e} s/s"
+        );
+        let fast = gyro.map(|g| clock_fast(g, ppm));
+        let (_, followed) = stretch_noise(angles, fast.each_ref().map(Vec::as_slice), RATE, smoothing, white);
+        let ratio = followed / (-ppm * 1e-6);
+        assert!(
+            (0.8..1.2).contains(&ratio),
+            "seed {seed}: followed {followed:e} s/s ({ratio} of the drift)"
+        );
+    }
+}

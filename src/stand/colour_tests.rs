@@ -227,38 +227,6 @@ fn the_bound_s_band_is_the_auto_band_s_search_limits() {
     );
 }
 
-/// [`align_weight`]'s level is the one unrelated signals pass once in a hundred windows: squared
-/// coherencies of independent complex Gaussian pairs over `M` bins (brute force, seeded) exceed
-/// it in 1 % of 20000 windows (binomial deviation 0.07 %), for `M` of 4, 8 and 16; it gives 0 at
-/// and below that level and 1 at full coherence.
-#[test]
-fn the_alignment_weight_passes_unrelated_signals_once_in_a_hundred() {
-    let mut rng = Rng::new(31);
-    for m in [4_usize, 8, 16] {
-        let trials = 20_000;
-        let mut passed = 0;
-        for _ in 0..trials {
-            let (mut cross, mut pa, mut pb) = (Complex64::default(), 0.0, 0.0);
-            for _ in 0..m {
-                let a = Complex64::new(rng.normal(), rng.normal());
-                let b = Complex64::new(rng.normal(), rng.normal());
-                cross += a * b.conj();
-                pa += a.norm_sqr();
-                pb += b.norm_sqr();
-            }
-            if align_weight(cross.norm_sqr() / (pa * pb), m as f64) > 0.0 {
-                passed += 1;
-            }
-        }
-        let share = f64::from(passed) / f64::from(trials);
-        assert!((0.007..0.013).contains(&share), "M = {m}: {share}");
-        let c0 = 1.0 - ALIGN_FALSE_ALARM.powf(1.0 / (m as f64 - 1.0));
-        assert!(align_weight(c0, m as f64).abs() < 1e-12 && align_weight(0.5 * c0, m as f64) == 0.0);
-        assert!((align_weight(1.0, m as f64) - 1.0).abs() < 1e-12);
-    }
-    assert!(align_weight(0.9, 1.0) == 0.0, "one bin tells nothing");
-}
-
 /// `x` sampled `ppm` parts per million fast: sample `i` holds `x` at `i (1 + ppm 1e-6)` (linear
 /// interpolation; its delay behind the angles falls by `ppm` microseconds per second).
 fn clock_fast(x: &[f64], ppm: f64) -> Vec<f64> {

@@ -11,3 +11,4 @@ pub mod inputs;
 pub mod kinematics;
 pub mod mount;
 pub mod observer;
+mod witness_delay;

@@ -30,4 +30,19 @@ impl Block {
             Block::Accel => "accel",
         }
     }
+
+    /// The block whose contract name is `name`.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::BOTH.into_iter().find(|b| b.name() == name)
+    }
+
+    /// The unit of the block's outputs (and of its inputs): angular rate or specific force.
+    #[must_use]
+    pub fn output_unit(self) -> &'static str {
+        match self {
+            Block::Gyro => "rad/s",
+            Block::Accel => "m/s^2",
+        }
+    }
 }

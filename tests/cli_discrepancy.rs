@@ -88,6 +88,15 @@ fn report_names_the_hidden_effect_with_the_contract_fields() {
     assert_eq!(given.as_array().map(Vec::len), Some(3), "{given}");
     // The model's settings are the diagnosis's, its estimate included.
     assert_eq!(v["settings"]["estimate"], "h1", "{}", v["settings"]);
+    // What the tone search could have seen, per block: written and said.
+    for block in ["gyro", "accel"] {
+        let limit = &v["blocks"][block]["tone_limit"];
+        let (f, a) = (&limit["frequency_hz"], &limit["amplitude"]);
+        assert!(limit["chi2_needed"].as_f64().is_some_and(|c| c > 0.0), "{limit}");
+        assert_eq!(f.as_array().map(Vec::len), a.as_array().map(Vec::len), "{limit}");
+        let said = format!("imu-attest: note: {block} block: the tone search's limit");
+        assert!(String::from_utf8_lossy(&o.stderr).contains(&said), "{said}");
+    }
 }
 
 #[test]

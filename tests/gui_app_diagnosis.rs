@@ -99,6 +99,9 @@ fn the_clean_sample_run_has_no_missing_effect() {
     let mut harness = app(vec![sample_run_path().unwrap()]);
     diagnose(&mut harness);
     harness.get_by_label("verdict: no missing effect");
+    // What the search could have seen, for each block.
+    harness.get_by_label_contains("gyro block: the tone search's limit");
+    harness.get_by_label_contains("accel block: the tone search's limit");
     let run = harness.state().selected().unwrap();
     assert!(run.diagnosis.as_ref().unwrap().findings.is_empty());
     assert!(!run.diagnosis.running());

@@ -99,6 +99,7 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
         "imu-attest: warning: ",
     ));
     lines.extend(input_limit_lines(&report, None));
+    lines.extend(tone_limit_lines(&report));
     lines.extend(unexplained_lines(&report, None));
     super::identify::print_messages(&lines);
     Ok(())
@@ -123,6 +124,17 @@ pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&s
                 .map(|s| format!("imu-attest: warning: {run}{}", s.diagnosis_words(name)));
             limit.into_iter().chain(step)
         })
+        .collect()
+}
+
+/// Each block's tone search limit ([`crate::diagnose::tone_limit`]), a note: what a search that
+/// named no tone could have seen.
+fn tone_limit_lines(report: &crate::diagnose::Report) -> Vec<String> {
+    report
+        .blocks
+        .iter()
+        .filter_map(|(name, b)| Some((crate::block::Block::from_name(name)?, b.tone_limit.as_ref()?)))
+        .map(|(block, limit)| format!("imu-attest: note: {}", limit.words(block)))
         .collect()
 }
 

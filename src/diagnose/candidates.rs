@@ -9,7 +9,7 @@ use super::design::Design;
 use super::fit::{Fitted, cost_at, fit};
 use super::state::State;
 use super::structure::Structure;
-use super::tone::{Tone, strongest_line};
+use super::tone::{TONE_PARAMETERS, Tone, strongest_line};
 use crate::block::Block;
 use crate::effect::Effect;
 
@@ -140,7 +140,7 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
             effect: Effect::VibrationTone,
             delta_chi2: tone.delta_chi2,
             // Frequency, cosine and sine per channel, and the gate's parameters.
-            added_params: 7 + tone.gate.as_ref().map_or(0, |g| g.parameters),
+            added_params: TONE_PARAMETERS + tone.gate.as_ref().map_or(0, |g| g.parameters),
             extension: Extension::Tone(tone),
         });
     }

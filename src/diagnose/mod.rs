@@ -35,6 +35,7 @@ pub mod simplex;
 pub mod state;
 pub mod structure;
 pub mod tone;
+pub mod tone_limit;
 pub mod uncertainty;
 mod workflow;
 

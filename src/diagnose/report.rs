@@ -208,6 +208,10 @@ pub struct BlockReport {
     /// Per-channel gap of the model given with `--model`, as it is (no refit), dB.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub given_model_gap_db: Option<[f64; 3]>,
+    /// What the tone search could have seen: per frequency and channel, the amplitude a constant
+    /// tone needs to be named ([`super::tone_limit`]; absent where no tone was searched).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tone_limit: Option<super::tone_limit::ToneLimit>,
 }
 
 /// The static gain `K` of a state.

@@ -23,8 +23,10 @@ use super::design::{Design, WINDOW_ENBW, band_spectrum, hann};
 use super::gate::{Gate, estimate_gate};
 use crate::fourier::RecordFft;
 
+/// The real parameters a constant tone adds: its frequency, and a cosine and a sine per channel.
+pub(super) const TONE_PARAMETERS: usize = 7;
 /// Bins on each side of the line used for the fit.
-const HALF_WINDOW: usize = 16;
+pub(super) const HALF_WINDOW: usize = 16;
 /// Bins at either end of a searched range where no line is looked for ([`HALF_WINDOW`]).
 pub(super) const EDGE_MARGIN_BINS: usize = HALF_WINDOW;
 /// Bins on each side for the running median of the continuum.
@@ -101,7 +103,11 @@ fn hann_dirichlet(theta: f64, n: usize) -> Complex64 {
 }
 
 /// DFTs of the tapered `cos(2 pi f n / fs)` and `sin(..)` over band bins `range`.
-fn sinusoid_dft(design: &Design, f: f64, range: std::ops::Range<usize>) -> (Vec<Complex64>, Vec<Complex64>) {
+pub(super) fn sinusoid_dft(
+    design: &Design,
+    f: f64,
+    range: std::ops::Range<usize>,
+) -> (Vec<Complex64>, Vec<Complex64>) {
     let alpha = 2.0 * PI * f / design.sample_rate_hz;
     let n = design.n_samples;
     range
@@ -134,7 +140,7 @@ fn explain(
 
 /// Channel `i`'s weighted Gram matrix `[a, b; b, d]` of the basis `(c, s)` over `range` and its
 /// projections `r1, r2` of the residual, weights `1 / expected`.
-fn projections(
+pub(super) fn projections(
     design: &Design,
     residual: &[Vec<Complex64>; 3],
     (c, s): (&[Complex64], &[Complex64]),
@@ -240,7 +246,11 @@ fn fit_channels(
 /// level). Above the reference's band limit the residual is the platform motion the angles no
 /// longer carry, the same in every channel: a random peak of it is in all three at once, and
 /// counted as three independent channels it would pass for a tone.
-fn channel_covariance(design: &Design, peak: usize, r: impl Fn(usize, usize) -> Complex64) -> Matrix3<f64> {
+pub(super) fn channel_covariance(
+    design: &Design,
+    peak: usize,
+    r: impl Fn(usize, usize) -> Complex64,
+) -> Matrix3<f64> {
     const RIDGE: f64 = 1e-3;
     let n = design.n_bins();
     let lo = peak.saturating_sub(MEDIAN_HALF);

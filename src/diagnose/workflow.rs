@@ -15,6 +15,8 @@ use super::report::{
     BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
 };
 use super::state::State;
+use super::tone::TONE_PARAMETERS;
+use super::tone_limit::{ToneLimit, detection_limit};
 use super::uncertainty::{covariance, parameter_std};
 use crate::block::Block;
 use crate::effect::Effect;
@@ -168,6 +170,7 @@ fn diagnose_block(
     let mut state = base.clone();
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
+    let mut last_rule = None;
     for round in 0..MAX_FINDINGS {
         let mut cands = candidates(&state, band);
         cands.retain(|c| !rejected.contains(&c.effect));
@@ -175,6 +178,7 @@ fn diagnose_block(
             per_parameter: dof.ln(),
             multiplicity: 2.0 * (cands.len().max(1) as f64).ln(),
         };
+        last_rule = Some(rule);
         cands.sort_by(|a, b| rule.gain(b).total_cmp(&rule.gain(a)));
         if round == 0 {
             first_round = cands.iter().map(|c| summary(c, rule)).collect();
@@ -247,7 +251,25 @@ fn diagnose_block(
     report.input_limit.clone_from(&pb.input_limit);
     report.delay_step = pb.delay_step;
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
+    report.tone_limit = last_rule
+        .filter(|_| !rejected.contains(&Effect::VibrationTone))
+        .and_then(|rule| tone_limit(&state, rule.threshold(TONE_PARAMETERS)));
     (report, findings)
+}
+
+/// The tone search's detection limit on the final model's residual, in the band and above it
+/// (`None` where neither range is wide enough for a line).
+fn tone_limit(state: &State, chi2_needed: f64) -> Option<ToneLimit> {
+    let mut limit = ToneLimit {
+        chi2_needed,
+        frequency_hz: Vec::new(),
+        amplitude: Vec::new(),
+    };
+    detection_limit(&state.design, &state.residual, chi2_needed, &mut limit);
+    if let Some(upper) = state.upper.as_deref() {
+        detection_limit(upper, &state.upper_residual, chi2_needed, &mut limit);
+    }
+    (!limit.frequency_hz.is_empty()).then_some(limit)
 }
 
 /// How many standard deviations two blocks' lags may differ by and still be one lag.
@@ -367,5 +389,6 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
         input_limit: None,
         delay_step: None,
         given_model_gap_db: None,
+        tone_limit: None,
     }
 }

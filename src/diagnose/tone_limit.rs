@@ -1,0 +1,130 @@
+//! What the tone search could have seen: per frequency and output channel, the amplitude of a
+//! constant vibration tone whose expected evidence just reaches the criterion a tone must pass
+//! (BIC's `ln n` for each of its seven parameters plus the look-elsewhere cost of the last
+//! round, [`super::workflow`]). A tone of this amplitude on one channel is found about half the
+//! time (its evidence then scatters around the criterion); at twice it, nearly always; a search
+//! that ended without a tone says that nothing above this curve was there.
+//!
+//! The evidence of a tone of amplitude `A` on channel `i` alone, against the background's
+//! covariance `C` around it ([`super::tone`]): `2 A^2 E_i (C^-1)_ii / ENBW`, `E_i` the
+//! channel's basis energy per unit amplitude (the mean of its weighted Gram matrix's diagonal).
+//! So `A_min = sqrt(chi2_needed ENBW / (2 E_i (C^-1)_ii))`. Where the channels' background is
+//! shared (above a reference's band limit, the motion the angles no longer carry reaches every
+//! accelerometer channel), a tone on one channel stands out of it and `(C^-1)_ii` is far above
+//! `1 / C_ii`: the limit is the one-channel tone's. A tone in several channels at once, along
+//! the direction their background shares, needs more (by design: `super::tone`). The background
+//! is the record's own residual after every finding, so the limit rises where the model leaves
+//! more unexplained (on a real stand above the reference's band limit, where the angles no
+//! longer carry the motion) and a lab sees how much.
+//!
+//! Units: amplitudes in the block's output units (rad/s, m/s^2), frequencies in Hz. Evaluated
+//! every [`STRIDE`] bins of the searched range away from its edges; a range too narrow for a line
+//! gives no points. NaN cannot arise from finite input; a channel without basis energy gives an
+//! infinite limit, which is left out.
+
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use super::design::{Design, WINDOW_ENBW};
+use super::tone::{HALF_WINDOW, channel_covariance, projections, sinusoid_dft};
+use crate::block::Block;
+
+/// Bins between two evaluations of the limit (the background's window is 120 bins wide, so the
+/// curve changes slowly on this scale).
+const STRIDE: usize = 8;
+
+/// The tone search's detection limit of one block.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ToneLimit {
+    /// The evidence (chi2) a constant tone needs to be named.
+    pub chi2_needed: f64,
+    /// Frequencies, Hz, ascending.
+    pub frequency_hz: Vec<f64>,
+    /// Per frequency, per output channel, the amplitude at which a tone's expected evidence
+    /// reaches [`Self::chi2_needed`], output units.
+    pub amplitude: Vec<[f64; 3]>,
+}
+
+impl ToneLimit {
+    /// The limit at the point nearest `f_hz`, per channel (`None` outside the searched range:
+    /// below its first point or above its last).
+    #[must_use]
+    pub fn at(&self, f_hz: f64) -> Option<[f64; 3]> {
+        let (first, last) = (self.frequency_hz.first()?, self.frequency_hz.last()?);
+        if !(*first..=*last).contains(&f_hz) {
+            return None;
+        }
+        let nearest = self
+            .frequency_hz
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - f_hz).abs().total_cmp(&(b.1 - f_hz).abs()))?;
+        Some(self.amplitude[nearest.0])
+    }
+}
+
+impl ToneLimit {
+    /// The limit in words for `block`: the median over the searched range and the outputs, the
+    /// largest (where the search is least sensitive: its frequency, and how many times the
+    /// median), and the top of the range.
+    #[must_use]
+    pub fn words(&self, block: Block) -> String {
+        let mut all: Vec<f64> = self.amplitude.iter().flatten().copied().collect();
+        let (Some(first), Some(last)) = (self.frequency_hz.first(), self.frequency_hz.last()) else {
+            return format!("{block} block: no tone searched (too few bins)");
+        };
+        all.sort_by(f64::total_cmp);
+        let median = all[all.len() / 2];
+        let (worst_hz, worst) = self
+            .frequency_hz
+            .iter()
+            .zip(&self.amplitude)
+            .map(|(f, a)| (*f, a.iter().copied().fold(0.0, f64::max)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((*first, median));
+        let unit = block.output_unit();
+        format!(
+            "{block} block: the tone search's limit (a constant tone in one output; chi2 {:.1} needed) is \
+             {median:.2e} {unit} (the median over {first:.2}-{last:.2} Hz and the outputs), {worst:.2e} {unit} \
+             at {worst_hz:.1} Hz ({:.0} times the median); no tone searched above {last:.1} Hz",
+            self.chi2_needed,
+            worst / median
+        )
+    }
+}
+
+/// The limit over one searched range (`design`'s band bins, `residual` the residual there),
+/// appended to `out` (points in ascending frequency).
+pub(super) fn detection_limit(
+    design: &Design,
+    residual: &[Vec<Complex64>; 3],
+    chi2_needed: f64,
+    out: &mut ToneLimit,
+) {
+    let n = design.n_bins();
+    if n < 2 * HALF_WINDOW + 3 {
+        return;
+    }
+    let plain = |i: usize, k: usize| residual[i][k];
+    for peak in (HALF_WINDOW..n - HALF_WINDOW).step_by(STRIDE) {
+        let f = design.frequency_hz[peak];
+        let range = peak - HALF_WINDOW..peak + HALF_WINDOW + 1;
+        let (c, s) = sinusoid_dft(design, f, range.clone());
+        let inverse = channel_covariance(design, peak, plain)
+            .try_inverse()
+            .unwrap_or_else(nalgebra::Matrix3::identity);
+        let amplitude = [0, 1, 2].map(|i| {
+            let [a, _, d, _, _] = projections(design, residual, (&c, &s), &range, i);
+            let information = 2.0 * 0.5 * (a + d) * inverse[(i, i)] / WINDOW_ENBW;
+            (chi2_needed / information).sqrt()
+        });
+        if amplitude.iter().all(|a| a.is_finite()) {
+            out.frequency_hz.push(f);
+            out.amplitude.push(amplitude);
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "tone_limit_tests.rs"]
+mod tests;

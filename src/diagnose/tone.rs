@@ -286,9 +286,7 @@ pub fn strongest_line(
     outputs: &[Vec<Complex64>; 3],
 ) -> Option<Tone> {
     let n = design.n_bins();
-    if n < 2 * MEDIAN_HALF + 1 {
-        return None;
-    }
+    let peaks = searched_peaks(n)?;
     let power: Vec<f64> = (0..n)
         .map(|k| {
             (0..3)
@@ -304,10 +302,7 @@ pub fn strongest_line(
     // HALF_WINDOW bins of either end of the searched range it cannot be told from the edge of a
     // rising residual (on `--stand real` runs, where the reference's band limit ends the inputs,
     // the residual's ratio to the continuum climbs to the search's top edge).
-    if n < 2 * HALF_WINDOW + 3 {
-        return None;
-    }
-    let mut order: Vec<usize> = (HALF_WINDOW..n - HALF_WINDOW).collect();
+    let mut order: Vec<usize> = peaks.collect();
     order.sort_by(|&a, &b| ratio(b).total_cmp(&ratio(a)));
     let mut tried: Vec<usize> = Vec::new();
     for peak in order {
@@ -339,6 +334,13 @@ pub fn strongest_line(
         }
     }
     None
+}
+
+/// The band bins where [`strongest_line`] looks for a line among `n`: all but [`HALF_WINDOW`] at
+/// either end (a line needs its neighbourhood on both sides), and none when the range is too
+/// narrow for the continuum's window (`2 MEDIAN_HALF + 1` bins).
+pub(super) fn searched_peaks(n: usize) -> Option<std::ops::Range<usize>> {
+    (n > 2 * MEDIAN_HALF).then_some(HALF_WINDOW..n - HALF_WINDOW)
 }
 
 /// How many of the strongest lines are tried before the search gives up.

@@ -245,14 +245,16 @@ fn diagnose_block(
     if let Some(source) = halves {
         compare_halves(source, block_index, &state, band, input_names, &mut accepted);
     }
+    let rounds_left = accepted.len() < MAX_FINDINGS;
     let findings = accepted.into_iter().map(|(_, _, finding)| finding).collect();
     let mut report = block_report(base, &state, first_round, dof);
     report.band_hz = band;
     report.input_limit.clone_from(&pb.input_limit);
     report.delay_step = pb.delay_step;
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
+    // No limit where the rounds ended on their count: no tone could have been named then.
     report.tone_limit = last_rule
-        .filter(|_| !rejected.contains(&Effect::VibrationTone))
+        .filter(|_| rounds_left && !rejected.contains(&Effect::VibrationTone))
         .and_then(|rule| tone_limit(&state, rule.threshold(TONE_PARAMETERS)));
     (report, findings)
 }

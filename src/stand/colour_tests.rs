@@ -262,3 +262,32 @@ fn a_drift_is_followed_only_where_the_gyro_s_clock_drifts() {
         );
     }
 }
+
+/// What arbitrates a drift read from a half's wrong peak: on a steady gyro the witness aligned
+/// along a drift of 100 ppm (a 6 ms change over the minute, far beyond the halves' scatter)
+/// leaves more of the angles unexplained than one delay does, on every seed.
+#[test]
+fn a_false_drift_leaves_more_unexplained_than_one_delay() {
+    let s = ObserverSettings::default();
+    let (smoothing, white) = ((s.smoothing_hz, s.smoothing_fraction), [1e-10; 3]);
+    for seed in 1..=3 {
+        let r = sim(StandImperfections::real(), seed);
+        let n = (60.0 * RATE) as usize;
+        let angles = r.angles.each_ref().map(|a| &a[..n]);
+        let gyro = r.gyro.as_ref().unwrap().each_ref().map(|g| &g[..n]);
+        let mut fft = RecordFft::new(fast_len(n), RATE);
+        let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, RATE).2, fft.len())));
+        let (delay_s, _) = first_delay(angles, gyro, &y, &mut fft);
+        let mut share = |slope: f64| {
+            let late_s = |i: usize| delay_s + slope * (i as f64 - 0.5 * n as f64) / RATE;
+            unexplained_share(&stretch_cells(
+                angles, gyro, &y, &mut fft, smoothing, white, &late_s,
+            ))
+        };
+        let (steady, drifted) = (share(0.0), share(1e-4));
+        assert!(
+            drifted > steady,
+            "seed {seed}: drifted {drifted} against steady {steady}"
+        );
+    }
+}

@@ -155,7 +155,8 @@ pub(super) fn first_delay(
 
 /// The phase a delay's change through a stretch must turn at the top of [`BOUND_BAND_HZ`] before
 /// it is followed ([`drift`]): 0.05 rad, a change of 0.2 ms at 40 Hz. Below it the witness's
-/// lost coherence (about the turn squared over 12) is under a thousandth, [`MIN_SHARE`].
+/// lost coherence (about the turn squared over 12) is under a thousandth (the colour model's
+/// `MIN_SHARE`).
 const DRIFT_PHASE_RAD: f64 = 0.05;
 
 /// How many of its standard deviations the change of delay between a stretch's halves must be
@@ -189,7 +190,7 @@ pub(super) fn drift(angles: [&[f64]; 3], body_rates: [&[f64]; 3], rate: f64) -> 
     let change = delays[1].0 - delays[0].0;
     let change_std = delays[0].1.hypot(delays[1].1);
     let over_stretch = change * n as f64 / half as f64;
-    if 2.0 * std::f64::consts::PI * BOUND_BAND_HZ[1] * over_stretch.abs() < DRIFT_PHASE_RAD
+    if 2.0 * std::f64::consts::PI * BOUND_BAND_HZ[1].min(0.4 * rate) * over_stretch.abs() < DRIFT_PHASE_RAD
         || change.abs() <= DRIFT_SIGMAS * change_std
     {
         return 0.0;

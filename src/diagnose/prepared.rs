@@ -55,6 +55,11 @@ pub struct PreparedBlock {
     /// Whether a clock drift is searched: not through a step, unless the slope its two sides
     /// share is a drift.
     pub search_drift: bool,
+    /// Where the expected disturbance level's smoothing window is whole ([`smoothed_noise_psd`]),
+    /// Hz: below, it narrows towards zero frequency and follows a line's own power, so a tone
+    /// there is measured against itself and may go unnamed at any size (a campaign on 29 Nov:
+    /// one-output tones at 0.3 Hz not named at 300 times the level its neighbours set).
+    pub full_level_hz: f64,
     /// The paper's model `K e^(-tau s)` fitted on the whole-record design (with the stretches'
     /// delay trend as the clock-drift hint).
     pub base: State,
@@ -180,6 +185,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             search_drift: delay_step.is_none() || drifts,
             base,
             dof,
+            full_level_hz: full_level_hz(b),
         });
     }
     // Every block set aside: refused as the identification refuses a run with none left.
@@ -284,6 +290,17 @@ pub(super) fn block_design(
     Some((design, upper))
 }
 
+/// Native Welch bins each side of [`smoothed_noise_psd`]'s window where it is whole.
+const LEVEL_HALF_NATIVE: usize = 4;
+
+/// The lowest frequency where [`smoothed_noise_psd`]'s window is whole (its half-width, a quarter
+/// of the bin's index below, reaches [`LEVEL_HALF_NATIVE`] native bins), Hz.
+fn full_level_hz(b: &BlockIdentification) -> f64 {
+    let k = 4 * LEVEL_HALF_NATIVE * b.spectra.native_step();
+    let f = &b.spectra.frequency_hz;
+    f.get(k).or(f.last()).copied().unwrap_or(0.0)
+}
+
 /// `S_psi,ii` running-median smoothed over about four native Welch bins each side, so that a
 /// line does not raise the level it is tested against; near zero frequency the window shrinks to
 /// a quarter of the bin's index each side, since there the density changes by a large factor
@@ -291,7 +308,7 @@ pub(super) fn block_design(
 /// underestimate it.
 fn smoothed_noise_psd(b: &BlockIdentification) -> [Vec<f64>; 3] {
     let psd = &b.factorisation.noise_psd;
-    let half = 4 * b.spectra.native_step();
+    let half = LEVEL_HALF_NATIVE * b.spectra.native_step();
     // S_psi is a regression residual of n_eq averages less the three inputs' degrees of freedom,
     // so its mean is (n_eq - 3) / n_eq of the disturbance's; the median of its scaled
     // chi-squared(2 (n_eq - 3)) distribution lies a further (1 - 1/(9 (n_eq - 3)))^3 below

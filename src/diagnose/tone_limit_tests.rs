@@ -37,5 +37,6 @@ fn the_words_give_the_median_the_largest_and_the_top() {
         w.contains("chi2 70.0 needed") && w.contains("above 4.0 Hz"),
         "{w}"
     );
+    assert!(w.contains("none stated below 1.00 Hz"), "{w}");
     assert!(limit().words(Block::Gyro).contains("rad/s"));
 }

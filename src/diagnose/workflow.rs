@@ -255,21 +255,22 @@ fn diagnose_block(
     // No limit where the rounds ended on their count: no tone could have been named then.
     report.tone_limit = last_rule
         .filter(|_| rounds_left && !rejected.contains(&Effect::VibrationTone))
-        .and_then(|rule| tone_limit(&state, rule.threshold(TONE_PARAMETERS)));
+        .and_then(|rule| tone_limit(&state, rule.threshold(TONE_PARAMETERS), pb.full_level_hz));
     (report, findings)
 }
 
-/// The tone search's detection limit on the final model's residual, in the band and above it
-/// (`None` where neither range is wide enough for a line).
-fn tone_limit(state: &State, chi2_needed: f64) -> Option<ToneLimit> {
+/// The tone search's detection limit on the final model's residual, in the band and above it,
+/// from `from_hz` up (below, the level a line is measured against follows the line:
+/// [`PreparedBlock::full_level_hz`]); `None` where no range is wide enough for a line.
+fn tone_limit(state: &State, chi2_needed: f64, from_hz: f64) -> Option<ToneLimit> {
     let mut limit = ToneLimit {
         chi2_needed,
         frequency_hz: Vec::new(),
         amplitude: Vec::new(),
     };
-    detection_limit(&state.design, &state.residual, chi2_needed, &mut limit);
+    detection_limit(&state.design, &state.residual, (chi2_needed, from_hz), &mut limit);
     if let Some(upper) = state.upper.as_deref() {
-        detection_limit(upper, &state.upper_residual, chi2_needed, &mut limit);
+        detection_limit(upper, &state.upper_residual, (chi2_needed, from_hz), &mut limit);
     }
     (!limit.frequency_hz.is_empty()).then_some(limit)
 }

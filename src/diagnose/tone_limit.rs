@@ -2,10 +2,10 @@
 //! constant vibration tone in one output whose evidence against that output's own background
 //! just reaches the criterion a tone must pass
 //! (BIC's `ln n` for each of its seven parameters plus the look-elsewhere cost of the last
-//! round, `diagnose::workflow`). A tone in one output at 1.5 times it is named (112 of 112 in a
-//! campaign, 29 Nov, 2-58 Hz; the channels' correlation only adds to its evidence); at the limit
-//! about two times in three, at 0.6 times or below never (80 tones). A search
-//! that ended without a tone says that nothing above this curve was there. Where the rounds
+//! round, `diagnose::workflow`). A tone in one output at 1.5 times it is named (80 of 80 at
+//! 7-57 Hz in a campaign, 29 Nov; 7 of 8 at 2 Hz; the channels' correlation only adds to its
+//! evidence); at the limit about two times in three, at 0.6 times or below never (80 tones). A
+//! search that ended without a tone says that nothing above this curve was there. Where the rounds
 //! ended on their count (every round named an effect) no tone could have been named, and no
 //! limit is given.
 //!

@@ -7,8 +7,9 @@
 //! frequency, which the order selection then "explains" with poles).
 //!
 //! A run with a gyro block carries a second, independent measurement of the same motion: the
-//! gyro's outputs, turned into Euler rates at the measured angles ([`euler_rate`]), the
-//! **witness** `w` (in platform axes first when the gyro is mounted turned, [`super::mount`]).
+//! gyro's outputs, turned into Euler rates at the measured angles
+//! ([`super::kinematics::euler_rate`]), the **witness** `w` (in platform axes first when the gyro
+//! is mounted turned, [`super::mount`]; [`super::witness_delay`] builds it and aligns it).
 //! Per bin the part of each measured angle that no linear filter of the witness explains is
 //!
 //! `N_c = S_yy - S_yw S_ww^-1 S_wy`,
@@ -52,12 +53,12 @@ use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
-use super::kinematics::euler_rate;
 use super::mount::{in_platform_axes, turned_mounting};
-use super::observer::{daniell_half_width, remove_line};
-use super::witness_delay::{align, drift, first_delay};
+use super::observer::daniell_half_width;
+use super::witness_delay::{
+    align, angle_spectra, drift, first_delay, hann_windowed, witness_angles, witness_euler_rates,
+};
 use crate::fourier::{RecordFft, fast_len};
-use crate::spectral::Window;
 
 /// Cells between two exact recomputations of the sliding window's sums (bounds rounding drift).
 const RESUM_EVERY: usize = 1024;
@@ -79,23 +80,6 @@ impl AngleNoise {
             Self::PerBin(v) => v[k],
         }
     }
-}
-
-/// The witness: the gyro's body rates `body` turned into Euler rates at the measured `angles`
-/// (rad/s, axis order `[roll, yaw, pitch]`). Samples at gimbal lock (non-finite) become 0.
-pub(super) fn witness_euler_rates(angles: [&[f64]; 3], body: [&[f64]; 3]) -> [Vec<f64>; 3] {
-    let n = angles[0].len().min(body[0].len());
-    let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-    for i in 0..n {
-        let r = euler_rate(
-            [angles[0][i], angles[1][i], angles[2][i]],
-            [body[0][i], body[1][i], body[2][i]],
-        );
-        for a in 0..3 {
-            out[a][i] = if r[a].is_finite() { r[a] } else { 0.0 };
-        }
-    }
-    out
 }
 
 /// Sums of `y y^H`, `y w^H` and `w w^H` over a window of bins.
@@ -133,19 +117,6 @@ fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
     Vector3::new(spectra[0][k], spectra[1][k], spectra[2][k])
 }
 
-/// `x` times the (periodic) Hann window over its length, at the start of a zero buffer of `len`
-/// samples.
-pub(super) fn hann_windowed(x: &[f64], len: usize) -> Vec<f64> {
-    let mut out: Vec<f64> = Window::Hann
-        .coefficients(x.len())
-        .iter()
-        .zip(x)
-        .map(|(w, v)| w * v)
-        .collect();
-    out.resize(len, 0.0);
-    out
-}
-
 /// `x` late by `samples(i)` at sample `i` (linear interpolation, held at the ends).
 fn delayed(x: &[f64], samples: impl Fn(usize) -> f64) -> Vec<f64> {
     let n = x.len();
@@ -157,18 +128,6 @@ fn delayed(x: &[f64], samples: impl Fn(usize) -> f64) -> Vec<f64> {
             x[j] * (1.0 - frac) + x[(j + 1).min(n - 1)] * frac
         })
         .collect()
-}
-
-/// The witness as angles: integrated by trapezoids, its least-squares line removed.
-pub(super) fn witness_angles(rates: &[f64], sample_rate_hz: f64) -> Vec<f64> {
-    let mut angle = Vec::with_capacity(rates.len());
-    let mut sum = 0.0;
-    angle.push(sum);
-    for pair in rates.windows(2) {
-        sum += 0.5 * (pair[0] + pair[1]) / sample_rate_hz;
-        angle.push(sum);
-    }
-    remove_line(&angle, sample_rate_hz).2
 }
 
 /// Records shorter than this many seconds per stretch are not split (see [`coloured_noise`]).
@@ -350,7 +309,7 @@ fn stretch_noise(
     let n = angles[0].len();
     let mut fft = RecordFft::new(fast_len(n), rate);
     let fft = &mut fft;
-    let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, rate).2, fft.len())));
+    let y = angle_spectra(angles, fft);
     let (delay_s, _) = first_delay(angles, body_rates, &y, fft);
     let steady = stretch_cells(angles, body_rates, &y, fft, smoothing, white, &|_| delay_s);
     let slope = drift(angles, body_rates, rate);

@@ -276,7 +276,7 @@ fn a_false_drift_leaves_more_unexplained_than_one_delay() {
         let angles = r.angles.each_ref().map(|a| &a[..n]);
         let gyro = r.gyro.as_ref().unwrap().each_ref().map(|g| &g[..n]);
         let mut fft = RecordFft::new(fast_len(n), RATE);
-        let y = angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, RATE).2, fft.len())));
+        let y = angle_spectra(angles, &mut fft);
         let (delay_s, _) = first_delay(angles, gyro, &y, &mut fft);
         let mut share = |slope: f64| {
             let late_s = |i: usize| delay_s + slope * (i as f64 - 0.5 * n as f64) / RATE;

@@ -9,9 +9,60 @@
 
 use num_complex::Complex64;
 
-use super::colour::{BOUND_BAND_HZ, hann_windowed, witness_angles, witness_euler_rates};
+use super::colour::BOUND_BAND_HZ;
+use super::kinematics::euler_rate;
 use super::observer::remove_line;
 use crate::fourier::{RecordFft, fast_len};
+use crate::spectral::Window;
+
+/// The witness: the gyro's body rates `body` turned into Euler rates at the measured `angles`
+/// (rad/s, axis order `[roll, yaw, pitch]`). Samples at gimbal lock (non-finite) become 0.
+pub(super) fn witness_euler_rates(angles: [&[f64]; 3], body: [&[f64]; 3]) -> [Vec<f64>; 3] {
+    let n = angles[0].len().min(body[0].len());
+    let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    for i in 0..n {
+        let r = euler_rate(
+            [angles[0][i], angles[1][i], angles[2][i]],
+            [body[0][i], body[1][i], body[2][i]],
+        );
+        for a in 0..3 {
+            out[a][i] = if r[a].is_finite() { r[a] } else { 0.0 };
+        }
+    }
+    out
+}
+
+/// `x` times the (periodic) Hann window over its length, at the start of a zero buffer of `len`
+/// samples.
+pub(super) fn hann_windowed(x: &[f64], len: usize) -> Vec<f64> {
+    let mut out: Vec<f64> = Window::Hann
+        .coefficients(x.len())
+        .iter()
+        .zip(x)
+        .map(|(w, v)| w * v)
+        .collect();
+    out.resize(len, 0.0);
+    out
+}
+
+/// The witness as angles: integrated by trapezoids, its least-squares line removed.
+pub(super) fn witness_angles(rates: &[f64], sample_rate_hz: f64) -> Vec<f64> {
+    let mut angle = Vec::with_capacity(rates.len());
+    let mut sum = 0.0;
+    angle.push(sum);
+    for pair in rates.windows(2) {
+        sum += 0.5 * (pair[0] + pair[1]) / sample_rate_hz;
+        angle.push(sum);
+    }
+    remove_line(&angle, sample_rate_hz).2
+}
+
+/// The angles' spectra on `fft`'s grid: each axis's least-squares line removed, Hann-windowed
+/// ([`hann_windowed`]).
+pub(super) fn angle_spectra(angles: [&[f64]; 3], fft: &mut RecordFft) -> [Vec<Complex64>; 3] {
+    let rate = fft.sample_rate_hz();
+    angles.map(|a| fft.forward(&hann_windowed(&remove_line(a, rate).2, fft.len())))
+}
 
 /// Independent bins in the window over which [`align`] smooths the coherency: enough for chance
 /// to stay below [`align_weight`]'s level (0.48 at one false alarm in a hundred) where the two
@@ -184,7 +235,7 @@ pub(super) fn drift(angles: [&[f64]; 3], body_rates: [&[f64]; 3], rate: f64) -> 
         let a = angles.map(|x| &x[r.clone()]);
         let w = body_rates.map(|x| &x[r.clone()]);
         let mut fft = RecordFft::new(fast_len(half), rate);
-        let y = a.map(|x| fft.forward(&hann_windowed(&remove_line(x, rate).2, fft.len())));
+        let y = angle_spectra(a, &mut fft);
         first_delay(a, w, &y, &mut fft)
     });
     let change = delays[1].0 - delays[0].0;

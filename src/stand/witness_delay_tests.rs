@@ -54,7 +54,7 @@ fn the_delay_s_deviation_is_its_scatter_on_a_steady_gyro() {
                 let a = r.angles.each_ref().map(|x| &x[range.clone()]);
                 let w = gyro.each_ref().map(|x| &x[range.clone()]);
                 let mut fft = RecordFft::new(fast_len(half), rate);
-                let y = a.map(|x| fft.forward(&hann_windowed(&remove_line(x, rate).2, fft.len())));
+                let y = angle_spectra(a, &mut fft);
                 first_delay(a, w, &y, &mut fft)
             });
             assert!(

@@ -107,7 +107,9 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 
 /// Each block's input limit ([`crate::diagnose::input_limit`]): a note where the band was ended
 /// below it, a warning where the band searched reaches into it; a warning of a step in the
-/// block's delay ([`crate::ident::delay_step`]); after `run: ` when the lines of several runs are
+/// block's delay ([`crate::ident::delay_step`]); where the angles are mostly their noise
+/// ([`crate::diagnose::noisy_angles`]), a note of what was set aside, or a warning that nothing
+/// could be confirmed; after `run: ` when the lines of several runs are
 /// printed together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
     let run = run.map_or_else(String::new, |r| format!("{r}: "));
@@ -122,7 +124,11 @@ pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&s
             let step = b
                 .delay_step
                 .map(|s| format!("imu-attest: warning: {run}{}", s.diagnosis_words(name)));
-            limit.into_iter().chain(step)
+            let noisy = b.noisy_angles.as_ref().and_then(|n| {
+                let kind = if n.checked { "note" } else { "warning" };
+                Some(format!("imu-attest: {kind}: {run}{}", n.words(name)?))
+            });
+            limit.into_iter().chain(step).chain(noisy)
         })
         .collect()
 }

@@ -28,6 +28,7 @@ pub mod gate;
 pub mod halves;
 pub mod input_limit;
 pub mod map;
+pub mod noisy_angles;
 mod prepared;
 pub mod profile;
 pub mod report;

@@ -7,6 +7,7 @@ use super::DiagnoseError;
 use super::design::{Design, DesignSignals};
 use super::halves::HalvesSource;
 use super::input_limit::{InputLimit, falling_gain, input_limit};
+use super::noisy_angles::{Below, NoisyAngles, noisy_angles_range};
 use super::state::State;
 use crate::block::Block;
 use crate::ident::band::BandSetting;
@@ -49,6 +50,12 @@ pub struct PreparedBlock {
     /// Where the inputs from the angles are not the motion, at the top of the band asked for
     /// ([`super::input_limit`]).
     pub input_limit: Option<InputLimit>,
+    /// Where the angles are mostly their noise, up to the band's top ([`super::noisy_angles`]):
+    /// each finding is checked below it.
+    pub noisy_angles: Option<NoisyAngles>,
+    /// The paper's model fitted on the band below `noisy_angles`, where the search confirms its
+    /// findings (`None`: no noisy range, or too little below it).
+    pub below: Option<Below>,
     /// A step in the delays of the stretches over the band searched
     /// ([`crate::ident::delay_step`]): the record's streams slipped, and the report says so.
     pub delay_step: Option<crate::ident::delay_step::DelayStep>,
@@ -93,6 +100,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
     let mut blocks = Vec::new();
     let mut refused = refused_blocks(&id.refused);
     let mut first_refusal = id.refused.first().map(|r| r.error.clone());
+    let angle_snr = id.motion.angle_snr();
     for b in &id.blocks {
         let name = b.block.name();
         // The identification's refusal of a block without a usable band (a dead block) holds
@@ -177,10 +185,23 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         if let Some(upper) = upper {
             base.set_upper(upper);
         }
+        let noisy = noisy_angles_range(&angle_snr, band).filter(|n| n.from_hz < band[1]);
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,
             input_limit,
+            below: noisy.as_ref().filter(|n| n.from_hz > band[0]).and_then(|n| {
+                let below = [band[0], n.from_hz];
+                let (design, _) = block_design(run, &id.motion.euler, b, (below, false), &span)?;
+                let dof = 3.0 * design.dof_per_channel();
+                let state = State::base(design, b.structural.tau_s, below)?;
+                Some(Below {
+                    state,
+                    band_hz: below,
+                    dof,
+                })
+            }),
+            noisy_angles: noisy,
             delay_step,
             search_drift: delay_step.is_none() || drifts,
             base,

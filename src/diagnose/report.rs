@@ -201,6 +201,11 @@ pub struct BlockReport {
     /// (the band then ended below it, or the user's band kept: [`super::input_limit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_limit: Option<super::input_limit::InputLimit>,
+    /// Where the angles are mostly their noise, up to the band's top: each finding was checked
+    /// below it, and its evidence says where it rests on the angle-noise model
+    /// ([`super::noisy_angles`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noisy_angles: Option<super::noisy_angles::NoisyAngles>,
     /// A step of the delay through the record (the streams slipped: [`crate::ident::delay_step`]);
     /// no clock drift was searched, and the findings are of both sides of it mixed.
     #[serde(default, skip_serializing_if = "Option::is_none")]

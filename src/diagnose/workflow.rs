@@ -6,9 +6,10 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 
 use super::DiagnoseError;
-use super::candidates::{Candidate, Extension, candidates};
+use super::candidates::{Candidate, Extension, candidates, candidates_among};
 use super::halves::{HalvesSource, compare_halves};
 use super::map::{disagreement_map, power, psd_cells};
+use super::noisy_angles::confirmed_below;
 pub(super) use super::prepared::block_design;
 pub use super::prepared::{Prepared, PreparedBlock, prepare};
 use super::report::{
@@ -171,6 +172,10 @@ fn diagnose_block(
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
     let mut last_rule = None;
+    // The same model below where the angles are mostly their noise: a smooth effect is named only
+    // if it is significant there too (`super::noisy_angles`).
+    let mut below = pb.below.clone();
+    let mut set_aside: Vec<Effect> = Vec::new();
     for round in 0..MAX_FINDINGS {
         let mut cands = candidates(&state, band);
         cands.retain(|c| !rejected.contains(&c.effect));
@@ -191,12 +196,35 @@ fn diagnose_block(
             .take_while(|c| rule.gain(c) > 0.0)
             .filter(|c| within_reach(c, band))
             .find_map(|c| {
-                state
+                let next = state
                     .with(c, band)
-                    .filter(|n| above_band(c) || closes_gap(&state, n))
-                    .map(|n| (c, n))
+                    .filter(|n| above_band(c) || closes_gap(&state, n))?;
+                let Some(b) = below.as_ref().filter(|_| confirmed_below(c.effect)) else {
+                    return Some((c, next, None));
+                };
+                let rule_below = Rule {
+                    per_parameter: b.dof.ln(),
+                    ..rule
+                };
+                let there = candidates_among(&b.state, b.band_hz, &|e| e == c.effect)
+                    .into_iter()
+                    .filter(|t| rule_below.gain(t) > 0.0)
+                    .max_by(|x, y| rule_below.gain(x).total_cmp(&rule_below.gain(y)));
+                if let Some(t) = there {
+                    Some((c, next, b.state.with(&t, b.band_hz)))
+                } else {
+                    if !set_aside.contains(&c.effect) {
+                        set_aside.push(c.effect);
+                    }
+                    None
+                }
             });
-        let Some((best, next)) = chosen else { break };
+        let Some((best, next, next_below)) = chosen else {
+            break;
+        };
+        if let (Some(b), Some(s)) = (below.as_mut(), next_below) {
+            b.state = s;
+        }
         let index = match &best.extension {
             Extension::Tone(_) => state.tones.len(),
             Extension::Structural(_) | Extension::ClockCorrected { .. } => {
@@ -245,11 +273,18 @@ fn diagnose_block(
     if let Some(source) = halves {
         compare_halves(source, block_index, &state, band, input_names, &mut accepted);
     }
+    // What a later round named after all is not set aside.
+    set_aside.retain(|e| !accepted.iter().any(|(named, _, _)| named == e));
     let rounds_left = accepted.len() < MAX_FINDINGS;
     let findings = accepted.into_iter().map(|(_, _, finding)| finding).collect();
     let mut report = block_report(base, &state, first_round, dof);
     report.band_hz = band;
     report.input_limit.clone_from(&pb.input_limit);
+    report.noisy_angles = pb.noisy_angles.clone().map(|mut n| {
+        n.checked = pb.below.is_some();
+        n.set_aside = set_aside;
+        n
+    });
     report.delay_step = pb.delay_step;
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     // No limit where the rounds ended on their count: no tone could have been named then.
@@ -390,6 +425,7 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
         expected_psd: psd_cells(d, &d.expected, PSD_CELLS),
         band_hz: [0.0; 2],
         input_limit: None,
+        noisy_angles: None,
         delay_step: None,
         given_model_gap_db: None,
         tone_limit: None,

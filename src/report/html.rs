@@ -517,6 +517,12 @@ fn diagnosis(h: &mut String, run: &RunReport) {
             if let Some(step) = &b.delay_step {
                 let _ = write!(h, "</p><p class=\"warn\">{}.", esc(&step.diagnosis_words(name)));
             }
+            if let Some(noisy) = &b.noisy_angles
+                && let Some(words) = noisy.words(name)
+            {
+                let class = if noisy.checked { "" } else { " class=\"warn\"" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
+            }
             if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
                 let _ = write!(h, "</p><p>{}.", esc(&limit.words(block)));
             }

@@ -113,12 +113,46 @@ pub struct ObserverEstimate {
     /// The noise model per frequency: the one-sided density of the angle measurement's noise the
     /// observer assumed, rad^2/Hz per axis, in the bands of [`ErrorPsd`].
     pub angle_noise_psd: ErrorPsd,
+    /// The measured angles' one-sided density (their line removed, smoothed as the observer
+    /// smooths), rad^2/Hz per axis, in the same bands: against `angle_noise_psd`, the angles'
+    /// signal-to-noise ratio per frequency ([`ObserverEstimate::angle_snr`]).
+    pub angle_psd: ErrorPsd,
     /// The spectral density of the estimate's error, per angle axis (see [`ErrorPsd`]).
     pub error_psd: ErrorPsd,
     /// With a witness, the white level per axis that bounds the angles' noise from above (what
     /// the gyro leaves unexplained in them, over the auto band's search limits; module
     /// [`super::colour`]), rad; `None` without one.
     pub angle_noise_bound_rad: Option<[f64; 3]>,
+}
+
+impl ObserverEstimate {
+    /// The angles' signal-to-noise ratio per band of [`ErrorPsd`] and axis: the measured angles'
+    /// density over the noise model's, less one (the noise's own share), at least 0; a band
+    /// without noise is infinitely clean where the angles move, and 0 where they do not. `([low edge, high edge] Hz, [roll, yaw, pitch])`,
+    /// ascending. Where it is low the angles are mostly their noise, and the inputs computed
+    /// from them hold the motion only as well as the noise model is known
+    /// ([`crate::diagnose::input_limit`]).
+    #[must_use]
+    pub fn angle_snr(&self) -> Vec<([f64; 2], [f64; 3])> {
+        let (m, n) = (&self.angle_psd, &self.angle_noise_psd);
+        m.psd
+            .iter()
+            .zip(&n.psd)
+            .zip(m.edges_hz.windows(2))
+            .map(|((s, noise), edge)| {
+                let snr = [0, 1, 2].map(|i| {
+                    if noise[i] > 0.0 {
+                        (s[i] / noise[i] - 1.0).max(0.0)
+                    } else if s[i] > 0.0 {
+                        f64::INFINITY
+                    } else {
+                        0.0
+                    }
+                });
+                ([edge[0], edge[1]], snr)
+            })
+            .collect()
+    }
 }
 
 /// The one-sided spectral density of the angle estimate's error `theta_hat - theta`, rad^2/Hz,
@@ -300,6 +334,14 @@ pub fn observe_with_witness(
         df,
     );
 
+    let angle_psd = ErrorPsd::from_bins(
+        &smoothed
+            .iter()
+            .map(|s| [0, 1, 2].map(|i| s[(i, i)].re * density))
+            .collect::<Vec<_>>(),
+        df,
+    );
+
     let last = fft.n_bins() - 1;
     if fft.len().is_multiple_of(2) {
         for s in &mut estimate {
@@ -334,6 +376,7 @@ pub fn observe_with_witness(
         noise_source,
         noise_colour,
         angle_noise_psd,
+        angle_psd,
         error_psd,
         angle_noise_bound_rad,
     })

@@ -130,6 +130,13 @@ fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
     if let Some(step) = &b.delay_step {
         ui.colored_label(ui.visuals().error_fg_color, step.diagnosis_words(name));
     }
+    if let Some((noisy, words)) = b.noisy_angles.as_ref().and_then(|n| Some((n, n.words(name)?))) {
+        if noisy.checked {
+            ui.label(words);
+        } else {
+            ui.colored_label(ui.visuals().error_fg_color, words);
+        }
+    }
     if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
         ui.label(limit.words(block));
     }

@@ -125,7 +125,7 @@ pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&s
                 .delay_step
                 .map(|s| format!("imu-attest: warning: {run}{}", s.diagnosis_words(name)));
             let noisy = b.noisy_angles.as_ref().and_then(|n| {
-                let kind = if n.checked { "note" } else { "warning" };
+                let kind = if n.is_warning() { "warning" } else { "note" };
                 Some(format!("imu-attest: {kind}: {run}{}", n.words(name)?))
             });
             limit.into_iter().chain(step).chain(noisy)

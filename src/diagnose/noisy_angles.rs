@@ -17,18 +17,23 @@
 //! which the search fits as a lag, a reference lag or a skew (`tau` takes a lag's phase, its
 //! droop is left): a clean 300 s cruise run with 0.2 mrad of coloured angle noise gave the gyro a
 //! `sensor_lag` of criterion gain 535 over 0.1-40 Hz, 4 over 0.1-12 Hz, none over 0.1-9 Hz, its
-//! angles' SNR (median of the axes) below pi from 9.9 Hz. Ending the band there (tried, 29 Nov)
+//! angles' SNR (median of the axes) below pi from 9.9 Hz (that lag is one the band below still
+//! confirms: the check below removes most such findings, not all). Ending the band there (tried, 29 Nov)
 //! removed most such findings but lost true ones far larger than the model's error (a mount
 //! resonance at 21-31 Hz named at criterion gains of thousands, a gyro tone at 33 Hz) and handed
 //! a resonance's rise to a false `g_sensitivity`. So the band is kept, and a finding must be
 //! confirmed where the inputs are the motion: the search keeps, beside its model over the band,
 //! the same model over the band below the noisy range ([`Below`]), and a candidate of a smooth
 //! effect (every effect but a tone or a resonance, peaks seen where they are, and a clock drift,
-//! fitted on the whole band's re-timing: [`confirmed_below`]) is named only if the same effect
-//! is significant there too, by the search's own rule (BIC on that band's degrees of freedom plus the same look-elsewhere cost).
+//! fitted on the whole band's re-timing: [`asked_below`]) is named only if the same effect
+//! is significant there too, by the search's own rule (BIC on that band's degrees of freedom
+//! plus the same look-elsewhere cost).
 //! One that is not is set aside, and the report says so ([`NoisyAngles::set_aside`]): it rests
-//! on the angle-noise model. A true lag's droop begins below its corner, so it is confirmed; a
-//! smooth error of the model there is not.
+//! on the angle-noise model, and one named without confirmation (no band below of
+//! [`MIN_BELOW_BINS`], or after a resonance or clock drift the model below cannot follow) is said
+//! too ([`NoisyAngles::unconfirmed`]). The test is of significance only, not of agreement with
+//! the band's size; an effect whose evidence grows with frequency (a skew as `f`, a lever arm as
+//! `f^2`) is confirmed where it is weakest, so a small true one may be set aside (said).
 //!
 //! The median over the axes, as the usable band's coherence: two axes that carry the motion keep
 //! the range for the outputs they drive. Units: Hz; the ratio is of densities.
@@ -51,13 +56,15 @@ pub struct NoisyAngles {
     pub from_hz: f64,
     /// The SNR's median over the bands from `from_hz` to the band's top.
     pub snr: f64,
-    /// Whether the band below was long enough to confirm findings on.
-    #[serde(default)]
-    pub checked: bool,
-    /// The effects the search would have named over the band, which the band below did not
-    /// confirm (module docs).
+    /// The smooth effects the search found significant over the band, which the band below did
+    /// not confirm: not named (module docs).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub set_aside: Vec<Effect>,
+    /// The smooth effects named without confirmation: no band below long enough to fit
+    /// ([`MIN_BELOW_BINS`]), or named after a resonance or a clock drift, which the model below
+    /// cannot follow.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unconfirmed: Vec<Effect>,
 }
 
 /// Where, inside `searched_hz`, the angles' signal-to-noise ratio `snr` (the observer's bands,
@@ -86,8 +93,8 @@ pub fn noisy_angles_range(snr: &[([f64; 2], [f64; 3])], searched_hz: [f64; 2]) -
         // Noisy from the first band inside: from the search's bottom.
         from_hz: if first == 0 { searched_hz[0] } else { noisy[0].0 },
         snr: super::tone::median(&mut values),
-        checked: false,
         set_aside: Vec::new(),
+        unconfirmed: Vec::new(),
     })
 }
 
@@ -98,12 +105,16 @@ pub fn noisy_angles_range(snr: &[([f64; 2], [f64; 3])], searched_hz: [f64; 2]) -
 /// test keeps a resonance off the band's edges and below a damping of 0.5, so it is no smooth
 /// error of the model), or a clock drift (its re-timing is fitted on the whole band).
 #[must_use]
-pub fn confirmed_below(effect: Effect) -> bool {
+pub fn asked_below(effect: Effect) -> bool {
     !matches!(
         effect,
         Effect::VibrationTone | Effect::PlatformResonance | Effect::ClockDrift
     )
 }
+
+/// Fewest native Welch bins of the band below the noisy range (the usable band's least,
+/// `ident::band::MIN_BAND_BINS`): fewer confirm nothing, and the findings are said unconfirmed.
+pub const MIN_BELOW_BINS: usize = crate::ident::band::MIN_BAND_BINS;
 
 /// The search's model over the band below the noisy range, kept beside its model over the band.
 #[derive(Clone, Debug)]
@@ -117,8 +128,14 @@ pub struct Below {
 }
 
 impl NoisyAngles {
+    /// Whether the words are a warning (a finding named without confirmation) rather than a note.
+    #[must_use]
+    pub fn is_warning(&self) -> bool {
+        !self.unconfirmed.is_empty()
+    }
+
     /// The range in the lab's words, for the command line, the app and the certificate; `None`
-    /// where nothing was set aside and every finding could be confirmed.
+    /// where nothing was set aside and every smooth finding was confirmed.
     #[must_use]
     pub fn words(&self, block_name: &str) -> Option<String> {
         let range = format!(
@@ -127,20 +144,23 @@ impl NoisyAngles {
              motion only as well as that model is known",
             self.from_hz, self.snr
         );
-        if !self.checked {
-            return Some(format!(
-                "{range}; too little of the band lies below for a finding to be confirmed where the inputs are the motion: \
-                 findings may rest on the angle-noise model"
+        let ids = |effects: &[Effect]| effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", ");
+        let mut said = Vec::new();
+        if !self.set_aside.is_empty() {
+            said.push(format!(
+                "the search found {} significant over the band, but not on the band below (where the inputs are the \
+                 motion): not named, as resting on the angle-noise model",
+                ids(&self.set_aside)
             ));
         }
-        (!self.set_aside.is_empty()).then(|| {
-            let names: Vec<&str> = self.set_aside.iter().map(|e| e.id()).collect();
-            format!(
-                "{range}; the search would have named {}, which the band below (where the inputs are the motion) does not \
-                 confirm: set aside, as resting on the angle-noise model",
-                names.join(", ")
-            )
-        })
+        if !self.unconfirmed.is_empty() {
+            said.push(format!(
+                "{} named without that confirmation (too little of the band lies below, or named after a resonance or a \
+                 clock drift the model below cannot follow): it may rest on the angle-noise model",
+                ids(&self.unconfirmed)
+            ));
+        }
+        (!said.is_empty()).then(|| format!("{range}; {}", said.join("; ")))
     }
 }
 
@@ -197,19 +217,23 @@ mod tests {
             "{range:?} vs {crossing}"
         );
         assert!(range.snr < MIN_ANGLE_SNR && range.snr > 0.0, "{range:?}");
-        // The words: none where nothing was set aside and the findings could be checked.
+        // The words: none where nothing was set aside and every smooth finding was confirmed.
         let mut said = noisy_angles_range(&bands(falling), searched).expect("a range");
-        said.checked = true;
         assert_eq!(said.words("gyro"), None);
         said.set_aside = vec![crate::effect::Effect::SensorLag];
         let w = said.words("gyro").expect("words");
         assert!(
-            w.starts_with("gyro block: from ") && w.contains("sensor_lag") && w.contains("set aside"),
+            w.starts_with("gyro block: from ") && w.contains("sensor_lag") && w.contains("not named"),
             "{w}"
         );
-        said.checked = false;
+        assert!(!said.is_warning());
+        said.unconfirmed = vec![crate::effect::Effect::AxisTimeSkew];
         let w = said.words("gyro").expect("words");
-        assert!(w.contains("too little of the band lies below"), "{w}");
+        assert!(
+            w.contains("axis_time_skew named without that confirmation"),
+            "{w}"
+        );
+        assert!(said.is_warning());
         // Noisy from the search's bottom: the range starts there.
         let all = noisy_angles_range(&bands(|_| [0.5; 3]), [0.3, 40.0]).expect("a range");
         assert_eq!(
@@ -217,8 +241,8 @@ mod tests {
             NoisyAngles {
                 from_hz: 0.3,
                 snr: 0.5,
-                checked: false,
                 set_aside: Vec::new(),
+                unconfirmed: Vec::new(),
             }
         );
     }

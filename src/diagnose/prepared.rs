@@ -7,10 +7,11 @@ use super::DiagnoseError;
 use super::design::{Design, DesignSignals};
 use super::halves::HalvesSource;
 use super::input_limit::{InputLimit, falling_gain, input_limit};
-use super::noisy_angles::{Below, NoisyAngles, noisy_angles_range};
+use super::noisy_angles::{Below, MIN_BELOW_BINS, NoisyAngles, noisy_angles_range};
 use super::state::State;
 use crate::block::Block;
 use crate::ident::band::BandSetting;
+use crate::ident::band::native_bins;
 use crate::ident::identify::{BlockIdentification, resolve_band};
 use crate::ident::session::Session;
 use crate::ident::settings::{OrderSetting, Settings};
@@ -51,7 +52,7 @@ pub struct PreparedBlock {
     /// ([`super::input_limit`]).
     pub input_limit: Option<InputLimit>,
     /// Where the angles are mostly their noise, up to the band's top ([`super::noisy_angles`]):
-    /// each finding is checked below it.
+    /// a smooth finding must be confirmed below it.
     pub noisy_angles: Option<NoisyAngles>,
     /// The paper's model fitted on the band below `noisy_angles`, where the search confirms its
     /// findings (`None`: no noisy range, or too little below it).
@@ -190,8 +191,11 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             block: b.block,
             band_hz: band,
             input_limit,
-            below: noisy.as_ref().filter(|n| n.from_hz > band[0]).and_then(|n| {
+            below: noisy.as_ref().and_then(|n| {
                 let below = [band[0], n.from_hz];
+                if native_bins(&b.spectra, below).len() < MIN_BELOW_BINS {
+                    return None;
+                }
                 let (design, _) = block_design(run, &id.motion.euler, b, (below, false), &span)?;
                 let dof = 3.0 * design.dof_per_channel();
                 let state = State::base(design, b.structural.tau_s, below)?;

@@ -201,9 +201,8 @@ pub struct BlockReport {
     /// (the band then ended below it, or the user's band kept: [`super::input_limit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_limit: Option<super::input_limit::InputLimit>,
-    /// Where the angles are mostly their noise, up to the band's top: each finding was checked
-    /// below it, and its evidence says where it rests on the angle-noise model
-    /// ([`super::noisy_angles`]).
+    /// Where the angles are mostly their noise, up to the band's top, and the smooth effects the
+    /// band below did not confirm (not named) or could not (named, said) ([`super::noisy_angles`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noisy_angles: Option<super::noisy_angles::NoisyAngles>,
     /// A step of the delay through the record (the streams slipped: [`crate::ident::delay_step`]);

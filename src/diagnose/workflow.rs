@@ -9,7 +9,7 @@ use super::DiagnoseError;
 use super::candidates::{Candidate, Extension, candidates, candidates_among};
 use super::halves::{HalvesSource, compare_halves};
 use super::map::{disagreement_map, power, psd_cells};
-use super::noisy_angles::confirmed_below;
+use super::noisy_angles::asked_below;
 pub(super) use super::prepared::block_design;
 pub use super::prepared::{Prepared, PreparedBlock, prepare};
 use super::report::{
@@ -175,7 +175,7 @@ fn diagnose_block(
     // The same model below where the angles are mostly their noise: a smooth effect is named only
     // if it is significant there too (`super::noisy_angles`).
     let mut below = pb.below.clone();
-    let mut set_aside: Vec<Effect> = Vec::new();
+    let (mut set_aside, mut unconfirmed): (Vec<Effect>, Vec<Effect>) = (Vec::new(), Vec::new());
     for round in 0..MAX_FINDINGS {
         let mut cands = candidates(&state, band);
         cands.retain(|c| !rejected.contains(&c.effect));
@@ -199,31 +199,48 @@ fn diagnose_block(
                 let next = state
                     .with(c, band)
                     .filter(|n| above_band(c) || closes_gap(&state, n))?;
-                let Some(b) = below.as_ref().filter(|_| confirmed_below(c.effect)) else {
+                if !asked_below(c.effect) {
+                    return Some((c, next, None));
+                }
+                let Some(low) = below.as_ref() else {
+                    // Nothing to confirm on (no band below, or a peak or drift named earlier
+                    // that its model does not hold): named, and said unconfirmed.
+                    if pb.noisy_angles.is_some() && !unconfirmed.contains(&c.effect) {
+                        unconfirmed.push(c.effect);
+                    }
                     return Some((c, next, None));
                 };
                 let rule_below = Rule {
-                    per_parameter: b.dof.ln(),
+                    per_parameter: low.dof.ln(),
                     ..rule
                 };
-                let there = candidates_among(&b.state, b.band_hz, &|e| e == c.effect)
+                // By effect alone: every effect asked has one candidate (a resonance, one per
+                // axis, is not asked).
+                let confirmed = candidates_among(&low.state, low.band_hz, &|e| e == c.effect)
                     .into_iter()
                     .filter(|t| rule_below.gain(t) > 0.0)
-                    .max_by(|x, y| rule_below.gain(x).total_cmp(&rule_below.gain(y)));
-                if let Some(t) = there {
-                    Some((c, next, b.state.with(&t, b.band_hz)))
-                } else {
-                    if !set_aside.contains(&c.effect) {
-                        set_aside.push(c.effect);
-                    }
-                    None
+                    .max_by(|x, y| rule_below.gain(x).total_cmp(&rule_below.gain(y)))
+                    .and_then(|t| low.state.with(&t, low.band_hz));
+                if confirmed.is_none() && !set_aside.contains(&c.effect) {
+                    set_aside.push(c.effect);
                 }
+                confirmed.map(|s| (c, next, Some(s)))
             });
         let Some((best, next, next_below)) = chosen else {
             break;
         };
-        if let (Some(b), Some(s)) = (below.as_mut(), next_below) {
-            b.state = s;
+        match next_below {
+            Some(s) => {
+                if let Some(low) = below.as_mut() {
+                    low.state = s;
+                }
+            }
+            // A tone is a line its neighbours set the level of, below too; a resonance or a
+            // clock drift named changes the model below in a way it cannot follow (a peak
+            // above it, a re-timing): confirmation stops there, and what follows is said
+            // unconfirmed.
+            None if !matches!(best.effect, Effect::VibrationTone) => below = None,
+            None => {}
         }
         let index = match &best.extension {
             Extension::Tone(_) => state.tones.len(),
@@ -281,8 +298,8 @@ fn diagnose_block(
     report.band_hz = band;
     report.input_limit.clone_from(&pb.input_limit);
     report.noisy_angles = pb.noisy_angles.clone().map(|mut n| {
-        n.checked = pb.below.is_some();
         n.set_aside = set_aside;
+        n.unconfirmed = unconfirmed;
         n
     });
     report.delay_step = pb.delay_step;

@@ -520,7 +520,7 @@ fn diagnosis(h: &mut String, run: &RunReport) {
             if let Some(noisy) = &b.noisy_angles
                 && let Some(words) = noisy.words(name)
             {
-                let class = if noisy.checked { "" } else { " class=\"warn\"" };
+                let class = if noisy.is_warning() { " class=\"warn\"" } else { "" };
                 let _ = write!(h, "</p><p{class}>{}.", esc(&words));
             }
             if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {

@@ -128,10 +128,10 @@ pub struct ObserverEstimate {
 impl ObserverEstimate {
     /// The angles' signal-to-noise ratio per band of [`ErrorPsd`] and axis: the measured angles'
     /// density over the noise model's, less one (the noise's own share), at least 0; a band
-    /// without noise is infinitely clean where the angles move, and 0 where they do not. `([low edge, high edge] Hz, [roll, yaw, pitch])`,
-    /// ascending. Where it is low the angles are mostly their noise, and the inputs computed
+    /// without noise is infinitely clean where the angles move, and 0 where they do not.
+    /// `([low edge, high edge] Hz, [roll, yaw, pitch])`, ascending. Where it is low the angles are mostly their noise, and the inputs computed
     /// from them hold the motion only as well as the noise model is known
-    /// ([`crate::diagnose::input_limit`]).
+    /// ([`crate::diagnose::noisy_angles`]).
     #[must_use]
     pub fn angle_snr(&self) -> Vec<([f64; 2], [f64; 3])> {
         let (m, n) = (&self.angle_psd, &self.angle_noise_psd);

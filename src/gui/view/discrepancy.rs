@@ -131,10 +131,10 @@ fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
         ui.colored_label(ui.visuals().error_fg_color, step.diagnosis_words(name));
     }
     if let Some((noisy, words)) = b.noisy_angles.as_ref().and_then(|n| Some((n, n.words(name)?))) {
-        if noisy.checked {
-            ui.label(words);
-        } else {
+        if noisy.is_warning() {
             ui.colored_label(ui.visuals().error_fg_color, words);
+        } else {
+            ui.label(words);
         }
     }
     if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {

@@ -77,11 +77,7 @@ pub fn noisy_angles_range(snr: &[([f64; 2], [f64; 3])], searched_hz: [f64; 2]) -
     let inside: Vec<(f64, f64)> = snr
         .iter()
         .filter(|([lo, hi], _)| (searched_hz[0]..=searched_hz[1]).contains(&(lo * hi).sqrt()))
-        .map(|([lo, _], v)| {
-            let mut m = *v;
-            m.sort_by(f64::total_cmp);
-            (*lo, m[1])
-        })
+        .map(|([lo, _], v)| (*lo, super::tone::median(&mut v.clone())))
         .collect();
     let first = inside
         .iter()

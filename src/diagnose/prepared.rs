@@ -186,7 +186,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         if let Some(upper) = upper {
             base.set_upper(upper);
         }
-        let noisy = noisy_angles_range(&angle_snr, band).filter(|n| n.from_hz < band[1]);
+        let noisy = noisy_angles_range(&angle_snr, band);
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,

@@ -174,6 +174,61 @@ fn the_band_ended_below_the_reference_s_noise_is_said_and_written() {
     );
 }
 
+/// A significant candidate the search refused is written with its reason and said once: on the
+/// tapping recording (`tests/data/real`) a first-order lag that would make the three channels'
+/// residual power grow, a note (the optical reference's band limit, not a lost finding).
+#[test]
+fn a_significant_candidate_not_named_is_written_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad25_tapping.csv.gz");
+    let out = dir.path().join("report.json");
+    let err = discrepancy(&run, &out);
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("significant but not named"))
+        .collect();
+    assert_eq!(said.len(), 1, "{err}");
+    assert!(
+        said[0].starts_with("imu-attest: note: gyro block: "),
+        "{}",
+        said[0]
+    );
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let refused = report["blocks"]["gyro"]["not_named"]
+        .as_array()
+        .expect("not_named written");
+    let lag = refused
+        .iter()
+        .find(|r| r["effect"] == "sensor_lag")
+        .expect("the lag refused");
+    assert_eq!(lag["reason"]["kind"], "total_grows", "{lag}");
+    let (before, after) = (
+        lag["reason"]["before_db"].as_f64().unwrap(),
+        lag["reason"]["after_db"].as_f64().unwrap(),
+    );
+    assert!(
+        after > before && lag["criterion_gain"].as_f64().unwrap() > 0.0,
+        "{lag}"
+    );
+    assert!(
+        report["findings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|f| f["effect"] != "sensor_lag"),
+        "a refused effect named"
+    );
+    // The certificate says it too, as a note (a plain paragraph, not a warning's).
+    let html = dir.path().join("certificate.html");
+    let o = imu_attest(&["report", run.to_str().unwrap(), "--out", html.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("<p>gyro block: significant but not named"),
+        "not in the certificate as a note"
+    );
+}
+
 /// Angles measured through a causal 20 Hz filter (`simulate --angle-filter-hz`, a stand defect no
 /// effect of the catalogue is): the search names effects the run does not have, and the model
 /// with them still leaves chi2/dof far above 2. Each block's warning says so, once the report is

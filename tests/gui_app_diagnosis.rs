@@ -105,6 +105,44 @@ fn the_clean_sample_run_has_no_missing_effect() {
     let run = harness.state().selected().unwrap();
     assert!(run.diagnosis.as_ref().unwrap().findings.is_empty());
     assert!(!run.diagnosis.running());
+    assert_not_shown(
+        &harness,
+        "significant but not named",
+        "a refusal said on the clean sample",
+    );
+}
+
+/// A true mount resonance refused by the gap rule beside strong coloured angle noise (cruise,
+/// seed 21, 120 s, 0.2 mrad; `tests/diagnose_not_named.rs`): said with the verdict (a warning;
+/// its kind is tested there and on the command line).
+#[test]
+fn a_resonance_refused_by_the_gap_rule_is_said_with_the_verdict() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("resonance.csv");
+    let mut config = SimConfig::new(Regime::Cruise);
+    (config.seed, config.duration_s) = (21, 120.0);
+    config.stand.coloured_noise_rad = 2e-4;
+    config.stand.coloured_corner_hz = imu_attest::sim::stand::StandImperfections::real().coloured_corner_hz;
+    config.effects = vec!["platform_resonance:gyro".parse().unwrap()];
+    write_run(&simulate(&config).unwrap(), &path).unwrap();
+    let mut harness = app(vec![path]);
+    diagnose(&mut harness);
+    harness.get_by_label_contains("verdict: no missing effect (");
+    harness.get_by_label_contains("gyro block: significant but not named");
+    harness.get_by_label_contains("platform_resonance (gain");
+}
+
+/// A significant candidate the search refused is said in the tab with its reason: on the tapping
+/// recording a first-order lag that would make the three channels' residual power grow (the
+/// optical reference's band limit, issue 15).
+#[test]
+fn a_significant_candidate_not_named_is_said_with_its_reason() {
+    let real = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/real/broad25_tapping.csv.gz");
+    let mut harness = app(vec![real]);
+    diagnose(&mut harness);
+    harness.get_by_label_contains("gyro block: significant but not named");
+    harness.get_by_label_contains("sensor_lag (gain");
+    harness.get_by_label_contains("residual power would not shrink");
 }
 
 #[test]

@@ -109,8 +109,9 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 /// below it, a warning where the band searched reaches into it; a warning of a step in the
 /// block's delay ([`crate::ident::delay_step`]); where the angles are mostly their noise
 /// ([`crate::diagnose::noisy_angles`]), a note of what was set aside, or a warning that nothing
-/// could be confirmed; after `run: ` when the lines of several runs are
-/// printed together.
+/// could be confirmed; the significant candidates not named and why
+/// ([`crate::diagnose::not_named`]); after `run: ` when the lines of several runs are printed
+/// together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
     let run = run.map_or_else(String::new, |r| format!("{r}: "));
     report
@@ -128,7 +129,11 @@ pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&s
                 let kind = if n.is_warning() { "warning" } else { "note" };
                 Some(format!("imu-attest: {kind}: {run}{}", n.words(name)?))
             });
-            limit.into_iter().chain(step).chain(noisy)
+            let not_named = report.not_named_words(name).map(|(words, warning)| {
+                let kind = if warning { "warning" } else { "note" };
+                format!("imu-attest: {kind}: {run}{words}")
+            });
+            limit.into_iter().chain(step).chain(noisy).chain(not_named)
         })
         .collect()
 }

@@ -29,6 +29,7 @@ pub mod halves;
 pub mod input_limit;
 pub mod map;
 pub mod noisy_angles;
+pub mod not_named;
 mod prepared;
 pub mod profile;
 pub mod report;

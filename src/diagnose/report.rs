@@ -89,6 +89,23 @@ impl Report {
             .collect()
     }
 
+    /// The significant candidates a block's search did not name, in words, and whether that is
+    /// a warning (refused evidence stronger than every finding named there: [`super::not_named`]);
+    /// `None` where none was refused or the block is not in the report.
+    #[must_use]
+    pub fn not_named_words(&self, block_name: &str) -> Option<(String, bool)> {
+        let b = self.blocks.get(block_name)?;
+        let block = crate::block::Block::from_name(block_name)?;
+        let words = super::not_named::words(&b.not_named, block_name, b.band_hz)?;
+        let weakest = self
+            .findings
+            .iter()
+            .filter(|f| f.block == block)
+            .map(|f| f.criterion_gain)
+            .reduce(f64::min);
+        Some((words, super::not_named::is_warning(&b.not_named, weakest)))
+    }
+
     /// Where a block's band was ended below the band asked for (its inputs not the motion
     /// above: [`super::input_limit`]), `"gyro only up to 11.16 Hz"`, joined, with the other
     /// blocks' bands said whole: what the verdict covers. Empty when every band is the one asked
@@ -205,6 +222,9 @@ pub struct BlockReport {
     /// band below did not confirm (not named) or could not (named, said) ([`super::noisy_angles`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noisy_angles: Option<super::noisy_angles::NoisyAngles>,
+    /// Significant candidates not named, and why ([`super::not_named`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_named: Vec<super::not_named::NotNamed>,
     /// A step of the delay through the record (the streams slipped: [`crate::ident::delay_step`]);
     /// no clock drift was searched, and the findings are of both sides of it mixed.
     #[serde(default, skip_serializing_if = "Option::is_none")]

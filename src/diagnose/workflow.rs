@@ -1,6 +1,7 @@
 //! The rounds of the search: identify, build each block's design, grow the model effect by
 //! effect while the criterion gains, and write the report.
 
+use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -10,6 +11,7 @@ use super::candidates::{Candidate, Extension, candidates, candidates_among};
 use super::halves::{HalvesSource, compare_halves};
 use super::map::{disagreement_map, power, psd_cells};
 use super::noisy_angles::asked_below;
+use super::not_named::{self, NotNamed, Reason};
 pub(super) use super::prepared::block_design;
 pub use super::prepared::{Prepared, PreparedBlock, prepare};
 use super::report::{
@@ -166,7 +168,7 @@ fn diagnose_block(
     rejected: &[Effect],
 ) -> (BlockReport, Vec<Finding>) {
     let (b, band, dof) = (pb, pb.band_hz, pb.dof);
-    let (input_names, _) = channel_names(b.block);
+    let (input_names, output_names) = channel_names(b.block);
     let base = &pb.base;
     let mut state = base.clone();
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
@@ -176,6 +178,7 @@ fn diagnose_block(
     // if it is significant there too (`super::noisy_angles`).
     let mut below = pb.below.clone();
     let (mut set_aside, mut unconfirmed): (Vec<Effect>, Vec<Effect>) = (Vec::new(), Vec::new());
+    let mut refusals: Vec<(usize, NotNamed)> = Vec::new();
     for round in 0..MAX_FINDINGS {
         let mut cands = candidates(&state, band);
         cands.retain(|c| !rejected.contains(&c.effect));
@@ -191,41 +194,57 @@ fn diagnose_block(
         // The best significant candidate that closes part of the gap (contract section 5) and
         // opens it nowhere: one that trades the strong bins for the weak ones is no finding.
         let before = state.worst_gap_db();
-        let chosen = cands
-            .iter()
-            .take_while(|c| rule.gain(c) > 0.0)
-            .filter(|c| within_reach(c, band))
-            .find_map(|c| {
-                let next = state
-                    .with(c, band)
-                    .filter(|n| above_band(c) || closes_gap(&state, n))?;
-                if !asked_below(c.effect) {
-                    return Some((c, next, None));
-                }
-                let Some(low) = below.as_ref() else {
-                    // Nothing to confirm on (no band below, or a peak or drift named earlier
-                    // that its model does not hold): named, and said unconfirmed.
-                    if pb.noisy_angles.is_some() && !unconfirmed.contains(&c.effect) {
-                        unconfirmed.push(c.effect);
-                    }
-                    return Some((c, next, None));
+        let chosen = cands.iter().take_while(|c| rule.gain(c) > 0.0).find_map(|c| {
+            let mut refuse = |reason| {
+                let entry = NotNamed {
+                    effect: c.effect,
+                    criterion_gain: rule.gain(c),
+                    reason,
                 };
-                let rule_below = Rule {
-                    per_parameter: low.dof.ln(),
-                    ..rule
-                };
-                // By effect alone: every effect asked has one candidate (a resonance, one per
-                // axis, is not asked).
-                let confirmed = candidates_among(&low.state, low.band_hz, &|e| e == c.effect)
-                    .into_iter()
-                    .filter(|t| rule_below.gain(t) > 0.0)
-                    .max_by(|x, y| rule_below.gain(x).total_cmp(&rule_below.gain(y)))
-                    .and_then(|t| low.state.with(&t, low.band_hz));
-                if confirmed.is_none() && !set_aside.contains(&c.effect) {
-                    set_aside.push(c.effect);
+                not_named::record(&mut refusals, round, entry);
+            };
+            if let Some(reason) = out_of_reach(c, band) {
+                refuse(reason);
+                return None;
+            }
+            let Some(next) = state.with(c, band) else {
+                refuse(Reason::FitFailed);
+                return None;
+            };
+            if let Some(reason) = (!above_band(c))
+                .then(|| opens_gap(&state, &next, output_names))
+                .flatten()
+            {
+                refuse(reason);
+                return None;
+            }
+            if !asked_below(c.effect) {
+                return Some((c, next, None));
+            }
+            let Some(low) = below.as_ref() else {
+                // Nothing to confirm on (no band below, or a peak or drift named earlier
+                // that its model does not hold): named, and said unconfirmed.
+                if pb.noisy_angles.is_some() && !unconfirmed.contains(&c.effect) {
+                    unconfirmed.push(c.effect);
                 }
-                confirmed.map(|s| (c, next, Some(s)))
-            });
+                return Some((c, next, None));
+            };
+            let rule_below = Rule {
+                per_parameter: low.dof.ln(),
+                ..rule
+            };
+            // By effect alone: every effect asked has one candidate (a resonance, one per
+            // axis, is not asked).
+            let confirmed = candidates_among(&low.state, low.band_hz, &|e| e == c.effect)
+                .into_iter()
+                .filter(|t| rule_below.gain(t) > 0.0)
+                .max_by(|x, y| rule_below.gain(x).total_cmp(&rule_below.gain(y)))
+                .and_then(|t| low.state.with(&t, low.band_hz));
+            if confirmed.is_none() && !set_aside.contains(&c.effect) {
+                set_aside.push(c.effect);
+            }
+            confirmed.map(|s| (c, next, Some(s)))
+        });
         let Some((best, next, next_below)) = chosen else {
             break;
         };
@@ -292,6 +311,10 @@ fn diagnose_block(
     }
     // What a later round named after all is not set aside.
     set_aside.retain(|e| !accepted.iter().any(|(named, _, _)| named == e));
+    // Refusals of effects named after all, or set aside for the band below (said there), drop.
+    refusals.retain(|(_, r)| {
+        !accepted.iter().any(|(named, _, _)| *named == r.effect) && !set_aside.contains(&r.effect)
+    });
     let rounds_left = accepted.len() < MAX_FINDINGS;
     let findings = accepted.into_iter().map(|(_, _, finding)| finding).collect();
     let mut report = block_report(base, &state, first_round, dof);
@@ -303,6 +326,7 @@ fn diagnose_block(
         n
     });
     report.delay_step = pb.delay_step;
+    report.not_named = refusals.into_iter().map(|(_, r)| r).collect();
     report.given_model_gap_db = given.map(|m| base.gap_of(m.k, m.tau_s));
     // No limit where the rounds ended on their count: no tone could have been named then.
     report.tone_limit = last_rule
@@ -380,25 +404,29 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
 /// damping 0.57-0.60 at 22-28 Hz added, each taking 6.5-8.8 ms from its channel's delay: the
 /// skew reported with a channel at -2.5 ms, -7.1 ms on another run. The catalogue's weakest
 /// simulated resonance has damping 0.4 (`sim::block`).
-const MAX_RESONANCE_DAMPING: f64 = 0.5;
+pub(super) const MAX_RESONANCE_DAMPING: f64 = 0.5;
 /// How close to a band edge (relative) a resonance may sit and still be a finding.
 const EDGE_MARGIN: f64 = 0.03;
 
-/// Whether a candidate's size is inside what the data can show: a resonance inside the band
-/// (not within [`EDGE_MARGIN`] of an edge, where the fit parks a mode that explains a misfit
-/// beyond the band) and damped at most [`MAX_RESONANCE_DAMPING`]. (A lag whose corner lies
-/// beyond the band is still seen by its droop: a 1.2 ms lag takes 4 % off the gain at 40 Hz.)
-fn within_reach(c: &Candidate, band: [f64; 2]) -> bool {
-    match (&c.extension, c.effect) {
-        (Extension::Structural(fitted), Effect::PlatformResonance) => {
-            fitted.theta.resonances.last().is_some_and(|&(f, zeta)| {
-                f > band[0] * (1.0 + EDGE_MARGIN)
-                    && f < band[1] * (1.0 - EDGE_MARGIN)
-                    && zeta <= MAX_RESONANCE_DAMPING
-            })
-        }
-        _ => true,
-    }
+/// Why a candidate's size is outside what the data can show, if it is: a resonance at a band
+/// edge (within [`EDGE_MARGIN`], where the fit parks a mode that explains a misfit beyond the
+/// band) or damped above [`MAX_RESONANCE_DAMPING`]. (A lag whose corner lies beyond the band is
+/// still seen by its droop: a 1.2 ms lag takes 4 % off the gain at 40 Hz.)
+fn out_of_reach(c: &Candidate, band: [f64; 2]) -> Option<Reason> {
+    let (Extension::Structural(fitted), Effect::PlatformResonance) = (&c.extension, c.effect) else {
+        return None;
+    };
+    // A resonance candidate always carries its mode; one without is no fit of a mode.
+    let Some(&(f, zeta)) = fitted.theta.resonances.last() else {
+        return Some(Reason::FitFailed);
+    };
+    // Written so that a NaN frequency or damping is out of reach.
+    let inside = f > band[0] * (1.0 + EDGE_MARGIN) && f < band[1] * (1.0 - EDGE_MARGIN);
+    let peaked = zeta <= MAX_RESONANCE_DAMPING;
+    (!inside || !peaked).then_some(Reason::OutOfReach {
+        frequency_hz: f,
+        damping: zeta,
+    })
 }
 
 /// Whether the candidate is a tone above the fit's band: it leaves the band's gap as it is
@@ -411,14 +439,37 @@ fn above_band(c: &Candidate) -> bool {
 /// the gap of a channel the effect does not touch by a few ten-thousandths of a dB either way.
 const GAP_TOLERANCE_DB: f64 = 0.005;
 
-/// Whether `next` closes part of `state`'s gap and opens it nowhere: the total (all channels)
-/// shrinks, and no channel's gap (the worst's included) grows beyond [`GAP_TOLERANCE_DB`]. A
-/// skew of 0.1 ms between channels closes the gap of the channels it delays and leaves the
-/// worst channel's as it was, to 0.0004 dB.
-fn closes_gap(state: &State, next: &State) -> bool {
+/// Why `next` does not close part of `state`'s gap and open it nowhere, if it does not: the
+/// total (all channels) must shrink, and no channel's gap (the worst's included) grow beyond
+/// [`GAP_TOLERANCE_DB`]. A skew of 0.1 ms between channels closes the gap of the channels it
+/// delays and leaves the worst channel's as it was, to 0.0004 dB.
+fn opens_gap(state: &State, next: &State, outputs: [&str; 3]) -> Option<Reason> {
+    let (total_before, total_after) = (state.total_gap_db(), next.total_gap_db());
+    // (The gaps are floored at -300 dB, never NaN; were one NaN, nothing would shrink and every
+    // channel open.)
+    if total_after.partial_cmp(&total_before) != Some(Ordering::Less) {
+        return Some(Reason::TotalGrows {
+            before_db: total_before,
+            after_db: total_after,
+        });
+    }
     let (before, after) = (state.gap_db(), next.gap_db());
-    next.total_gap_db() < state.total_gap_db()
-        && before.iter().zip(&after).all(|(b, a)| *a <= b + GAP_TOLERANCE_DB)
+    let opened = |i: usize| {
+        !matches!(
+            after[i].partial_cmp(&(before[i] + GAP_TOLERANCE_DB)),
+            Some(Ordering::Less | Ordering::Equal)
+        )
+    };
+    let channel = (0..3)
+        .filter(|&i| opened(i))
+        .max_by(|&i, &j| (after[i] - before[i]).total_cmp(&(after[j] - before[j])))?;
+    Some(Reason::OpensGap {
+        channel: outputs[channel].to_owned(),
+        before_db: before[channel],
+        after_db: after[channel],
+        worst_before_db: state.worst_gap_db(),
+        worst_after_db: next.worst_gap_db(),
+    })
 }
 
 fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, dof: f64) -> BlockReport {
@@ -443,6 +494,7 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
         band_hz: [0.0; 2],
         input_limit: None,
         noisy_angles: None,
+        not_named: Vec::new(),
         delay_step: None,
         given_model_gap_db: None,
         tone_limit: None,

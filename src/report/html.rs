@@ -523,6 +523,10 @@ fn diagnosis(h: &mut String, run: &RunReport) {
                 let class = if noisy.is_warning() { " class=\"warn\"" } else { "" };
                 let _ = write!(h, "</p><p{class}>{}.", esc(&words));
             }
+            if let Some((words, warning)) = report.not_named_words(name) {
+                let class = if warning { " class=\"warn\"" } else { "" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
+            }
             if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
                 let _ = write!(h, "</p><p>{}.", esc(&limit.words(block)));
             }

@@ -75,6 +75,16 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     for words in report.unexplained() {
         ui.colored_label(ui.visuals().error_fg_color, words);
     }
+    // A refusal that may hide the block's strongest effect is read with the verdict; a note
+    // stays with its block's details below.
+    for (words, _) in report
+        .blocks
+        .keys()
+        .filter_map(|name| report.not_named_words(name))
+        .filter(|(_, w)| *w)
+    {
+        ui.colored_label(ui.visuals().error_fg_color, words);
+    }
     for f in &report.findings {
         ui.group(|ui| {
             ui.horizontal(|ui| {
@@ -105,11 +115,14 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     }
     for (name, block) in &report.blocks {
         ui.separator();
-        block_details(ui, name, block);
+        block_details(ui, name, block, report.not_named_words(name));
     }
 }
 
-fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
+/// One block's search: band, gaps, the notes and warnings of the search's limits, `not_named` the
+/// significant candidates not named when they are a note
+/// ([`crate::diagnose::Report::not_named_words`]), the maps and the densities.
+fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport, not_named: Option<(String, bool)>) {
     ui.label(format!(
         "{name}: searched {:.2}-{:.2} Hz; worst-channel gap {:.2} dB -> {:.2} dB; chi2/dof {:.3} -> {:.3}",
         b.band_hz[0],
@@ -136,6 +149,10 @@ fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport) {
         } else {
             ui.label(words);
         }
+    }
+    // A warning is shown with the verdict above.
+    if let Some((words, false)) = not_named {
+        ui.label(words);
     }
     if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
         ui.label(limit.words(block));

@@ -24,12 +24,12 @@ td.l,th.l{text-align:left}pre{background:#f6f6f6;padding:6px;font-size:11px;whit
 svg text.pt{font-size:11px;font-weight:bold}svg text.tk{font-size:9px}svg text.al{font-size:10px}\
 svg text.lg{font-size:9px}@media print{h2{page-break-before:always}.grid{break-inside:avoid}}";
 
-fn esc(s: &str) -> String {
+pub(super) fn esc(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
 /// `value` with `digits` significant digits.
-fn sig(value: f64, digits: usize) -> String {
+pub(super) fn sig(value: f64, digits: usize) -> String {
     if !value.is_finite() {
         return "n/a".to_owned();
     }
@@ -124,7 +124,7 @@ fn run_section(h: &mut String, run: &RunReport, checks: &[Check]) {
             );
         }
     }
-    diagnosis(h, run);
+    super::html_diagnosis::diagnosis(h, run);
     let own: Vec<&Check> = checks.iter().filter(|c| c.run == m.source.file).collect();
     if !own.is_empty() {
         spec_table(h, &own);
@@ -465,82 +465,6 @@ fn noise_section(h: &mut String, block: Block, noise: &BlockNoise) {
         h.push_str("</tr>");
     }
     h.push_str("</table>");
-}
-
-fn diagnosis(h: &mut String, run: &RunReport) {
-    h.push_str("<h3 id=\"diagnosis\">Diagnosis (missing effects)</h3>");
-    match &run.diagnosis {
-        Err(e) => {
-            let _ = write!(
-                h,
-                "<p class=\"warn\">The diagnosis could not be made: {}</p>",
-                esc(e)
-            );
-        }
-        Ok(report) if report.findings.is_empty() => {
-            h.push_str("<p>Verdict: no missing effect. The model explains the measurement to its noise");
-            only_searched(h, report);
-            h.push_str(".</p>");
-        }
-        Ok(report) => {
-            h.push_str("<p>Verdict: effect found");
-            only_searched(h, report);
-            h.push_str(".</p><ol>");
-            for f in &report.findings {
-                let _ = write!(
-                    h,
-                    "<li><b>{}</b>: gap {} &rarr; {} dB. {}<br>{}</li>",
-                    esc(&f.name),
-                    sig(f.gap_before_db, 4),
-                    sig(f.gap_after_db, 4),
-                    esc(&crate::diagnose::describe::describe(f).join("; ")),
-                    esc(&f.evidence)
-                );
-            }
-            h.push_str("</ol>");
-        }
-    }
-    if let Ok(report) = &run.diagnosis {
-        // What the findings leave unexplained: their sizes are then not certifiable.
-        for words in report.unexplained() {
-            let _ = write!(h, "<p class=\"warn\">{}.</p>", esc(&words));
-        }
-        // Where the search's band ended below the band asked for, or the user's band reaches
-        // where the inputs are not the motion.
-        for (name, b) in &report.blocks {
-            let range = format!("{}&ndash;{} Hz", sig(b.band_hz[0], 3), sig(b.band_hz[1], 3));
-            let _ = write!(h, "<p>{} block: searched {range}.", esc(name));
-            if let Some(limit) = &b.input_limit {
-                let class = if limit.is_warning() { " class=\"warn\"" } else { "" };
-                let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words(name)));
-            }
-            if let Some(step) = &b.delay_step {
-                let _ = write!(h, "</p><p class=\"warn\">{}.", esc(&step.diagnosis_words(name)));
-            }
-            if let Some(noisy) = &b.noisy_angles
-                && let Some(words) = noisy.words(name)
-            {
-                let class = if noisy.is_warning() { " class=\"warn\"" } else { "" };
-                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
-            }
-            if let Some((words, warning)) = report.not_named_words(name) {
-                let class = if warning { " class=\"warn\"" } else { "" };
-                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
-            }
-            if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
-                let _ = write!(h, "</p><p>{}.", esc(&limit.words(block)));
-            }
-            h.push_str("</p>");
-        }
-    }
-}
-
-/// What the verdict covers where a band was ended below the band asked for.
-fn only_searched(h: &mut String, report: &crate::diagnose::Report) {
-    let ended = report.ended_bands();
-    if !ended.is_empty() {
-        let _ = write!(h, " ({}: the inputs above are not the motion)", esc(&ended));
-    }
 }
 
 fn spec_table(h: &mut String, checks: &[&Check]) {

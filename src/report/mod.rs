@@ -10,6 +10,7 @@
 //! report and the model file never disagree.
 
 pub mod html;
+mod html_diagnosis;
 pub mod spec;
 pub mod svg;
 

@@ -1,0 +1,85 @@
+//! The certificate's diagnosis section: the verdict, each finding with its size and evidence,
+//! and per block the search's band and what it could not do or did not name (the notes and
+//! warnings the command line prints and the app shows, in the same words).
+
+use std::fmt::Write as _;
+
+use super::RunReport;
+use super::html::{esc, sig};
+
+/// The diagnosis of `run`, or why it could not be made.
+pub(super) fn diagnosis(h: &mut String, run: &RunReport) {
+    h.push_str("<h3 id=\"diagnosis\">Diagnosis (missing effects)</h3>");
+    match &run.diagnosis {
+        Err(e) => {
+            let _ = write!(
+                h,
+                "<p class=\"warn\">The diagnosis could not be made: {}</p>",
+                esc(e)
+            );
+        }
+        Ok(report) if report.findings.is_empty() => {
+            h.push_str("<p>Verdict: no missing effect. The model explains the measurement to its noise");
+            only_searched(h, report);
+            h.push_str(".</p>");
+        }
+        Ok(report) => {
+            h.push_str("<p>Verdict: effect found");
+            only_searched(h, report);
+            h.push_str(".</p><ol>");
+            for f in &report.findings {
+                let _ = write!(
+                    h,
+                    "<li><b>{}</b>: gap {} &rarr; {} dB. {}<br>{}</li>",
+                    esc(&f.name),
+                    sig(f.gap_before_db, 4),
+                    sig(f.gap_after_db, 4),
+                    esc(&crate::diagnose::describe::describe(f).join("; ")),
+                    esc(&f.evidence)
+                );
+            }
+            h.push_str("</ol>");
+        }
+    }
+    if let Ok(report) = &run.diagnosis {
+        // What the findings leave unexplained: their sizes are then not certifiable.
+        for words in report.unexplained() {
+            let _ = write!(h, "<p class=\"warn\">{}.</p>", esc(&words));
+        }
+        // Where the search's band ended below the band asked for, or the user's band reaches
+        // where the inputs are not the motion.
+        for (name, b) in &report.blocks {
+            let range = format!("{}&ndash;{} Hz", sig(b.band_hz[0], 3), sig(b.band_hz[1], 3));
+            let _ = write!(h, "<p>{} block: searched {range}.", esc(name));
+            if let Some(limit) = &b.input_limit {
+                let class = if limit.is_warning() { " class=\"warn\"" } else { "" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words(name)));
+            }
+            if let Some(step) = &b.delay_step {
+                let _ = write!(h, "</p><p class=\"warn\">{}.", esc(&step.diagnosis_words(name)));
+            }
+            if let Some(noisy) = &b.noisy_angles
+                && let Some(words) = noisy.words(name)
+            {
+                let class = if noisy.is_warning() { " class=\"warn\"" } else { "" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
+            }
+            if let Some((words, warning)) = report.not_named_words(name) {
+                let class = if warning { " class=\"warn\"" } else { "" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
+            }
+            if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
+                let _ = write!(h, "</p><p>{}.", esc(&limit.words(block)));
+            }
+            h.push_str("</p>");
+        }
+    }
+}
+
+/// What the verdict covers where a band was ended below the band asked for.
+fn only_searched(h: &mut String, report: &crate::diagnose::Report) {
+    let ended = report.ended_bands();
+    if !ended.is_empty() {
+        let _ = write!(h, " ({}: the inputs above are not the motion)", esc(&ended));
+    }
+}

@@ -16,6 +16,7 @@ fn finding(effect: Effect, parameters: Value, std: Value) -> Finding {
         added_parameters: 3,
         criterion_gain: 60.0,
         halves: None,
+        search_band: None,
     }
 }
 

@@ -249,6 +249,7 @@ mod tests {
             added_parameters: 1,
             criterion_gain: 80.0,
             halves: None,
+            search_band: None,
         }
     }
 

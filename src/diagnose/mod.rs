@@ -39,6 +39,7 @@ pub mod structure;
 pub mod tone;
 pub mod tone_limit;
 pub mod uncertainty;
+pub mod usable_band;
 mod workflow;
 
 pub use report::{DISCREPANCY_SCHEMA, Finding, Report, Verdict};

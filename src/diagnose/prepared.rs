@@ -73,6 +73,9 @@ pub struct PreparedBlock {
     pub base: State,
     /// Real degrees of freedom of the band (all three channels): BIC's `n`.
     pub dof: f64,
+    /// The usable band where it is narrower than the band searched at the top: each finding's
+    /// sizes are compared there ([`super::usable_band`]).
+    pub usable_band_hz: Option<[f64; 2]>,
 }
 
 /// [`Prepared`] for `session`'s run under `settings`.
@@ -211,6 +214,9 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             base,
             dof,
             full_level_hz: full_level_hz(b),
+            usable_band_hz: resolve_band(&b.spectra, b.block, BandSetting::Auto)
+                .ok()
+                .and_then(|usable| super::usable_band::compared_band(usable, band)),
         });
     }
     // Every block set aside: refused as the identification refuses a run with none left.

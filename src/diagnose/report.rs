@@ -171,6 +171,11 @@ pub struct Finding {
     /// (`halves.rs`; absent where the halves are not compared).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub halves: Option<Value>,
+    /// Where the sizes above are fitted over the usable band (narrower than the band searched),
+    /// the band searched's: `{band_hz, parameters, parameter_std}` (`usable_band.rs`; absent
+    /// where the sizes are the band searched's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_band: Option<Value>,
 }
 
 /// A candidate's evidence in one round.

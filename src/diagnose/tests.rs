@@ -122,6 +122,7 @@ fn lag_finding(block: Block, t: f64, sd: f64) -> super::Finding {
         added_parameters: 1,
         criterion_gain: 480.0,
         halves: None,
+        search_band: None,
     }
 }
 

@@ -21,6 +21,7 @@ use super::state::State;
 use super::tone::TONE_PARAMETERS;
 use super::tone_limit::{ToneLimit, detection_limit};
 use super::uncertainty::{covariance, parameter_std};
+use super::usable_band;
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::ident::session::Session;
@@ -289,6 +290,7 @@ fn diagnose_block(
             added_parameters: added,
             criterion_gain: gain,
             halves: None,
+            search_band: None,
         };
         accepted.push((best.effect, index, finding));
         state = next;
@@ -302,12 +304,29 @@ fn diagnose_block(
     for (effect, index, finding) in &mut accepted {
         finding.parameters = parameters(*effect, &state, *index, input_names);
         finding.parameter_std = parameter_std(*effect, &state, *index, cov.as_ref());
+    }
+    if let Some(source) = halves {
+        // Is each finding one property of the block over the run (over the band searched, where
+        // it was found), then its size where the inputs are the motion (`super::usable_band`).
+        compare_halves(source, block_index, &state, band, input_names, &mut accepted);
+        if let Some(usable) = pb
+            .usable_band_hz
+            .filter(|&usable| usable_band::applies(&state, usable))
+        {
+            usable_band::size_over_usable_band(
+                source,
+                block_index,
+                (&state, band),
+                usable,
+                input_names,
+                &mut accepted,
+            );
+        }
+    }
+    for (_, _, finding) in &mut accepted {
         if super::describe::size_within_noise(finding) {
             let _ = write!(finding.evidence, "; {}", super::describe::SIZE_WITHIN_NOISE);
         }
-    }
-    if let Some(source) = halves {
-        compare_halves(source, block_index, &state, band, input_names, &mut accepted);
     }
     // What a later round named after all is not set aside.
     set_aside.retain(|e| !accepted.iter().any(|(named, _, _)| named == e));

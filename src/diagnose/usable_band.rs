@@ -1,0 +1,173 @@
+//! Where a finding's size is fitted: over the usable band. The search covers the whole band
+//! asked for (0.1-40 Hz with `band_hz: "auto"`), beyond the usable band where the outputs are
+//! coherent with the inputs from the angles (`ident::band`): a missing effect lowers the
+//! coherence, and the usable band would hide the misfit looked for. But above the usable band the
+//! inputs are not all the motion (the angles' noise, or a reference that carries less of the
+//! motion than there is: a band limit), and a size fitted there leans on that. Measured on the
+//! last campaign's runs (29 Nov, 120 s, the hidden lag's truth against the finding): beside
+//! 0.1 mrad coloured angle noise the lag's time constant read 2.0-5.3 of its standard deviations
+//! long on 5 of 8 runs over the band searched, and -0.5 to +0.9 over the usable band (11.5-15.1
+//! Hz); on `--stand real` (a 30 Hz zero-phase band limit of the angles) 4.1-6.1 deviations short,
+//! and 0.8-4.6 over the usable band (26.4-28.7 Hz, where the limit already takes 5-13 % of the
+//! motion: a zero-phase band limit leaves the coherence whole). An accepted effect is fitted over
+//! the identifier's band (`super::extend`), within the usable band, too.
+//!
+//! So where the usable band is narrower than the band searched, the final model (every finding
+//! of the block in it) is refitted there and each finding's sizes and deviations are that fit's;
+//! the band searched's figures are kept in the finding (`search_band`). Where the two differ
+//! beyond [`crate::compare::SIGNIFICANCE_SIGMAS`] combined deviations (the fits share the usable
+//! band's bins, so treating them as independent is conservative), the evidence says the size
+//! depends on the band above it and is not certifiable as it stands. A finding whose size the
+//! usable band does not determine (a false lag beside strong coloured noise read 0.0005 ms there,
+//! with no deviation) keeps the band searched's size, and its evidence says it rests on the band
+//! above. The halves check (`super::halves`) is made before, over the band searched where the
+//! finding was found (over the usable band the tapping recording's rate-shaped misfit, read as a
+//! quadratic scale factor, reproduced between halves, which over the band searched it does not).
+//!
+//! Not applied (the band searched's sizes kept, nothing said) where the usable band is the band
+//! searched (within 3 %), for a block whose model holds a tone in its band or a clock correction
+//! (fitted on the whole record's bins) or a resonance outside the usable band (its frequency would
+//! be pinned to the edge), and where the usable band is too short for a design or its fit fails.
+//! Units as the findings' parameters.
+
+use std::fmt::Write as _;
+
+use serde_json::json;
+
+use super::halves::HalvesSource;
+use super::report::{Finding, parameters};
+use super::state::State;
+use super::uncertainty::{covariance, parameter_std};
+use crate::compare::findings::{figures, most_different, sizes};
+use crate::effect::Effect;
+
+/// How far below the band searched the usable band's top must lie to be compared, relative:
+/// the resonance edge margin of the search (`workflow::EDGE_MARGIN`).
+const NARROWER: f64 = 0.03;
+
+/// The usable band to compare on, if it is narrower than `searched` at the top: its bottom no
+/// lower than the search's.
+#[must_use]
+pub fn compared_band(usable: [f64; 2], searched: [f64; 2]) -> Option<[f64; 2]> {
+    let band = [usable[0].max(searched[0]), usable[1].min(searched[1])];
+    (band[1] < searched[1] * (1.0 - NARROWER) && band[1] > band[0]).then_some(band)
+}
+
+/// Whether the block's findings can be sized over `usable`: no tone in the band and no clock
+/// correction (fitted on the whole record's bins), every resonance inside it.
+#[must_use]
+pub fn applies(state: &State, usable: [f64; 2]) -> bool {
+    let modes_inside = state
+        .fitted
+        .theta
+        .resonances
+        .iter()
+        .all(|&(f, _)| f > usable[0] * (1.0 + NARROWER) && f < usable[1] * (1.0 - NARROWER));
+    modes_inside && state.clock_drift.is_none() && !state.tones.iter().any(|t| !t.upper)
+}
+
+/// Refits the final model (`state`, fitted over `searched`) over `usable` and makes each
+/// finding's sizes and deviations that fit's (tones above the band keep theirs), keeping the
+/// band searched's in `search_band`; says in the evidence where they differ. A finding whose
+/// size the usable band does not determine (a figure with a deviation over the band searched
+/// has none there: a lag's time constant at zero) keeps the band searched's, and its evidence
+/// says it rests on the band above. `entries` are the
+/// block's findings with their effect and index in `state`, `input_names` the block's inputs.
+/// Nothing changes where the usable band's design or fit fails.
+pub fn size_over_usable_band(
+    source: &HalvesSource,
+    block_index: usize,
+    (state, searched): (&State, [f64; 2]),
+    usable: [f64; 2],
+    input_names: [&str; 3],
+    entries: &mut [(Effect, usize, Finding)],
+) {
+    let Some(b) = source.identification.blocks.get(block_index) else {
+        return;
+    };
+    let Some(refit) = super::workflow::block_design(
+        &source.run,
+        &source.identification.motion.euler,
+        b,
+        (usable, false),
+        &source.span,
+    )
+    .and_then(|(design, _)| State::refit(design, &state.fitted.structure, &state.fitted.theta, usable)) else {
+        return;
+    };
+    let dof = 3.0 * refit.design.dof_per_channel();
+    let cov = covariance(&refit, usable, refit.fitted.chi2() / dof);
+    for (effect, index, finding) in entries.iter_mut().filter(|(e, _, _)| *e != Effect::VibrationTone) {
+        let mut there = finding.clone();
+        there.parameters = parameters(*effect, &refit, *index, input_names);
+        there.parameter_std = parameter_std(*effect, &refit, *index, cov.as_ref());
+        if let Some((name, value)) = undetermined(finding, &there) {
+            let _ = write!(
+                finding.evidence,
+                "; over the usable band {:.2}-{:.2} Hz, where the outputs are coherent with the inputs, its size is \
+                 not determined ({name} {value:.3e}, at its bound or without a deviation): the finding rests on the \
+                 band above, where the inputs are not all the motion (the angles' noise, or a reference's band limit)",
+                usable[0], usable[1]
+            );
+            continue;
+        }
+        let _ = write!(
+            finding.evidence,
+            "; its size is fitted over the usable band {:.2}-{:.2} Hz, where the outputs are coherent with the \
+             inputs (as an accepted effect is)",
+            usable[0], usable[1]
+        );
+        if let Some((s, z)) = most_different(&sizes(finding, &there)) {
+            let pm = |sd: Option<f64>| sd.map_or_else(String::new, |v| format!(" ± {v:.2e}"));
+            let _ = write!(
+                finding.evidence,
+                "; over the whole band searched it reads {} {:.3e}{} against {:.3e}{} here, {z:.1} standard \
+                 deviations apart: the size depends on the band above (the angles' noise, or a reference's band \
+                 limit, which may reach into the usable band's top too), not certifiable as it stands (a band_hz \
+                 ending lower shows where it settles)",
+                s.name,
+                s.a,
+                pm(s.a_std),
+                s.b,
+                pm(s.b_std)
+            );
+        }
+        finding.search_band = Some(json!({
+            "band_hz": searched,
+            "parameters": finding.parameters,
+            "parameter_std": finding.parameter_std,
+        }));
+        finding.parameters = there.parameters;
+        finding.parameter_std = there.parameter_std;
+    }
+}
+
+/// The first figure of `searched` with a deviation that `there` gives none (or lacks), with its
+/// value there (`NaN` where it lacks it).
+fn undetermined(searched: &Finding, there: &Finding) -> Option<(String, f64)> {
+    let there = figures(there);
+    figures(searched)
+        .into_iter()
+        .filter(|(_, _, sd)| sd.is_some())
+        .find_map(|(name, _, _)| match there.iter().find(|(n, _, _)| *n == name) {
+            Some((_, _, Some(_))) => None,
+            Some((_, value, None)) => Some((name, *value)),
+            None => Some((name, f64::NAN)),
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::compared_band;
+
+    #[test]
+    fn only_a_usable_band_narrower_at_the_top_is_compared() {
+        assert_eq!(compared_band([0.12, 26.6], [0.1, 40.0]), Some([0.12, 26.6]));
+        assert_eq!(compared_band([0.05, 20.0], [0.1, 40.0]), Some([0.1, 20.0]));
+        // Within the margin, or the search's own band ended at the usable band's top.
+        assert_eq!(compared_band([0.12, 39.5], [0.1, 40.0]), None);
+        assert_eq!(compared_band([0.12, 11.2], [0.1, 11.2]), None);
+        // A usable band above the band searched leaves nothing.
+        assert_eq!(compared_band([12.0, 30.0], [0.1, 11.0]), None);
+    }
+}

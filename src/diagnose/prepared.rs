@@ -73,8 +73,9 @@ pub struct PreparedBlock {
     pub base: State,
     /// Real degrees of freedom of the band (all three channels): BIC's `n`.
     pub dof: f64,
-    /// The usable band where it is narrower than the band searched at the top: each finding's
-    /// sizes are compared there ([`super::usable_band`]).
+    /// The usable band where it is narrower than the band searched at the top and the band is
+    /// `"auto"`: each finding's sizes are fitted there ([`super::usable_band`]). A band the user
+    /// gives is the band the sizes are fitted over.
     pub usable_band_hz: Option<[f64; 2]>,
 }
 
@@ -214,8 +215,9 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             base,
             dof,
             full_level_hz: full_level_hz(b),
-            usable_band_hz: resolve_band(&b.spectra, b.block, BandSetting::Auto)
-                .ok()
+            usable_band_hz: (!given)
+                .then(|| resolve_band(&b.spectra, b.block, BandSetting::Auto).ok())
+                .flatten()
                 .and_then(|usable| super::usable_band::compared_band(usable, band)),
         });
     }

@@ -167,8 +167,9 @@ pub struct Finding {
     pub added_parameters: usize,
     /// `delta_chi2 - added_parameters ln(n) - 2 ln(m)`: positive means significant.
     pub criterion_gain: f64,
-    /// The sizes fitted on each half of the analysed stretch, `[{parameters, parameter_std}, ..]`
-    /// (`halves.rs`; absent where the halves are not compared).
+    /// The sizes fitted on each half of the analysed stretch over the band searched,
+    /// `[{parameters, parameter_std}, ..]` (`halves.rs`; absent where the halves are not
+    /// compared; beside `search_band`'s sizes where the finding's are the usable band's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub halves: Option<Value>,
     /// Where the sizes above are fitted over the usable band (narrower than the band searched),

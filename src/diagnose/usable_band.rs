@@ -5,10 +5,10 @@
 //! inputs are not all the motion (the angles' noise, or a reference that carries less of the
 //! motion than there is: a band limit), and a size fitted there leans on that. Measured on the
 //! last campaign's runs (29 Nov, 120 s, the hidden lag's truth against the finding): beside
-//! 0.1 mrad coloured angle noise the lag's time constant read 2.0-5.3 of its standard deviations
-//! long on 5 of 8 runs over the band searched, and -0.5 to +0.9 over the usable band (11.5-15.1
-//! Hz); on `--stand real` (a 30 Hz zero-phase band limit of the angles) 4.1-6.1 deviations short,
-//! and 0.8-4.6 over the usable band (26.4-28.7 Hz, where the limit already takes 5-13 % of the
+//! 0.1 mrad coloured angle noise the lag's time constant read more than 2 of its standard
+//! deviations long on 6 of 8 runs over the band searched (up to 5.3), and -0.5 to +0.9 over the
+//! usable band (11.5-15.1 Hz); on `--stand real` (a 30 Hz zero-phase band limit of the angles)
+//! 4.1-6.1 deviations short, and 0.8-4.6 short over the usable band (26.4-28.7 Hz, where the limit already takes 5-13 % of the
 //! motion: a zero-phase band limit leaves the coherence whole). An accepted effect is fitted over
 //! the identifier's band (`super::extend`), within the usable band, too.
 //!
@@ -20,15 +20,19 @@
 //! depends on the band above it and is not certifiable as it stands. A finding whose size the
 //! usable band does not determine (a false lag beside strong coloured noise read 0.0005 ms there,
 //! with no deviation) keeps the band searched's size, and its evidence says it rests on the band
+//! above; where the usable band's fit has no deviations at all (a figure at its bound), every
+//! finding keeps the band searched's size and the one at its bound is said to rest on the band
 //! above. The halves check (`super::halves`) is made before, over the band searched where the
 //! finding was found (over the usable band the tapping recording's rate-shaped misfit, read as a
 //! quadratic scale factor, reproduced between halves, which over the band searched it does not).
 //!
-//! Not applied (the band searched's sizes kept, nothing said) where the usable band is the band
-//! searched (within 3 %), for a block whose model holds a tone in its band or a clock correction
-//! (fitted on the whole record's bins) or a resonance outside the usable band (its frequency would
-//! be pinned to the edge), and where the usable band is too short for a design or its fit fails.
-//! Units as the findings' parameters.
+//! Not applied (the band searched's sizes kept, nothing said) where the band is given
+//! (`band_hz` fixed: the user's band is the band the sizes are fitted over), where the usable band
+//! is the band searched (within 3 %), for a block with no finding but tones, for a block whose
+//! model holds a tone in its band or a clock correction (fitted on the whole record's bins) or a
+//! resonance outside the usable band or moved to its edge by the refit (its frequency would be
+//! pinned there), and where the usable band is too short for a design or its fit fails. Units as
+//! the findings' parameters; no figure is NaN except a missing one's value in the words.
 
 use std::fmt::Write as _;
 
@@ -41,8 +45,8 @@ use super::uncertainty::{covariance, parameter_std};
 use crate::compare::findings::{figures, most_different, sizes};
 use crate::effect::Effect;
 
-/// How far below the band searched the usable band's top must lie to be compared, relative:
-/// the resonance edge margin of the search (`workflow::EDGE_MARGIN`).
+/// How far below the band searched the usable band's top must lie for the sizes to be fitted
+/// over it, relative: a top closer than this moves a size by less than its deviation.
 const NARROWER: f64 = 0.03;
 
 /// The usable band to compare on, if it is narrower than `searched` at the top: its bottom no
@@ -53,18 +57,44 @@ pub fn compared_band(usable: [f64; 2], searched: [f64; 2]) -> Option<[f64; 2]> {
     (band[1] < searched[1] * (1.0 - NARROWER) && band[1] > band[0]).then_some(band)
 }
 
-/// Whether the block's findings can be sized over `usable`: no tone in the band and no clock
-/// correction (fitted on the whole record's bins), every resonance inside it.
-#[must_use]
-pub fn applies(state: &State, usable: [f64; 2]) -> bool {
-    let modes_inside = state
+/// Whether every resonance of `state` lies inside `band`, away from its edges by the search's
+/// margin (`workflow::EDGE_MARGIN`: a mode at an edge is pinned there by the fit).
+fn modes_inside(state: &State, band: [f64; 2]) -> bool {
+    let margin = super::workflow::EDGE_MARGIN;
+    state
         .fitted
         .theta
         .resonances
         .iter()
-        .all(|&(f, _)| f > usable[0] * (1.0 + NARROWER) && f < usable[1] * (1.0 - NARROWER));
-    modes_inside && state.clock_drift.is_none() && !state.tones.iter().any(|t| !t.upper)
+        .all(|&(f, _)| f > band[0] * (1.0 + margin) && f < band[1] * (1.0 - margin))
 }
+
+/// Whether the block's findings can be sized over `usable`: no tone in the band and no clock
+/// correction (fitted on the whole record's bins), every resonance inside it.
+#[must_use]
+pub fn applies(state: &State, usable: [f64; 2]) -> bool {
+    modes_inside(state, usable) && state.clock_drift.is_none() && !state.tones.iter().any(|t| !t.upper)
+}
+
+/// A figure of `effect` that the fit over the usable band left at the bound of its range (a
+/// lag's time constant at zero, a mode's damping at its floor), with its value there: the
+/// model then has no deviations over that band, and the finding rests on the band above.
+fn at_bound(effect: Effect, there: &serde_json::Value) -> Option<(String, f64)> {
+    let (key, floor) = match effect {
+        Effect::SensorLag | Effect::ReferenceLag => ("T_s", MIN_LAG_S),
+        Effect::PlatformResonance => ("damping", MIN_DAMPING),
+        _ => return None,
+    };
+    let value = there.get(key)?.as_f64()?;
+    (value <= floor).then(|| (key.to_owned(), value))
+}
+
+/// A lag's time constant at or below which it is at its bound (zero), s: a thousandth of the
+/// shortest lag the catalogue simulates (1 ms).
+const MIN_LAG_S: f64 = 1e-6;
+/// A damping at or below which it is at the fit's floor (0.005, `fit.rs`), with a margin for
+/// the search's last step.
+const MIN_DAMPING: f64 = 0.0051;
 
 /// Refits the final model (`state`, fitted over `searched`) over `usable` and makes each
 /// finding's sizes and deviations that fit's (tones above the band keep theirs), keeping the
@@ -82,6 +112,9 @@ pub fn size_over_usable_band(
     input_names: [&str; 3],
     entries: &mut [(Effect, usize, Finding)],
 ) {
+    if entries.iter().all(|(e, _, _)| *e == Effect::VibrationTone) {
+        return;
+    }
     let Some(b) = source.identification.blocks.get(block_index) else {
         return;
     };
@@ -92,23 +125,28 @@ pub fn size_over_usable_band(
         (usable, false),
         &source.span,
     )
-    .and_then(|(design, _)| State::refit(design, &state.fitted.structure, &state.fitted.theta, usable)) else {
+    .and_then(|(design, _)| State::refit(design, &state.fitted.structure, &state.fitted.theta, usable))
+    .filter(|refit| modes_inside(refit, usable)) else {
         return;
     };
     let dof = 3.0 * refit.design.dof_per_channel();
-    let cov = covariance(&refit, usable, refit.fitted.chi2() / dof);
+    let Some(cov) = covariance(&refit, usable, refit.fitted.chi2() / dof) else {
+        // No deviations over the usable band: the sizes stay the band searched's, and a
+        // finding at its bound there is said to rest on the band above.
+        for (effect, index, finding) in entries.iter_mut() {
+            let there = parameters(*effect, &refit, *index, input_names);
+            if let Some((name, value)) = at_bound(*effect, &there) {
+                rests_on_band_above(finding, usable, &name, value);
+            }
+        }
+        return;
+    };
     for (effect, index, finding) in entries.iter_mut().filter(|(e, _, _)| *e != Effect::VibrationTone) {
         let mut there = finding.clone();
         there.parameters = parameters(*effect, &refit, *index, input_names);
-        there.parameter_std = parameter_std(*effect, &refit, *index, cov.as_ref());
+        there.parameter_std = parameter_std(*effect, &refit, *index, Some(&cov));
         if let Some((name, value)) = undetermined(finding, &there) {
-            let _ = write!(
-                finding.evidence,
-                "; over the usable band {:.2}-{:.2} Hz, where the outputs are coherent with the inputs, its size is \
-                 not determined ({name} {value:.3e}, at its bound or without a deviation): the finding rests on the \
-                 band above, where the inputs are not all the motion (the angles' noise, or a reference's band limit)",
-                usable[0], usable[1]
-            );
+            rests_on_band_above(finding, usable, &name, value);
             continue;
         }
         let _ = write!(
@@ -140,6 +178,18 @@ pub fn size_over_usable_band(
         finding.parameters = there.parameters;
         finding.parameter_std = there.parameter_std;
     }
+}
+
+/// Says in `finding`'s evidence that over `usable` its size is not determined (`name` reads
+/// `value` there): it rests on the band above.
+fn rests_on_band_above(finding: &mut Finding, usable: [f64; 2], name: &str, value: f64) {
+    let _ = write!(
+        finding.evidence,
+        "; over the usable band {:.2}-{:.2} Hz, where the outputs are coherent with the inputs, its size is not \
+         determined ({name} {value:.3e}, at its bound or without a deviation): the finding rests on the band above, \
+         where the inputs are not all the motion (the angles' noise, or a reference's band limit)",
+        usable[0], usable[1]
+    );
 }
 
 /// The first figure of `searched` with a deviation that `there` gives none (or lacks), with its

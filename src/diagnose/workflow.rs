@@ -380,9 +380,17 @@ const SHARED_LAG_SIGMAS: f64 = 3.0;
 /// [`Effect::ReferenceLag`]. (The simulator draws a sensor lag on each block independently,
 /// 3.2-5 ms apart by up to 1.8 ms, far beyond the few hundredths of a ms their deviations are.)
 pub(super) fn name_stand_side(findings: &mut [Finding]) {
+    // Over the band searched, where both were found: a block's size over its own usable band
+    // (`super::usable_band`) is over a band the other block's need not share.
     let lag = |f: &Finding| {
-        let t = f.parameters.get("T_s")?.as_f64()?;
-        let sd = f.parameter_std.get("T_s")?.as_f64()?;
+        let (parameters, std) = f
+            .search_band
+            .as_ref()
+            .map_or((&f.parameters, &f.parameter_std), |s| {
+                (&s["parameters"], &s["parameter_std"])
+            });
+        let t = parameters.get("T_s")?.as_f64()?;
+        let sd = std.get("T_s")?.as_f64()?;
         Some((t, sd))
     };
     let of = |findings: &[Finding], block: Block| {
@@ -405,7 +413,8 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
         f.name = Effect::ReferenceLag.name_on(f.block);
         let _ = write!(
             f.evidence,
-            "; the same lag on both blocks (gyro {:.3} ± {:.3} ms, accelerometer {:.3} ± {:.3} ms): the angle \
+            "; the same lag on both blocks over the band searched (gyro {:.3} ± {:.3} ms, accelerometer {:.3} ± \
+             {:.3} ms): the angle \
              measurement's band limit or latency, seen by both through their inputs, not the sensors'",
             tg * 1e3,
             sg * 1e3,
@@ -425,7 +434,7 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
 /// simulated resonance has damping 0.4 (`sim::block`).
 pub(super) const MAX_RESONANCE_DAMPING: f64 = 0.5;
 /// How close to a band edge (relative) a resonance may sit and still be a finding.
-const EDGE_MARGIN: f64 = 0.03;
+pub(super) const EDGE_MARGIN: f64 = 0.03;
 
 /// Why a candidate's size is outside what the data can show, if it is: a resonance at a band
 /// edge (within [`EDGE_MARGIN`], where the fit parks a mode that explains a misfit beyond the

@@ -169,8 +169,29 @@ fn words(presence: Presence, sizes: &[SizeDelta], names: [&str; 2]) -> String {
     }
 }
 
+/// `a`'s and `b`'s sizes over the same kind of band: where only one was sized over its usable
+/// band (`diagnose::usable_band`: the other's band was given, as wide, or its model holds what
+/// cannot be refitted there), its band searched's figures stand for it, as the other's are.
+fn over_like_bands(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
+    let searched = |f: &Finding| {
+        let mut g = f.clone();
+        if let Some(s) = g.search_band.take() {
+            g.parameters = s["parameters"].clone();
+            g.parameter_std = s["parameter_std"].clone();
+        }
+        g
+    };
+    match (a.search_band.is_some(), b.search_band.is_some()) {
+        (true, false) => sizes(&searched(a), b),
+        (false, true) => sizes(a, &searched(b)),
+        _ => sizes(a, b),
+    }
+}
+
 /// Every pair of runs `a < b`, every (block, effect) named on either, compared. `names` labels
-/// the runs in the words (their files); `findings[i]` is run `i`'s diagnosis's findings.
+/// the runs in the words (their files); `findings[i]` is run `i`'s diagnosis's findings. Sizes
+/// are compared over like bands: where only one run's were fitted over its usable band
+/// (`diagnose::usable_band`), its band searched's stand for it.
 #[must_use]
 pub fn compare_findings(findings: &[&[Finding]], names: &[String]) -> Vec<FindingDifference> {
     let mut out = Vec::new();
@@ -195,7 +216,7 @@ pub fn compare_findings(findings: &[&[Finding]], names: &[String]) -> Vec<Findin
                         _ => Presence::OnlyB,
                     };
                     let sizes = match (fa.get(k), fb.get(k)) {
-                        (Some(x), Some(y)) => sizes(x, y),
+                        (Some(x), Some(y)) => over_like_bands(x, y),
                         _ => Vec::new(),
                     };
                     let judged: Vec<bool> = sizes.iter().filter_map(|s| s.delta.significant).collect();

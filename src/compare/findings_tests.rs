@@ -104,3 +104,31 @@ fn unknown_deviations_and_nested_sizes() {
     let d = [g(2e-4, json!(1e-5))];
     assert_eq!(compare_findings(&[&a, &d], &names())[0].consistent, Some(false));
 }
+
+#[test]
+fn a_run_sized_over_its_usable_band_is_compared_over_the_band_searched_with_one_that_is_not() {
+    // Run A's size over its usable band differs from run B's (band searched), its band searched's
+    // agrees: compared like for like, they agree; two runs both sized over their usable bands
+    // compare those sizes.
+    let mut usable = k2([5.0e-3, 0.0, 0.0], [0.2e-3, 0.2e-3, 0.2e-3]);
+    usable.search_band = Some(json!({
+        "band_hz": [0.1, 40.0],
+        "parameters": {"k2": [1.0e-3, 0.0, 0.0]},
+        "parameter_std": {"k2": [0.2e-3, 0.2e-3, 0.2e-3]},
+    }));
+    let searched = [k2([1.1e-3, 0.0, 0.0], [0.2e-3, 0.2e-3, 0.2e-3])];
+    let a = [usable.clone()];
+    let out = compare_findings(&[&a, &searched], &names());
+    assert_eq!(out[0].consistent, Some(true), "{}", out[0].words);
+    assert!((out[0].sizes[0].a - 1.0e-3).abs() < 1e-15);
+    let out = compare_findings(&[&searched, &a], &names());
+    assert_eq!(out[0].consistent, Some(true), "{}", out[0].words);
+    let both = [usable.clone()];
+    let out = compare_findings(&[&a, &both], &names());
+    assert!((out[0].sizes[0].a - 5.0e-3).abs() < 1e-15, "{:?}", out[0].sizes);
+    // Against the usable band's size, as before the change, they would differ.
+    let mut plain = usable;
+    plain.search_band = None;
+    let out = compare_findings(&[&[plain], &searched], &names());
+    assert_eq!(out[0].consistent, Some(false), "{}", out[0].words);
+}

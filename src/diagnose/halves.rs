@@ -41,6 +41,27 @@ pub struct HalvesSource {
 /// Fewest samples a half may hold (below it the halves are not compared).
 const MIN_HALF: usize = 2048;
 
+/// The final model `state` of the block `block_index` refitted over `band` on the samples
+/// `range` of the run (`None` when its design or fit fails): the halves here, the usable band in
+/// `super::usable_band`.
+pub(super) fn refit_over(
+    source: &HalvesSource,
+    block_index: usize,
+    state: &State,
+    band: [f64; 2],
+    range: &Range<usize>,
+) -> Option<State> {
+    let b = source.identification.blocks.get(block_index)?;
+    let (design, _) = super::workflow::block_design(
+        &source.run,
+        &source.identification.motion.euler,
+        b,
+        (band, false),
+        range,
+    )?;
+    State::refit(design, &state.fitted.structure, &state.fitted.theta, band)
+}
+
 /// The final model of the block `block_index` refitted on each half: `None` when it cannot be.
 fn half_states(
     source: &HalvesSource,
@@ -53,17 +74,7 @@ fn half_states(
     if mid - span.start < MIN_HALF {
         return None;
     }
-    let b = source.identification.blocks.get(block_index)?;
-    let fit_on = |range: Range<usize>| {
-        let (design, _) = super::workflow::block_design(
-            &source.run,
-            &source.identification.motion.euler,
-            b,
-            (band, false),
-            &range,
-        )?;
-        State::refit(design, &state.fitted.structure, &state.fitted.theta, band)
-    };
+    let fit_on = |range: Range<usize>| refit_over(source, block_index, state, band, &range);
     Some([fit_on(span.start..mid)?, fit_on(mid..span.end)?])
 }
 

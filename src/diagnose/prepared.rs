@@ -111,7 +111,10 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         // The identification's refusal of a block without a usable band (a dead block) holds
         // here too, though the band searched is fixed: the diagnosis of a block the model
         // refused would be of nothing, and a gyro's refuses the run as it does there.
-        if !given && let Err(e) = resolve_band(&b.spectra, b.block, BandSetting::Auto) {
+        // The usable band, once: its absence refuses the block, and where it is narrower than
+        // the band searched the findings are sized over it (`super::usable_band`).
+        let usable = (!given).then(|| resolve_band(&b.spectra, b.block, BandSetting::Auto));
+        if let Some(Err(e)) = usable {
             match RefusedBlock::of(&e).filter(|_| e.is_refusal()) {
                 Some(entry) => {
                     refused.insert(name.to_owned(), entry);
@@ -215,9 +218,8 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             base,
             dof,
             full_level_hz: full_level_hz(b),
-            usable_band_hz: (!given)
-                .then(|| resolve_band(&b.spectra, b.block, BandSetting::Auto).ok())
-                .flatten()
+            usable_band_hz: usable
+                .and_then(Result::ok)
                 .and_then(|usable| super::usable_band::compared_band(usable, band)),
         });
     }

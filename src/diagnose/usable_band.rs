@@ -38,7 +38,7 @@ use std::fmt::Write as _;
 
 use serde_json::json;
 
-use super::halves::HalvesSource;
+use super::halves::{HalvesSource, refit_over};
 use super::report::{Finding, parameters};
 use super::state::State;
 use super::uncertainty::{covariance, parameter_std};
@@ -115,18 +115,9 @@ pub fn size_over_usable_band(
     if entries.iter().all(|(e, _, _)| *e == Effect::VibrationTone) {
         return;
     }
-    let Some(b) = source.identification.blocks.get(block_index) else {
-        return;
-    };
-    let Some(refit) = super::workflow::block_design(
-        &source.run,
-        &source.identification.motion.euler,
-        b,
-        (usable, false),
-        &source.span,
-    )
-    .and_then(|(design, _)| State::refit(design, &state.fitted.structure, &state.fitted.theta, usable))
-    .filter(|refit| modes_inside(refit, usable)) else {
+    let Some(refit) = refit_over(source, block_index, state, usable, &source.span)
+        .filter(|refit| modes_inside(refit, usable))
+    else {
         return;
     };
     let dof = 3.0 * refit.design.dof_per_channel();

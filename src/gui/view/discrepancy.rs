@@ -76,13 +76,13 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
         ui.colored_label(ui.visuals().error_fg_color, words);
     }
     // A refusal that may hide the block's strongest effect is read with the verdict; a note
-    // stays with its block's details below.
-    for (words, _) in report
+    // stays with its block's details below (the words made once per frame).
+    let mut not_named: Vec<Option<(String, bool)>> = report
         .blocks
         .keys()
-        .filter_map(|name| report.not_named_words(name))
-        .filter(|(_, w)| *w)
-    {
+        .map(|name| report.not_named_words(name))
+        .collect();
+    for (words, _) in not_named.iter().flatten().filter(|(_, warning)| *warning) {
         ui.colored_label(ui.visuals().error_fg_color, words);
     }
     for f in &report.findings {
@@ -113,9 +113,9 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ui.weak(&f.evidence);
         });
     }
-    for (name, block) in &report.blocks {
+    for ((name, block), said) in report.blocks.iter().zip(&mut not_named) {
         ui.separator();
-        block_details(ui, name, block, report.not_named_words(name));
+        block_details(ui, name, block, said.take());
     }
 }
 

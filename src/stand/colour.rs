@@ -15,9 +15,11 @@
 //! `N_c = S_yy - S_yw S_ww^-1 S_wy`,
 //!
 //! with the cross-periodograms of the Hann-windowed record (the strong low-frequency motion
-//! would leak through a rectangular window into the weak high-frequency bins) smoothed over the
-//! observer's Daniell windows, and corrected by `M / (M - 3)` for the three regressors fitted in
-//! a window of `M` independent bins (the window's bins times `(2n/3) / L_fft`). The witness's
+//! would leak through a rectangular window into the weak high-frequency bins) summed over the
+//! observer's Daniell windows, the witness's transfer taken as a straight line in frequency across
+//! each window (a gyro's sharp resonance turns it within one: [`super::colour_window`]), and
+//! corrected by `M / (M - 6)` for the six regressors fitted in a window of `M` independent bins
+//! (the window's bins times `(2n/3) / L_fft`). The witness's
 //! own misalignment and dynamics are linear filters, so they do not enter; its bulk delay is
 //! taken out (a delay turns the phase across a window); the kinematic coupling does not enter
 //! either, because the witness is converted to Euler rates sample by sample with the exact
@@ -49,10 +51,11 @@
 //! singular `S_ww` give the white floor (nothing is known beyond it). NaN cannot arise from
 //! finite input.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use num_complex::Complex64;
 use rayon::prelude::*;
 
+use super::colour_window::{Sums, unexplained};
 use super::mount::{in_platform_axes, turned_mounting};
 use super::observer::daniell_half_width;
 use super::witness_delay::{
@@ -82,37 +85,6 @@ impl AngleNoise {
     }
 }
 
-/// Sums of `y y^H`, `y w^H` and `w w^H` over a window of bins.
-#[derive(Clone, Copy)]
-struct Sums {
-    yy: Matrix3<Complex64>,
-    yw: Matrix3<Complex64>,
-    ww: Matrix3<Complex64>,
-}
-
-impl Sums {
-    fn zero() -> Self {
-        Self {
-            yy: Matrix3::zeros(),
-            yw: Matrix3::zeros(),
-            ww: Matrix3::zeros(),
-        }
-    }
-
-    fn merge(&mut self, other: &Self, sign: f64) {
-        let s = Complex64::from(sign);
-        self.yy += other.yy * s;
-        self.yw += other.yw * s;
-        self.ww += other.ww * s;
-    }
-
-    fn add(&mut self, y: &Vector3<Complex64>, w: &Vector3<Complex64>) {
-        self.yy += y * y.adjoint();
-        self.yw += y * w.adjoint();
-        self.ww += w * w.adjoint();
-    }
-}
-
 fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
     Vector3::new(spectra[0][k], spectra[1][k], spectra[2][k])
 }
@@ -137,10 +109,13 @@ const MIN_STRETCH_S: f64 = 20.0;
 /// thousandth, what is left is as likely the gyro's own noise, and either way moves a gain by
 /// less than a thousandth).
 const MIN_SHARE: f64 = 1e-3;
+/// The sum of the squared correlations between one bin of a Hann-windowed record's spectrum and
+/// the others, `1 + 2 (4/9 + 1/36)` (`ident::spectra::bin_correlation` of a Hann window).
+const HANN_BIN_CORRELATION: f64 = 35.0 / 18.0;
 /// Most stretches the record is split into.
 const MAX_STRETCHES: usize = 5;
 /// Fewest independent bins a smoothing window holds for the conditional spectrum (its relative
-/// standard deviation is about `1 / sqrt(M - 3)`); narrower windows are widened.
+/// standard deviation is about `1 / sqrt(M - 6)`); narrower windows are widened.
 const MIN_INDEPENDENT: f64 = 24.0;
 
 /// The coloured model, and what the witness bounds the angle noise by.
@@ -367,6 +342,12 @@ fn stretch_cells(
     // stretch's equivalent number of independent samples, spread over the grid's bins.
     let power_norm = 3.0 * n as f64 / 8.0;
     let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
+    // The Hann-windowed record's bins are correlated (the next -2/3, the one after 1/6, on a grid
+    // of the record's own length; more on a longer one): a regressor fitted in a window takes up
+    // `HANN_BIN_CORRELATION` of its bins' worth of the noise, so the regressors' share is counted
+    // in bins over that (the unexplained part read 3 % low beside 6 % with the time domain's
+    // `2n/3` independent samples, the level of a simulated coloured noise 6 % low with six).
+    let fitted_per_bin = (n as f64 / fft.len() as f64).min(1.0) / HANN_BIN_CORRELATION;
     let late = angles.map(|a| delayed(a, |i| late_s(i) * rate));
     let euler = witness_euler_rates(late.each_ref().map(Vec::as_slice), body_rates);
     let len = fft.len();
@@ -384,47 +365,47 @@ fn stretch_cells(
     // times cheaper than per bin.
     let cell = (min_half / 4).max(1);
     let bins = fft.n_bins();
-    let cells: Vec<(Sums, usize)> = (0..bins.div_ceil(cell))
+    // Distances from the sums' origin in units of `min_half` bins (module `colour_window`).
+    let unit = min_half as f64;
+    let cells: Vec<(Sums, usize, f64)> = (0..bins.div_ceil(cell))
         .map(|c| {
             let mut sums = Sums::zero();
             let range = c * cell..((c + 1) * cell).min(bins);
+            let centre = (range.start + range.end - 1) as f64 / 2.0;
             for k in range.clone() {
-                sums.add(&bin(y, k), &bin(&w, k));
+                sums.add(&bin(y, k), &bin(&w, k), (k as f64 - centre) / unit);
             }
-            (sums, range.len())
+            (sums, range.len(), centre)
         })
         .collect();
     let mut sums = Sums::zero();
-    let mut count = 0;
+    let mut count = 0_usize;
     let (mut lo, mut hi) = (0, 0);
+    let mut origin = 0.0;
     let mut out = Vec::with_capacity(cells.len());
     for c in 0..cells.len() {
-        let centre_hz = (c * cell + cell / 2) as f64 / bins_per_hz;
-        let half = daniell_half_width(smoothing, centre_hz, bins_per_hz)
-            .max(min_half)
-            .div_ceil(cell);
+        let centre = (c * cell + cell / 2) as f64;
+        let half_bins = daniell_half_width(smoothing, centre / bins_per_hz, bins_per_hz).max(min_half);
+        let half = half_bins.div_ceil(cell);
         let (new_lo, new_hi) = (c.saturating_sub(half), (c + half + 1).min(cells.len()));
-        if c % RESUM_EVERY == 0 {
-            (sums, count) = (Sums::zero(), 0);
-            for (s, m) in &cells[new_lo..new_hi] {
-                sums.merge(s, 1.0);
-                count += m;
-            }
+        // Summed afresh now and then (rounding) and whenever the centre has moved a half-width
+        // from the origin (the distances stay near 1).
+        if c % RESUM_EVERY == 0 || (centre - origin).abs() > half_bins as f64 {
+            origin = centre;
+            (sums, count) = cells_about(&cells[new_lo..new_hi], origin, unit);
         } else {
-            for (s, m) in &cells[hi..new_hi] {
-                sums.merge(s, 1.0);
-                count += m;
-            }
-            for (s, m) in &cells[lo..new_lo] {
-                sums.merge(s, -1.0);
-                count -= m;
-            }
+            let (added, more) = cells_about(&cells[hi..new_hi], origin, unit);
+            let (removed, fewer) = cells_about(&cells[lo..new_lo], origin, unit);
+            sums.merge(&added, 1.0);
+            sums.merge(&removed, -1.0);
+            count = count + more - fewer;
         }
         (lo, hi) = (new_lo, new_hi);
-        out.push(unexplained(
-            &sums,
+        let about_centre = sums.about((origin - centre) / unit, unit / half_bins as f64);
+        out.push(cell_of(
+            &about_centre,
             count as f64,
-            independent_per_bin,
+            fitted_per_bin,
             power_norm,
             white,
         ));
@@ -432,22 +413,19 @@ fn stretch_cells(
     (cell as f64 * rate / fft.len() as f64, out)
 }
 
+/// The sums of `cells` (each about its centre bin) about the bin `origin`, and their bins.
+fn cells_about(cells: &[(Sums, usize, f64)], origin: f64, unit: f64) -> (Sums, usize) {
+    let mut sums = Sums::zero();
+    for (s, _, at) in cells {
+        sums.merge(&s.about((at - origin) / unit, 1.0), 1.0);
+    }
+    (sums, cells.iter().map(|c| c.1).sum())
+}
+
 /// `clamp(N_c, white, S_yy)` per axis from a window's sums over `count` bins, and the bound
 /// `min(N_c, S_yy)` (the white floor where nothing is known beyond it).
-fn unexplained(sums: &Sums, count: f64, independent_per_bin: f64, power_norm: f64, white: [f64; 3]) -> Cell {
-    let independent = count * independent_per_bin;
-    let scale = Complex64::from(1.0 / (count.max(1.0) * power_norm));
-    let (syy, syw, sww) = (sums.yy * scale, sums.yw * scale, sums.ww * scale);
-    let total = [syy[(0, 0)].re, syy[(1, 1)].re, syy[(2, 2)].re];
-    // Too few bins or no witness power: nothing is known beyond the floor.
-    let witnessed = match sww.try_inverse() {
-        Some(inv) if independent > 4.0 => {
-            let explained = syw * inv * syw.adjoint();
-            let correction = independent / (independent - 3.0);
-            Some([0, 1, 2].map(|a| (total[a] - explained[(a, a)].re) * correction))
-        }
-        _ => None,
-    };
+fn cell_of(sums: &Sums, count: f64, fitted_per_bin: f64, power_norm: f64, white: [f64; 3]) -> Cell {
+    let (total, witnessed) = unexplained(sums, count, count * fitted_per_bin, power_norm);
     let left = witnessed.unwrap_or(white);
     let model = [0, 1, 2].map(|a| {
         if left[a] < MIN_SHARE * total[a] {

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::identify::read_settings;
 use super::{Args, CliError};
+use crate::diagnose::limits::LimitKind;
 use crate::diagnose::{DiagnoseOptions, diagnose_session};
 use crate::ident::session::Session;
 use crate::model::{MODEL_SCHEMA, Model};
@@ -113,39 +114,32 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 /// ([`crate::diagnose::not_named`]); after `run: ` when the lines of several runs are printed
 /// together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
-    let run = run.map_or_else(String::new, |r| format!("{r}: "));
-    report
-        .blocks
-        .iter()
-        .flat_map(|(name, b)| {
-            let limit = b.input_limit.as_ref().map(|limit| {
-                let kind = if limit.is_warning() { "warning" } else { "note" };
-                format!("imu-attest: {kind}: {run}{}", limit.words(name))
-            });
-            let step = b
-                .delay_step
-                .map(|s| format!("imu-attest: warning: {run}{}", s.diagnosis_words(name)));
-            let noisy = b.noisy_angles.as_ref().and_then(|n| {
-                let kind = if n.is_warning() { "warning" } else { "note" };
-                Some(format!("imu-attest: {kind}: {run}{}", n.words(name)?))
-            });
-            let not_named = report.not_named_words(name).map(|(words, warning)| {
-                let kind = if warning { "warning" } else { "note" };
-                format!("imu-attest: {kind}: {run}{words}")
-            });
-            limit.into_iter().chain(step).chain(noisy).chain(not_named)
-        })
-        .collect()
+    limit_lines(report, run, |kind| kind != LimitKind::ToneLimit)
 }
 
 /// Each block's tone search limit ([`crate::diagnose::tone_limit`]), a note: what a search that
 /// named no tone could have seen.
 fn tone_limit_lines(report: &crate::diagnose::Report) -> Vec<String> {
+    limit_lines(report, None, |kind| kind == LimitKind::ToneLimit)
+}
+
+/// The limits of every block's search ([`crate::diagnose::Report::limits`]) of the kinds
+/// `which` keeps, as notes and warnings; after `run: ` when given.
+fn limit_lines(
+    report: &crate::diagnose::Report,
+    run: Option<&str>,
+    which: impl Fn(LimitKind) -> bool,
+) -> Vec<String> {
+    let run = run.map_or_else(String::new, |r| format!("{r}: "));
     report
         .blocks
-        .iter()
-        .filter_map(|(name, b)| Some((crate::block::Block::from_name(name)?, b.tone_limit.as_ref()?)))
-        .map(|(block, limit)| format!("imu-attest: note: {}", limit.words(block)))
+        .keys()
+        .flat_map(|name| report.limits(name))
+        .filter(|l| which(l.kind))
+        .map(|l| {
+            let kind = if l.warning { "warning" } else { "note" };
+            format!("imu-attest: {kind}: {run}{}", l.words)
+        })
         .collect()
 }
 

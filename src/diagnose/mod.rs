@@ -27,6 +27,7 @@ pub mod fit;
 pub mod gate;
 pub mod halves;
 pub mod input_limit;
+pub mod limits;
 pub mod map;
 pub mod noisy_angles;
 pub mod not_named;

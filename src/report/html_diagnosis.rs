@@ -46,30 +46,13 @@ pub(super) fn diagnosis(h: &mut String, run: &RunReport) {
         for words in report.unexplained() {
             let _ = write!(h, "<p class=\"warn\">{}.</p>", esc(&words));
         }
-        // Where the search's band ended below the band asked for, or the user's band reaches
-        // where the inputs are not the motion.
+        // Each block's band searched and the limits of its search.
         for (name, b) in &report.blocks {
             let range = format!("{}&ndash;{} Hz", sig(b.band_hz[0], 3), sig(b.band_hz[1], 3));
             let _ = write!(h, "<p>{} block: searched {range}.", esc(name));
-            if let Some(limit) = &b.input_limit {
-                let class = if limit.is_warning() { " class=\"warn\"" } else { "" };
-                let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words(name)));
-            }
-            if let Some(step) = &b.delay_step {
-                let _ = write!(h, "</p><p class=\"warn\">{}.", esc(&step.diagnosis_words(name)));
-            }
-            if let Some(noisy) = &b.noisy_angles
-                && let Some(words) = noisy.words(name)
-            {
-                let class = if noisy.is_warning() { " class=\"warn\"" } else { "" };
-                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
-            }
-            if let Some((words, warning)) = report.not_named_words(name) {
-                let class = if warning { " class=\"warn\"" } else { "" };
-                let _ = write!(h, "</p><p{class}>{}.", esc(&words));
-            }
-            if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
-                let _ = write!(h, "</p><p>{}.", esc(&limit.words(block)));
+            for limit in report.limits(name) {
+                let class = if limit.warning { " class=\"warn\"" } else { "" };
+                let _ = write!(h, "</p><p{class}>{}.", esc(&limit.words));
             }
             h.push_str("</p>");
         }

@@ -9,10 +9,9 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use crate::block::Block;
-use crate::diagnose::Report;
 use crate::effect::Effect;
 use crate::gui::pipeline::{
-    Identification, Measured, Motion, RunId, RunSummary, Spectra, Validated, ValidationKey,
+    Diagnosis, Identification, Measured, Motion, RunId, RunSummary, Spectra, Validated, ValidationKey,
 };
 
 use super::StageRecord;
@@ -54,7 +53,7 @@ pub struct RunEntry {
     /// Identification (the last good one), requested with every analysis.
     pub identification: StageRecord<Identification>,
     /// The missing-effect report (the last good one; results of older requests are dropped).
-    pub diagnosis: StageRecord<Report>,
+    pub diagnosis: StageRecord<Diagnosis>,
     /// A model's prediction of the outputs (the Validation tab; the last good one).
     pub validation: StageRecord<Validated>,
     /// What the latest validation request answers.

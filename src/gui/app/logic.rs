@@ -128,7 +128,7 @@ impl App {
         // Every compared run diagnosed (Find missing effects): their findings compared too.
         let reports: Vec<&crate::diagnose::Report> = entries
             .iter()
-            .filter_map(|r| r.diagnosis.value.as_deref())
+            .filter_map(|r| r.diagnosis.value.as_deref().map(|d| &d.report))
             .collect();
         // Only diagnoses made under one set of settings are comparable.
         let same_settings = reports
@@ -231,13 +231,13 @@ impl App {
             Event::Diagnosed {
                 run,
                 generation,
-                report,
+                diagnosis,
             } => {
                 let Some(entry) = self.run_mut(run) else { return };
                 // A stale report (an older request finishing after a newer one) never replaces
                 // the newer one: only the newest request's report is taken.
                 if generation >= entry.diagnosis.requested {
-                    entry.diagnosis.offer(generation, report);
+                    entry.diagnosis.offer(generation, diagnosis);
                     self.errors.clear(ErrorTopic::Diagnosis(run));
                 }
             }

@@ -35,6 +35,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+pub use diagnosis::{BlockWords, Diagnosis};
 pub use display::{BlockSpectra, NativeCsd, Spectra, decibels};
 pub use identified::{BAND_FLOOR_DB, BAND_SIGMAS, BlockBode, BodeElement, Identification, deviation};
 pub use series::Series;
@@ -42,7 +43,6 @@ pub use stages::{Measured, Motion};
 pub use worker::{Worker, WorkerMode};
 
 use crate::block::Block;
-use crate::diagnose::Report;
 use crate::effect::Effect;
 use crate::ident::settings::Settings;
 
@@ -277,8 +277,8 @@ pub enum Event {
         run: RunId,
         /// The job's generation.
         generation: u64,
-        /// The report.
-        report: Arc<Report>,
+        /// The report and its words.
+        diagnosis: Arc<Diagnosis>,
     },
     /// A model's prediction of the run's outputs ready.
     Validated {

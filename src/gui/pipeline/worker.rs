@@ -253,10 +253,10 @@ impl Pipeline {
                     return;
                 };
                 let event = match super::diagnosis::diagnose(cache, &settings, &rejected) {
-                    Ok(report) => Event::Diagnosed {
+                    Ok(diagnosis) => Event::Diagnosed {
                         run,
                         generation,
-                        report: Arc::new(report),
+                        diagnosis: Arc::new(diagnosis),
                     },
                     Err(e) => Event::Failed {
                         run,

@@ -117,8 +117,10 @@ fn a_rejection_rediagnoses_from_the_cached_fits() {
         .try_iter()
         .filter_map(|e| match e {
             Event::Diagnosed {
-                generation, report, ..
-            } => Some((generation, report)),
+                generation,
+                diagnosis,
+                ..
+            } => Some((generation, diagnosis)),
             _ => None,
         })
         .collect();
@@ -132,7 +134,7 @@ fn a_rejection_rediagnoses_from_the_cached_fits() {
     };
     let cold = crate::diagnose::diagnose_run(&run, &crate::ident::settings::Settings::default(), &options)
         .expect("diagnosed");
-    assert_eq!(*reports[1].1, cold);
+    assert_eq!(reports[1].1.report, cold);
 }
 
 #[test]

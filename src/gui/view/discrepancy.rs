@@ -1,17 +1,19 @@
 //! The missing-effect view: run the diagnosis on demand (it takes seconds), then show the verdict,
 //! the named effects with their sizes, evidence and gaps before and after (each to accept or
 //! reject: a rejected effect is never offered again and the diagnosis reruns without it), the
-//! disagreement map before and after (channel by octave band, coloured by significance, hover for
+//! limits of each block's search and the candidates it did not name (each to accept all the
+//! same), the disagreement map before and after (channel by octave band, coloured by significance, hover for
 //! values), and the residual densities before and after against the expected one.
 
 use eframe::egui::{self, Align2, Color32, FontId, Rect, Sense, Stroke, StrokeKind, pos2, vec2};
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 
 use super::colormap::color;
-use crate::diagnose::Verdict;
 use crate::diagnose::map::DisagreementMap;
 use crate::diagnose::report::BlockReport;
+use crate::effect::Effect;
 use crate::gui::app::{Command, RunEntry};
+use crate::gui::pipeline::BlockWords;
 use crate::ident::signals::channel_names;
 use crate::run::Block;
 
@@ -51,49 +53,19 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
     if let Some(e) = &run.diagnosis.error {
         ui.colored_label(ui.visuals().error_fg_color, e);
     }
-    let Some(report) = run.diagnosis.as_ref() else {
+    let Some(diagnosis) = run.diagnosis.as_ref() else {
         ui.weak("The diagnosis simulates each block with its identified model, examines the residual against the model's disturbance model, and names the catalogue effect that explains it.");
         return;
     };
-    let verdict = match report.verdict {
-        Verdict::EffectFound => "verdict: effect found",
-        Verdict::NoMissingEffect => "verdict: no missing effect",
-    };
-    let ended = report.ended_bands();
-    let verdict = if ended.is_empty() {
-        verdict.to_owned()
-    } else {
-        format!("{verdict} ({ended}: the inputs above are not the motion)")
-    };
-    ui.label(egui::RichText::new(verdict).strong());
-    for name in report.refused_blocks.keys() {
-        ui.colored_label(
-            ui.visuals().error_fg_color,
-            format!("{name} block not diagnosed: the run cannot identify it (Results says why); the verdict is the other block's"),
-        );
-    }
-    for words in report.unexplained() {
+    let report = &diagnosis.report;
+    ui.label(egui::RichText::new(&diagnosis.verdict).strong());
+    for words in &diagnosis.warnings {
         ui.colored_label(ui.visuals().error_fg_color, words);
     }
-    // A refusal that may hide the block's strongest effect is read with the verdict; a note
-    // stays with its block's details below (the words made once per frame).
-    let mut not_named: Vec<Option<(String, bool)>> = report
-        .blocks
-        .keys()
-        .map(|name| report.not_named_words(name))
-        .collect();
-    for (words, _) in not_named.iter().flatten().filter(|(_, warning)| *warning) {
-        ui.colored_label(ui.visuals().error_fg_color, words);
-    }
-    for f in &report.findings {
+    for (f, sizes) in report.findings.iter().zip(&diagnosis.sizes) {
         ui.group(|ui| {
             ui.horizontal(|ui| {
-                let accepted = run.accepted.iter().any(|&(b, e)| b == f.block && e == f.effect);
-                if accepted {
-                    ui.label("accepted");
-                } else if ui.small_button("Accept").clicked() {
-                    commands.push(Command::AcceptEffect(run.id, f.block, f.effect));
-                }
+                accept_button(ui, run, (f.block, f.effect), commands);
                 if ui.small_button("Reject").clicked() {
                     commands.push(Command::RejectEffect(run.id, f.block, f.effect));
                 }
@@ -103,60 +75,65 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
                     f.gap_before_db, f.gap_after_db
                 ));
             });
-            let lines = crate::diagnose::describe::describe(f);
-            if lines.is_empty() {
+            if sizes.is_empty() {
                 ui.label(format!("size: {}", f.parameters));
             }
-            for line in lines {
+            for line in sizes {
                 ui.label(line);
             }
             ui.weak(&f.evidence);
         });
     }
-    for ((name, block), said) in report.blocks.iter().zip(&mut not_named) {
+    for words in &diagnosis.blocks {
         ui.separator();
-        block_details(ui, name, block, said.take());
+        if let Some(b) = report.blocks.get(&words.name) {
+            block_details(ui, run, words, b, commands);
+        }
     }
 }
 
-/// One block's search: band, gaps, the notes and warnings of the search's limits, `not_named` the
-/// significant candidates not named when they are a note
-/// ([`crate::diagnose::Report::not_named_words`]), the maps and the densities.
-fn block_details(ui: &mut egui::Ui, name: &str, b: &BlockReport, not_named: Option<(String, bool)>) {
-    ui.label(format!(
-        "{name}: searched {:.2}-{:.2} Hz; worst-channel gap {:.2} dB -> {:.2} dB; chi2/dof {:.3} -> {:.3}",
-        b.band_hz[0],
-        b.band_hz[1],
-        b.gap_db[0].iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        b.gap_db[1].iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        b.chi2_per_dof[0],
-        b.chi2_per_dof[1],
-    ));
-    if let Some(limit) = &b.input_limit {
-        let words = limit.words(name);
-        if limit.is_warning() {
-            ui.colored_label(ui.visuals().error_fg_color, words);
+/// "Accept" for an effect of the run (the identification then fits the model with it), or
+/// "accepted" once it is.
+fn accept_button(ui: &mut egui::Ui, run: &RunEntry, pair: (Block, Effect), commands: &mut Vec<Command>) {
+    if run.accepted.contains(&pair) {
+        ui.label("accepted");
+    } else if ui.small_button("Accept").clicked() {
+        commands.push(Command::AcceptEffect(run.id, pair.0, pair.1));
+    }
+}
+
+/// One block's search: its header, the notes and warnings of the search's limits (a warning of
+/// candidates not named is with the verdict), an "Accept" for each candidate not named (the user
+/// may know better than the rule that set it aside), the maps and the densities.
+fn block_details(
+    ui: &mut egui::Ui,
+    run: &RunEntry,
+    words: &BlockWords,
+    b: &BlockReport,
+    commands: &mut Vec<Command>,
+) {
+    ui.label(&words.header);
+    for limit in &words.limits {
+        if limit.warning {
+            ui.colored_label(ui.visuals().error_fg_color, &limit.words);
         } else {
-            ui.label(words);
+            ui.label(&limit.words);
         }
     }
-    if let Some(step) = &b.delay_step {
-        ui.colored_label(ui.visuals().error_fg_color, step.diagnosis_words(name));
-    }
-    if let Some((noisy, words)) = b.noisy_angles.as_ref().and_then(|n| Some((n, n.words(name)?))) {
-        if noisy.is_warning() {
-            ui.colored_label(ui.visuals().error_fg_color, words);
+    for &(block, effect) in &words.not_named {
+        let name = effect.name_on(block);
+        if run.accepted.contains(&(block, effect)) {
+            ui.label(format!("not named: {name} (accepted)"));
         } else {
-            ui.label(words);
+            ui.horizontal(|ui| {
+                ui.label("not named:");
+                if ui.small_button(format!("Accept {name}")).clicked() {
+                    commands.push(Command::AcceptEffect(run.id, block, effect));
+                }
+            });
         }
     }
-    // A warning is shown with the verdict above.
-    if let Some((words, false)) = not_named {
-        ui.label(words);
-    }
-    if let (Some(block), Some(limit)) = (crate::block::Block::from_name(name), &b.tone_limit) {
-        ui.label(limit.words(block));
-    }
+    let name = words.name.as_str();
     ui.horizontal(|ui| {
         ui.vertical(|ui| {
             ui.weak("disagreement before");

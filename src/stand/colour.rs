@@ -17,9 +17,10 @@
 //! with the cross-periodograms of the Hann-windowed record (the strong low-frequency motion
 //! would leak through a rectangular window into the weak high-frequency bins) summed over the
 //! observer's Daniell windows, the witness's transfer taken as a straight line in frequency across
-//! each window (a gyro's sharp resonance turns it within one: [`super::colour_window`]), and
-//! corrected by `M / (M - 6)` for the six regressors fitted in a window of `M` independent bins
-//! (the window's bins times `(2n/3) / L_fft`). The witness's
+//! a window where it is seen to turn within one (a gyro's sharp resonance:
+//! [`super::colour_window`]), and corrected by `M / (M - p)` for the `p` regressors fitted in a
+//! window of `M` equivalent samples (the window's bins times `(2n/3) / L_fft`; short of the bins'
+//! correlation's count by a few percent of the level, said there). The witness's
 //! own misalignment and dynamics are linear filters, so they do not enter; its bulk delay is
 //! taken out (a delay turns the phase across a window); the kinematic coupling does not enter
 //! either, because the witness is converted to Euler rates sample by sample with the exact
@@ -43,7 +44,8 @@
 //! Robustness: the estimate is the median over up to five equal stretches of the record, each
 //! estimated on its own (a stretch where the gyro is no witness, a hold or a dead start, would
 //! otherwise pass its unexplained motion for angle noise everywhere), with windows of at least
-//! 24 independent bins. The model is used for the input estimate only: the error the observer
+//! 24 of the window's equivalent samples (`2n/3` over the bins; 18.5 independent bins by the
+//! Hann bins' correlation). The model is used for the input estimate only: the error the observer
 //! reports for the noise terms ([`super::observer::ErrorPsd`]) is the white floor's.
 //!
 //! Units: the per-bin values are periodogram levels `|Y|^2 / L_eff` (rad^2 per sample, the units
@@ -51,20 +53,15 @@
 //! singular `S_ww` give the white floor (nothing is known beyond it). NaN cannot arise from
 //! finite input.
 
-use nalgebra::Vector3;
 use num_complex::Complex64;
 use rayon::prelude::*;
 
-use super::colour_window::{Sums, unexplained};
+use super::colour_window::{Dof, Windows, slide};
 use super::mount::{in_platform_axes, turned_mounting};
-use super::observer::daniell_half_width;
 use super::witness_delay::{
     align, angle_spectra, drift, first_delay, hann_windowed, witness_angles, witness_euler_rates,
 };
 use crate::fourier::{RecordFft, fast_len};
-
-/// Cells between two exact recomputations of the sliding window's sums (bounds rounding drift).
-const RESUM_EVERY: usize = 1024;
 
 /// The angle noise the observer assumes, per bin, as per-sample variances per axis.
 #[derive(Clone, Debug)]
@@ -83,10 +80,6 @@ impl AngleNoise {
             Self::PerBin(v) => v[k],
         }
     }
-}
-
-fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
-    Vector3::new(spectra[0][k], spectra[1][k], spectra[2][k])
 }
 
 /// `x` late by `samples(i)` at sample `i` (linear interpolation, held at the ends).
@@ -114,8 +107,10 @@ const MIN_SHARE: f64 = 1e-3;
 const HANN_BIN_CORRELATION: f64 = 35.0 / 18.0;
 /// Most stretches the record is split into.
 const MAX_STRETCHES: usize = 5;
-/// Fewest independent bins a smoothing window holds for the conditional spectrum (its relative
-/// standard deviation is about `1 / sqrt(M - 6)`); narrower windows are widened.
+/// Fewest of the Hann window's equivalent samples (`2n/3` spread over the bins) a smoothing
+/// window holds for the conditional spectrum, narrower windows widened: 18.5 independent bins by
+/// the Hann bins' correlation (`HANN_BIN_CORRELATION`), the relative standard deviation about
+/// `1 / sqrt(18.5 - 3)`, 0.25 (0.28 where the slope is fitted).
 const MIN_INDEPENDENT: f64 = 24.0;
 
 /// The coloured model, and what the witness bounds the angle noise by.
@@ -338,16 +333,16 @@ fn stretch_cells(
 ) -> (f64, Vec<Cell>) {
     let n = angles[0].len();
     let rate = fft.sample_rate_hz();
-    // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3 is the
-    // stretch's equivalent number of independent samples, spread over the grid's bins.
+    // Hann: sum w^2 = 3n/8 normalises to per-sample variance; (sum w)^2 / sum w^2 = 2n/3, the
+    // window's equivalent length, spread over the grid's bins, sizes the smoothing windows and
+    // the delay's alignment.
     let power_norm = 3.0 * n as f64 / 8.0;
     let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
     // The Hann-windowed record's bins are correlated (the next -2/3, the one after 1/6, on a grid
     // of the record's own length; more on a longer one): a regressor fitted in a window takes up
-    // `HANN_BIN_CORRELATION` of its bins' worth of the noise, so the regressors' share is counted
-    // in bins over that (the unexplained part read 3 % low beside 6 % with the time domain's
-    // `2n/3` independent samples, the level of a simulated coloured noise 6 % low with six).
-    let fitted_per_bin = (n as f64 / fft.len() as f64).min(1.0) / HANN_BIN_CORRELATION;
+    // `HANN_BIN_CORRELATION` of its bins' worth of the noise; the slope's test counts them so
+    // (the level's correction counts the `2n/3` samples: `colour_window`).
+    let independent_bins_per_bin = (n as f64 / fft.len() as f64).min(1.0) / HANN_BIN_CORRELATION;
     let late = angles.map(|a| delayed(a, |i| late_s(i) * rate));
     let euler = witness_euler_rates(late.each_ref().map(Vec::as_slice), body_rates);
     let len = fft.len();
@@ -358,74 +353,32 @@ fn stretch_cells(
         ))
     });
     align(&mut w, y, fft, independent_per_bin);
-    let bins_per_hz = fft.len() as f64 / rate;
     let min_half = (MIN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
-    // The windows hold at least 2 min_half bins: the model is evaluated per cell of a quarter of
-    // min_half bins (each cell's sums accumulated once), which is smooth enough and four to eight
-    // times cheaper than per bin.
-    let cell = (min_half / 4).max(1);
-    let bins = fft.n_bins();
-    // Distances from the sums' origin in units of `min_half` bins (module `colour_window`).
-    let unit = min_half as f64;
-    let cells: Vec<(Sums, usize, f64)> = (0..bins.div_ceil(cell))
-        .map(|c| {
-            let mut sums = Sums::zero();
-            let range = c * cell..((c + 1) * cell).min(bins);
-            let centre = (range.start + range.end - 1) as f64 / 2.0;
-            for k in range.clone() {
-                sums.add(&bin(y, k), &bin(&w, k), (k as f64 - centre) / unit);
-            }
-            (sums, range.len(), centre)
-        })
+    let windows = Windows {
+        bins_per_hz: fft.len() as f64 / rate,
+        smoothing,
+        min_half,
+        // The windows hold at least 2 min_half bins: the model is evaluated per cell of a
+        // quarter of min_half bins (each cell's sums accumulated once), which is smooth enough
+        // and four to eight times cheaper than per bin.
+        cell: (min_half / 4).max(1),
+        per_bin: Dof {
+            equivalent: independent_per_bin,
+            independent: independent_bins_per_bin,
+        },
+        power_norm,
+    };
+    let out = slide(y, &w, &windows)
+        .into_iter()
+        .map(|(total, left)| cell_of(total, left, white))
         .collect();
-    let mut sums = Sums::zero();
-    let mut count = 0_usize;
-    let (mut lo, mut hi) = (0, 0);
-    let mut origin = 0.0;
-    let mut out = Vec::with_capacity(cells.len());
-    for c in 0..cells.len() {
-        let centre = (c * cell + cell / 2) as f64;
-        let half_bins = daniell_half_width(smoothing, centre / bins_per_hz, bins_per_hz).max(min_half);
-        let half = half_bins.div_ceil(cell);
-        let (new_lo, new_hi) = (c.saturating_sub(half), (c + half + 1).min(cells.len()));
-        // Summed afresh now and then (rounding) and whenever the centre has moved a half-width
-        // from the origin (the distances stay near 1).
-        if c % RESUM_EVERY == 0 || (centre - origin).abs() > half_bins as f64 {
-            origin = centre;
-            (sums, count) = cells_about(&cells[new_lo..new_hi], origin, unit);
-        } else {
-            let (added, more) = cells_about(&cells[hi..new_hi], origin, unit);
-            let (removed, fewer) = cells_about(&cells[lo..new_lo], origin, unit);
-            sums.merge(&added, 1.0);
-            sums.merge(&removed, -1.0);
-            count = count + more - fewer;
-        }
-        (lo, hi) = (new_lo, new_hi);
-        let about_centre = sums.about((origin - centre) / unit, unit / half_bins as f64);
-        out.push(cell_of(
-            &about_centre,
-            count as f64,
-            fitted_per_bin,
-            power_norm,
-            white,
-        ));
-    }
-    (cell as f64 * rate / fft.len() as f64, out)
+    (windows.cell as f64 * rate / fft.len() as f64, out)
 }
 
-/// The sums of `cells` (each about its centre bin) about the bin `origin`, and their bins.
-fn cells_about(cells: &[(Sums, usize, f64)], origin: f64, unit: f64) -> (Sums, usize) {
-    let mut sums = Sums::zero();
-    for (s, _, at) in cells {
-        sums.merge(&s.about((at - origin) / unit, 1.0), 1.0);
-    }
-    (sums, cells.iter().map(|c| c.1).sum())
-}
-
-/// `clamp(N_c, white, S_yy)` per axis from a window's sums over `count` bins, and the bound
-/// `min(N_c, S_yy)` (the white floor where nothing is known beyond it).
-fn cell_of(sums: &Sums, count: f64, fitted_per_bin: f64, power_norm: f64, white: [f64; 3]) -> Cell {
-    let (total, witnessed) = unexplained(sums, count, count * fitted_per_bin, power_norm);
+/// `clamp(N_c, white, S_yy)` per axis from what a window says (its angles' power `total` and
+/// the part the witness leaves, `left`), and the bound `min(N_c, S_yy)` (the white floor where
+/// nothing is known beyond it).
+fn cell_of(total: [f64; 3], witnessed: Option<[f64; 3]>, white: [f64; 3]) -> Cell {
     let left = witnessed.unwrap_or(white);
     let model = [0, 1, 2].map(|a| {
         if left[a] < MIN_SHARE * total[a] {

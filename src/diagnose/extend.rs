@@ -8,6 +8,7 @@
 use super::DiagnoseError;
 use super::candidates::candidates_among;
 use super::report::{gain, parameters};
+use super::rules::within_reach;
 use super::state::State;
 use super::uncertainty::{covariance, parameter_std, tau_std};
 use super::workflow::{Prepared, PreparedBlock, prepare};
@@ -185,27 +186,27 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
 
 /// Why an accepted effect's fit `next` (from `state`, over `band`) is not added, if it is not: a
 /// mode the band does not reach, parked at its edge or damped past a peak (the diagnosis's own
-/// rule, [`super::workflow::EDGE_MARGIN`], [`super::workflow::MAX_RESONANCE_DAMPING`]), or a fit
-/// that leaves the model worse than without the effect (a fit that did not converge: the effect
-/// nests the model without it). Accepting a mode the diagnosis found at 30 Hz into a gyro
+/// rule, [`within_reach`]), or a fit that leaves the model worse than without the effect (a fit
+/// that did not converge: the effect nests the model without it; not a clock correction, whose
+/// chi2 is of resampled outputs). Accepting a mode the diagnosis found at 30 Hz into a gyro
 /// identified over 0.12-4.15 Hz (0.2 mrad coloured angle noise) put it at 4.15 Hz with damping
 /// 0.43, the delay at -2.8 ms and K 3 % off, chi2/dof 1.06 -> 3.51, with no word.
 fn unfit(effect: Effect, state: &State, next: &State, band: [f64; 2]) -> Option<String> {
     let (before, after) = (state.fitted.chi2(), next.fitted.chi2());
     if effect == Effect::PlatformResonance
         && let Some(&(f, zeta)) = next.fitted.theta.resonances.last()
+        && !within_reach(f, zeta, band)
     {
-        let margin = super::workflow::EDGE_MARGIN;
-        // Written so that a NaN frequency or damping is out of reach.
-        let inside = f > band[0] * (1.0 + margin) && f < band[1] * (1.0 - margin);
-        if !(inside && zeta <= super::workflow::MAX_RESONANCE_DAMPING) {
-            return Some(format!(
-                "the band the block is identified over ({:.2}-{:.2} Hz) does not reach the mode: \
-                 its fit there parks at {f:.2} Hz, damping {zeta:.2}; give a band_hz that \
-                 reaches the mode to fit it",
-                band[0], band[1]
-            ));
-        }
+        return Some(format!(
+            "the band the block is identified over ({:.2}-{:.2} Hz) does not reach the mode: its \
+             fit there parks at {f:.2} Hz, damping {zeta:.2}; give a band_hz that reaches the \
+             mode to fit it",
+            band[0], band[1]
+        ));
+    }
+    // A clock correction resamples the outputs: its chi2 is of another design, not comparable.
+    if effect == Effect::ClockDrift {
+        return None;
     }
     // A NaN chi2 is worse.
     let better = after

@@ -34,6 +34,7 @@ pub mod not_named;
 mod prepared;
 pub mod profile;
 pub mod report;
+mod rules;
 pub mod simplex;
 pub mod state;
 pub mod structure;

@@ -22,7 +22,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::workflow::MAX_RESONANCE_DAMPING;
+use super::rules::MAX_RESONANCE_DAMPING;
 use crate::effect::Effect;
 
 /// One significant candidate not named.

@@ -58,15 +58,14 @@ pub fn compared_band(usable: [f64; 2], searched: [f64; 2]) -> Option<[f64; 2]> {
 }
 
 /// Whether every resonance of `state` lies inside `band`, away from its edges by the search's
-/// margin (`workflow::EDGE_MARGIN`: a mode at an edge is pinned there by the fit).
+/// margin ([`super::rules::inside_edges`]: a mode at an edge is pinned there by the fit).
 fn modes_inside(state: &State, band: [f64; 2]) -> bool {
-    let margin = super::workflow::EDGE_MARGIN;
     state
         .fitted
         .theta
         .resonances
         .iter()
-        .all(|&(f, _)| f > band[0] * (1.0 + margin) && f < band[1] * (1.0 - margin))
+        .all(|&(f, _)| super::rules::inside_edges(f, band))
 }
 
 /// Whether the block's findings can be sized over `usable`: no tone in the band and no clock

@@ -1,7 +1,6 @@
 //! The rounds of the search: identify, build each block's design, grow the model effect by
 //! effect while the criterion gains, and write the report.
 
-use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -17,6 +16,7 @@ pub use super::prepared::{Prepared, PreparedBlock, prepare};
 use super::report::{
     BlockReport, CandidateSummary, Criterion, DISCREPANCY_SCHEMA, Finding, Report, Verdict, gain, parameters,
 };
+use super::rules::{above_band, opens_gap, out_of_reach};
 use super::state::State;
 use super::tone::TONE_PARAMETERS;
 use super::tone_limit::{ToneLimit, detection_limit};
@@ -422,82 +422,6 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
             sa * 1e3
         );
     }
-}
-
-/// Highest damping ratio of a resonance reported as a finding: 0.5, where the mode's gain at its
-/// own frequency, `1 / (2 zeta)`, is 1. A mode damped more attenuates even there (its peak, if
-/// any, under 1.25 dB, none beyond 0.707): the data cannot tell it from a gentle roll-off (a lag,
-/// the stand's band limit), and its phase lag trades with the channels' delays. A real
-/// recording with one gyro channel delayed 3 ms had its skew found right, then "resonances" of
-/// damping 0.57-0.60 at 22-28 Hz added, each taking 6.5-8.8 ms from its channel's delay: the
-/// skew reported with a channel at -2.5 ms, -7.1 ms on another run. The catalogue's weakest
-/// simulated resonance has damping 0.4 (`sim::block`).
-pub(super) const MAX_RESONANCE_DAMPING: f64 = 0.5;
-/// How close to a band edge (relative) a resonance may sit and still be a finding.
-pub(super) const EDGE_MARGIN: f64 = 0.03;
-
-/// Why a candidate's size is outside what the data can show, if it is: a resonance at a band
-/// edge (within [`EDGE_MARGIN`], where the fit parks a mode that explains a misfit beyond the
-/// band) or damped above [`MAX_RESONANCE_DAMPING`]. (A lag whose corner lies beyond the band is
-/// still seen by its droop: a 1.2 ms lag takes 4 % off the gain at 40 Hz.)
-fn out_of_reach(c: &Candidate, band: [f64; 2]) -> Option<Reason> {
-    let (Extension::Structural(fitted), Effect::PlatformResonance) = (&c.extension, c.effect) else {
-        return None;
-    };
-    // A resonance candidate always carries its mode; one without is no fit of a mode.
-    let Some(&(f, zeta)) = fitted.theta.resonances.last() else {
-        return Some(Reason::FitFailed);
-    };
-    // Written so that a NaN frequency or damping is out of reach.
-    let inside = f > band[0] * (1.0 + EDGE_MARGIN) && f < band[1] * (1.0 - EDGE_MARGIN);
-    let peaked = zeta <= MAX_RESONANCE_DAMPING;
-    (!inside || !peaked).then_some(Reason::OutOfReach {
-        frequency_hz: f,
-        damping: zeta,
-    })
-}
-
-/// Whether the candidate is a tone above the fit's band: it leaves the band's gap as it is
-/// (what it explains is its own line, measured against the local continuum there).
-fn above_band(c: &Candidate) -> bool {
-    matches!(&c.extension, Extension::Tone(t) if t.upper)
-}
-
-/// Numerical tolerance of "a channel's gap does not grow", dB: refitting every parameter moves
-/// the gap of a channel the effect does not touch by a few ten-thousandths of a dB either way.
-const GAP_TOLERANCE_DB: f64 = 0.005;
-
-/// Why `next` does not close part of `state`'s gap and open it nowhere, if it does not: the
-/// total (all channels) must shrink, and no channel's gap (the worst's included) grow beyond
-/// [`GAP_TOLERANCE_DB`]. A skew of 0.1 ms between channels closes the gap of the channels it
-/// delays and leaves the worst channel's as it was, to 0.0004 dB.
-fn opens_gap(state: &State, next: &State, outputs: [&str; 3]) -> Option<Reason> {
-    let (total_before, total_after) = (state.total_gap_db(), next.total_gap_db());
-    // (The gaps are floored at -300 dB, never NaN; were one NaN, nothing would shrink and every
-    // channel open.)
-    if total_after.partial_cmp(&total_before) != Some(Ordering::Less) {
-        return Some(Reason::TotalGrows {
-            before_db: total_before,
-            after_db: total_after,
-        });
-    }
-    let (before, after) = (state.gap_db(), next.gap_db());
-    let opened = |i: usize| {
-        !matches!(
-            after[i].partial_cmp(&(before[i] + GAP_TOLERANCE_DB)),
-            Some(Ordering::Less | Ordering::Equal)
-        )
-    };
-    let channel = (0..3)
-        .filter(|&i| opened(i))
-        .max_by(|&i, &j| (after[i] - before[i]).total_cmp(&(after[j] - before[j])))?;
-    Some(Reason::OpensGap {
-        channel: outputs[channel].to_owned(),
-        before_db: before[channel],
-        after_db: after[channel],
-        worst_before_db: state.worst_gap_db(),
-        worst_after_db: next.worst_gap_db(),
-    })
 }
 
 fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, dof: f64) -> BlockReport {

@@ -7,6 +7,7 @@
 use super::analyse::RunCache;
 use crate::block::Block;
 use crate::diagnose::limits::Limit;
+use crate::diagnose::not_named::Reason;
 use crate::diagnose::{DiagnoseError, DiagnoseOptions, Report, Verdict, diagnose_prepared};
 use crate::effect::Effect;
 use crate::ident::settings::Settings;
@@ -36,7 +37,10 @@ pub struct BlockWords {
     pub header: String,
     /// The limits of its search ([`Report::limits`]) but a warning said with the verdict.
     pub limits: Vec<Limit>,
-    /// The significant candidates not named, which the user may accept all the same.
+    /// The significant candidates a tolerance of the rules set aside (a gap opened, the total
+    /// residual power not shrinking), which the user may accept all the same; a mode out of
+    /// reach or a fit that failed would not be added to the model either
+    /// ([`crate::diagnose::extend`]).
     pub not_named: Vec<(Block, Effect)>,
 }
 
@@ -86,7 +90,13 @@ impl Diagnosis {
                 ),
                 limits,
                 not_named: Block::from_name(name)
-                    .map(|block| b.not_named.iter().map(|n| (block, n.effect)).collect())
+                    .map(|block| {
+                        b.not_named
+                            .iter()
+                            .filter(|n| matches!(n.reason, Reason::OpensGap { .. } | Reason::TotalGrows { .. }))
+                            .map(|n| (block, n.effect))
+                            .collect()
+                    })
                     .unwrap_or_default(),
             });
         }

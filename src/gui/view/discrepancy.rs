@@ -96,9 +96,31 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
 /// "accepted" once it is.
 fn accept_button(ui: &mut egui::Ui, run: &RunEntry, pair: (Block, Effect), commands: &mut Vec<Command>) {
     if run.accepted.contains(&pair) {
-        ui.label("accepted");
+        accepted_label(ui, run, pair, "accepted");
     } else if ui.small_button("Accept").clicked() {
         commands.push(Command::AcceptEffect(run.id, pair.0, pair.1));
+    }
+}
+
+/// `words` for an accepted effect, in red with the reason where the model could not add it
+/// (`ModelEffects::not_added`: Results says the same).
+fn accepted_label(ui: &mut egui::Ui, run: &RunEntry, (block, effect): (Block, Effect), words: &str) {
+    let not_added = run
+        .identification
+        .as_ref()
+        .and_then(|i| i.model.blocks.get(block.name()))
+        .and_then(|m| m.effects.as_ref())
+        .and_then(|e| e.not_added.iter().find(|n| n.effect == effect));
+    match not_added {
+        Some(n) => {
+            ui.colored_label(
+                ui.visuals().error_fg_color,
+                format!("{words}, not added to the model: {}", n.reason),
+            );
+        }
+        None => {
+            ui.label(words);
+        }
     }
 }
 
@@ -123,7 +145,7 @@ fn block_details(
     for &(block, effect) in &words.not_named {
         let name = effect.name_on(block);
         if run.accepted.contains(&(block, effect)) {
-            ui.label(format!("not named: {name} (accepted)"));
+            accepted_label(ui, run, (block, effect), &format!("not named: {name} (accepted)"));
         } else {
             ui.horizontal(|ui| {
                 ui.label("not named:");

@@ -1,12 +1,7 @@
 //! The speed work must not change what is identified: the sample runs' models (K, delay, order
 //! of each block) as identified before it (commit 6afbdeb, stored in
 //! `tests/data/sample_models_before_speed_work.json`) are what the session gives today, to
-//! rounding (1e-9 on K, 1e-12 s on the delay; measured differences 1.2e-10 and 3e-13 s) until
-//! 29 Nov, when the angle-noise model's windows changed on purpose (`stand::colour_window`: sums
-//! about each cell's centre, Cholesky inverses, a slope where the witness's transfer turns): the
-//! models then moved by up to 1.9e-6 on K and 3.6e-9 s on the delay, a hundredth of their
-//! deviations, and the bounds are 1e-5 and 2e-8 s (a change of the computation the speed work
-//! did not intend still shows). The
+//! rounding (1e-9 on K, 1e-12 s on the delay; measured differences 1.2e-10 and 3e-13 s). The
 //! models were fitted to the causal Wiener estimate, the default then; the default is now `H1`
 //! (issue 13, 26 Nov), so the check asks for the causal estimate: it guards the computation.
 
@@ -55,7 +50,7 @@ fn the_sample_runs_are_identified_as_before_the_speed_work() {
             let s = &b.structural;
             assert_eq!(s.order, want.order, "{file} {}", b.block);
             assert!(
-                (s.tau_s - want.tau_s).abs() < 2e-8,
+                (s.tau_s - want.tau_s).abs() < 1e-12,
                 "{file} {}: tau {} vs {}",
                 b.block,
                 s.tau_s,
@@ -64,7 +59,7 @@ fn the_sample_runs_are_identified_as_before_the_speed_work() {
             for i in 0..3 {
                 for j in 0..3 {
                     let d = (s.k[i][j] - want.k[i][j]).abs();
-                    assert!(d < 1e-5, "{file} {}: K[{i}][{j}] differs by {d:e}", b.block);
+                    assert!(d < 1e-9, "{file} {}: K[{i}][{j}] differs by {d:e}", b.block);
                 }
             }
         }

@@ -204,8 +204,9 @@ fn unfit(effect: Effect, state: &State, next: &State, band: [f64; 2]) -> Option<
             band[0], band[1]
         ));
     }
-    // A clock correction resamples the outputs: its chi2 is of another design, not comparable.
-    if effect == Effect::ClockDrift {
+    // A clock correction resamples the outputs: its chi2 is of another design, not comparable
+    // (a fit that diverged is still refused).
+    if effect == Effect::ClockDrift && after.is_finite() {
         return None;
     }
     // A NaN chi2 is worse.

@@ -20,7 +20,7 @@
 //! a window where it is seen to turn within one (a gyro's sharp resonance:
 //! [`super::colour_window`]), and corrected by `M / (M - p)` for the `p` regressors fitted in a
 //! window of `M` equivalent samples (the window's bins times `(2n/3) / L_fft`; short of the bins'
-//! correlation's count by a few percent of the level, said there). The witness's
+//! correlation's count by 3-6 % of the level, said there). The witness's
 //! own misalignment and dynamics are linear filters, so they do not enter; its bulk delay is
 //! taken out (a delay turns the phase across a window); the kinematic coupling does not enter
 //! either, because the witness is converted to Euler rates sample by sample with the exact
@@ -111,7 +111,7 @@ const MAX_STRETCHES: usize = 5;
 /// window holds for the conditional spectrum, narrower windows widened: 18.5 independent bins by
 /// the Hann bins' correlation (`HANN_BIN_CORRELATION`), the relative standard deviation about
 /// `1 / sqrt(18.5 - 3)`, 0.25 (0.28 where the slope is fitted).
-const MIN_INDEPENDENT: f64 = 24.0;
+const MIN_EQUIVALENT: f64 = 24.0;
 
 /// The coloured model, and what the witness bounds the angle noise by.
 ///
@@ -141,7 +141,7 @@ pub(super) const BOUND_BAND_HZ: [f64; 2] = [0.1, 40.0];
 /// own: a stretch where the gyro is no witness of the motion (a hold, a dropout, a dead start)
 /// leaves much of the motion unexplained there and would pass for angle noise everywhere; the
 /// median ignores up to two such stretches. The smoothing windows are the observer's
-/// (`max(smoothing_hz, smoothing_fraction f)` wide), widened to [`MIN_INDEPENDENT`] bins. With it,
+/// (`max(smoothing_hz, smoothing_fraction f)` wide), widened to [`MIN_EQUIVALENT`] bins. With it,
 /// the bound the same medians put on the angles' noise ([`Coloured::bound_rad`]).
 pub(super) fn coloured_noise(
     angles: [&[f64]; 3],
@@ -337,7 +337,7 @@ fn stretch_cells(
     // window's equivalent length, spread over the grid's bins, sizes the smoothing windows and
     // the delay's alignment.
     let power_norm = 3.0 * n as f64 / 8.0;
-    let independent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
+    let equivalent_per_bin = (2.0 * n as f64 / 3.0 / fft.len() as f64).min(1.0);
     // The Hann-windowed record's bins are correlated (the next -2/3, the one after 1/6, on a grid
     // of the record's own length; more on a longer one): a regressor fitted in a window takes up
     // `HANN_BIN_CORRELATION` of its bins' worth of the noise; the slope's test counts them so
@@ -352,8 +352,8 @@ fn stretch_cells(
             len,
         ))
     });
-    align(&mut w, y, fft, independent_per_bin);
-    let min_half = (MIN_INDEPENDENT / independent_per_bin / 2.0).ceil() as usize;
+    align(&mut w, y, fft, equivalent_per_bin);
+    let min_half = (MIN_EQUIVALENT / equivalent_per_bin / 2.0).ceil() as usize;
     let windows = Windows {
         bins_per_hz: fft.len() as f64 / rate,
         smoothing,
@@ -363,7 +363,7 @@ fn stretch_cells(
         // and four to eight times cheaper than per bin.
         cell: (min_half / 4).max(1),
         per_bin: Dof {
-            equivalent: independent_per_bin,
+            equivalent: equivalent_per_bin,
             independent: independent_bins_per_bin,
         },
         power_norm,

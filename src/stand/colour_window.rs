@@ -20,7 +20,7 @@
 //! `diagnose::input_limit`) were measured with the constant's. So was the level's correction for
 //! the regressors fitted, `M / (M - p)` with `M` the window's bins times the Hann window's
 //! `2n/3` equivalent samples over the grid: it falls short, as the bins' correlation (35/18)
-//! would count it, by 3-5 % of a noise's level (`a_hann_windowed_white_noise_reads_its_variance`;
+//! would count it, by 3-6 % of a noise's level (`a_hann_windowed_white_noise_reads_its_variance`;
 //! made right, 29 Nov, the model of a simulated 0.2 mrad noise read within 2.5 %, false findings
 //! beside strong coloured angle noise fell, and on a 120 Hz interpolated reference a clean run's
 //! accelerometer band was no longer ended and a true lag was set aside: kept as it was until
@@ -38,7 +38,8 @@
 //!
 //! Units: the sums are of the Hann-windowed spectra as they come; [`unexplained`] scales them to
 //! periodogram levels (rad^2 per sample). NaN cannot arise from finite input; a window with too
-//! few bins or a singular `S_zz` says nothing (`None`).
+//! few bins or a singular `S_ww` says nothing (`None`); a slope block that is singular (the slope
+//! adds nothing) leaves the constant's fit.
 
 use nalgebra::{Cholesky, Matrix3, Vector3};
 use num_complex::Complex64;
@@ -152,11 +153,12 @@ pub(super) fn unexplained(
     };
     let slope = beyond * s_inv * beyond.adjoint();
     let left = [0, 1, 2].map(|a| {
-        let residual = total[a] - constant[(a, a)].re - slope[(a, a)].re;
+        // Rounding can take a residual the slope explains wholly below 0: it is 0.
+        let residual = (total[a] - constant[(a, a)].re - slope[(a, a)].re).max(0.0);
         // The slope's power against what three regressors of noise would take, `3 / M` of the
-        // noise's level, itself `residual M / (M - 6)`.
-        let f = slope[(a, a)].re * (independent - REGRESSORS) / (half * residual);
-        if f > SLOPE_F {
+        // noise's level, itself `residual M / (M - 6)`: the F ratio above `SLOPE_F`, without a
+        // division (a NaN keeps the constant).
+        if slope[(a, a)].re * (independent - REGRESSORS) > SLOPE_F * half * residual {
             residual * equivalent / (equivalent - REGRESSORS)
         } else {
             left_constant[a]
@@ -179,7 +181,8 @@ pub(super) struct Dof {
 /// The F ratio of the slope's explained power (per axis, three complex regressors) over what
 /// noise alone would give it, above which the slope is kept: 4, about the 0.3 % point of
 /// `F(6, 2 (M - 6))` for the windows' 18-50 independent bins (false slopes in three windows of a
-/// thousand, each taking the noise's level down by about `3 / M`).
+/// thousand, each taking the noise's level down by about `3 / M`); nearer 5 % in the windows cut
+/// to half at the spectrum's ends (DC and Nyquist, 9-10 bins).
 pub(super) const SLOPE_F: f64 = 4.0;
 
 /// Pivots (squared) below this fraction of the largest diagonal element make a Hermitian block
@@ -319,7 +322,8 @@ mod tests {
     /// A witness whose transfer turns across the window is explained but for the turn's
     /// curvature (a constant transfer would leave much more); with a transfer exactly a line and
     /// independent noise added to the angles, what is left is that noise's power (the
-    /// `M / (M - 6)` correction makes it unbiased: the mean over many windows within 3 %, where the three regressors' `M / (M - 3)` would be 7 % low).
+    /// `M / (M - 6)` correction makes it unbiased: the mean over many windows within 3 %, where
+    /// the three regressors' `M / (M - 3)` would be 7 % low).
     #[test]
     fn a_transfer_turning_across_the_window_is_explained_and_the_noise_is_measured() {
         let mut rng = Rng::new(11);

@@ -72,6 +72,16 @@ pub enum Reason {
     },
 }
 
+impl Reason {
+    /// Whether the candidate was set aside by a tolerance of the rules (a gap opened, the total
+    /// residual power not shrinking), which an engineer may overrule by accepting it; a mode out
+    /// of reach or a failed fit would not be added to a model either ([`super::extend`]).
+    #[must_use]
+    pub fn may_be_accepted(&self) -> bool {
+        matches!(self, Self::OpensGap { .. } | Self::TotalGrows { .. })
+    }
+}
+
 /// Records a refusal in `kept` (with its round): the first (strongest) of an effect in a round
 /// stands for it; a later round's replaces an earlier one's (it was tried against the fuller
 /// model).

@@ -106,6 +106,19 @@ impl Report {
         Some((words, super::not_named::is_warning(&b.not_named, weakest)))
     }
 
+    /// What the verdict covers where a block's band was ended, as said after it:
+    /// `" (gyro only up to 11.16 Hz; ...: the inputs above are not the motion)"`; empty when every
+    /// band is the one asked for ([`Self::ended_bands`]).
+    #[must_use]
+    pub fn verdict_scope(&self) -> String {
+        let ended = self.ended_bands();
+        if ended.is_empty() {
+            ended
+        } else {
+            format!(" ({ended}: the inputs above are not the motion)")
+        }
+    }
+
     /// Where a block's band was ended below the band asked for (its inputs not the motion
     /// above: [`super::input_limit`]), `"gyro only up to 11.16 Hz"`, joined, with the other
     /// blocks' bands said whole: what the verdict covers. Empty when every band is the one asked

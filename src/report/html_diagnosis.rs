@@ -61,8 +61,5 @@ pub(super) fn diagnosis(h: &mut String, run: &RunReport) {
 
 /// What the verdict covers where a band was ended below the band asked for.
 fn only_searched(h: &mut String, report: &crate::diagnose::Report) {
-    let ended = report.ended_bands();
-    if !ended.is_empty() {
-        let _ = write!(h, " ({}: the inputs above are not the motion)", esc(&ended));
-    }
+    h.push_str(&esc(&report.verdict_scope()));
 }

@@ -7,7 +7,6 @@
 use super::analyse::RunCache;
 use crate::block::Block;
 use crate::diagnose::limits::Limit;
-use crate::diagnose::not_named::Reason;
 use crate::diagnose::{DiagnoseError, DiagnoseOptions, Report, Verdict, diagnose_prepared};
 use crate::effect::Effect;
 use crate::ident::settings::Settings;
@@ -37,10 +36,8 @@ pub struct BlockWords {
     pub header: String,
     /// The limits of its search ([`Report::limits`]) but a warning said with the verdict.
     pub limits: Vec<Limit>,
-    /// The significant candidates a tolerance of the rules set aside (a gap opened, the total
-    /// residual power not shrinking), which the user may accept all the same; a mode out of
-    /// reach or a fit that failed would not be added to the model either
-    /// ([`crate::diagnose::extend`]).
+    /// The significant candidates the user may accept all the same
+    /// ([`crate::diagnose::not_named::Reason::may_be_accepted`]).
     pub not_named: Vec<(Block, Effect)>,
 }
 
@@ -52,12 +49,7 @@ impl Diagnosis {
             Verdict::EffectFound => "verdict: effect found",
             Verdict::NoMissingEffect => "verdict: no missing effect",
         };
-        let ended = report.ended_bands();
-        let verdict = if ended.is_empty() {
-            verdict.to_owned()
-        } else {
-            format!("{verdict} ({ended}: the inputs above are not the motion)")
-        };
+        let verdict = format!("{verdict}{}", report.verdict_scope());
         let mut warnings: Vec<String> = report
             .refused_blocks
             .keys()
@@ -93,7 +85,7 @@ impl Diagnosis {
                     .map(|block| {
                         b.not_named
                             .iter()
-                            .filter(|n| matches!(n.reason, Reason::OpensGap { .. } | Reason::TotalGrows { .. }))
+                            .filter(|n| n.reason.may_be_accepted())
                             .map(|n| (block, n.effect))
                             .collect()
                     })

@@ -143,10 +143,13 @@ fn a_resonance_refused_by_the_gap_rule_is_said_with_the_verdict() {
         .as_ref()
         .expect("the model's effects");
     assert_eq!(effects.not_added[0].effect, Effect::PlatformResonance);
-    // Said beside the Accept too, not only in Results.
+    // Said beside the Accept too, not only in Results, where the model is the identified one.
     harness.get_by_label_contains(
         "not named: gyro mount resonance (accepted), not added to the model: the band",
     );
+    harness.get_by_label("gyro model: as identified (no accepted effect could be added)");
+    harness.get_by_label_contains("not added: gyro mount resonance (the band");
+    assert!(!effects.extends());
 }
 
 /// A significant candidate the search refused is said in the tab with its reason: on the tapping

@@ -3,7 +3,8 @@
 //! parameter refitted, as the diagnosis's rounds do but without asking the effect to be
 //! significant (the engineer decided). The result replaces the block's structural model in the
 //! model file ([`crate::model::ModelEffects`]): what `identify --effects` writes and what the
-//! app shows and exports after Accept.
+//! app shows and exports after Accept. When none of a block's accepted effects can be added, its
+//! identified model is kept and they are listed with the reasons.
 
 use super::DiagnoseError;
 use super::candidates::candidates_among;
@@ -92,7 +93,8 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
 }
 
 /// Adds `effects` (in order, each once) to the block's whole-record model and writes the result
-/// into `entry`.
+/// into `entry`; when none can be added, `entry` keeps its identified model and only lists them
+/// with the reasons.
 fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) {
     let band = pb.band_hz;
     let mut state = pb.base.clone();
@@ -179,6 +181,13 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
         chi2_per_dof,
         gap_db: [pb.base.gap_db(), state.gap_db()],
     };
+    if added.is_empty() {
+        // Nothing could be added: the block's model stays as identified (over its usable band,
+        // with its order, poles and even gain), not the whole-record fit without effects, whose
+        // K and delay differ within their deviations; the effects only list what was asked.
+        entry.effects = Some(effects);
+        return;
+    }
     let k_std = [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov.as_ref().and_then(|c| c.linear_std(3 * i + j))));
     let tau_sd = cov.as_ref().and_then(tau_std);
     entry.set_effects(effects, gain(&state), k_std, f.theta.tau_s, tau_sd);

@@ -89,6 +89,15 @@ pub struct NotAdded {
 }
 
 impl ModelEffects {
+    /// Whether any effect was added: the block's model is then the extended one. Accepted
+    /// effects that could none be added leave the block's model as identified (its order, poles
+    /// and even gain), and these effects only list them with the reasons
+    /// ([`crate::diagnose::extend`]).
+    #[must_use]
+    pub fn extends(&self) -> bool {
+        !self.accepted.is_empty()
+    }
+
     /// The extended response at `f_hz` of gain `k` and delay `tau_s`.
     #[must_use]
     pub fn response(&self, k: &[[f64; 3]; 3], tau_s: f64, f_hz: f64) -> nalgebra::Matrix3<Complex64> {

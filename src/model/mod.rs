@@ -162,7 +162,9 @@ pub struct BlockModel {
     pub noise: Option<crate::noise::BlockNoise>,
     /// Effects of the catalogue accepted into the model (`identify --effects`, the app's
     /// Accept): with them `K`, `tau_s` and their deviations are the joint fit's, `order` is 0 and
-    /// `poles` are the effects' ([`effects`]). Absent when none was accepted.
+    /// `poles` are the effects' ([`effects`]). Absent when none was accepted; when some were
+    /// accepted and none could be added ([`ModelEffects::extends`] false), it only lists them
+    /// with the reasons and the model is as identified.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub effects: Option<ModelEffects>,
     /// The even gain of a block whose gain changes across the band with no phase (the warning
@@ -312,13 +314,13 @@ impl BlockModel {
 
 impl BlockModel {
     /// The model's response at `f_hz` (Hz), `s = j 2 pi f`: `N(s) / d(s) e^(-tau s)`, or with
-    /// accepted effects their extended response ([`ModelEffects::response`]); times the even gain
+    /// effects added their extended response ([`ModelEffects::response`]); times the even gain
     /// where there is one.
     #[must_use]
     pub fn response(&self, f_hz: f64) -> Matrix3<Complex64> {
         let r = match &self.effects {
-            Some(e) => e.response(&self.k, self.tau_s, f_hz),
-            None => crate::ident::structural::rational_response(
+            Some(e) if e.extends() => e.response(&self.k, self.tau_s, f_hz),
+            _ => crate::ident::structural::rational_response(
                 &self.numerator,
                 &self.denominator,
                 self.tau_s,

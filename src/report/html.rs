@@ -250,13 +250,19 @@ fn accepted_effects(h: &mut String, b: &BlockModel) {
     } else {
         Block::Accel
     };
-    let _ = write!(
-        h,
-        "<p>Accepted effects (the model above is the paper's model extended by them, fitted on the whole \
-         record; identified without them: order {}, delay {} ms):</p><ul class=\"effects\">",
-        e.identified.order,
-        sig(e.identified.tau_s * 1e3, 4)
-    );
+    if e.extends() {
+        let _ = write!(
+            h,
+            "<p>Accepted effects (the model above is the paper's model extended by them, fitted on the whole \
+             record; identified without them: order {}, delay {} ms):</p><ul class=\"effects\">",
+            e.identified.order,
+            sig(e.identified.tau_s * 1e3, 4)
+        );
+    } else {
+        h.push_str(
+            "<p>Accepted effects: none could be added (the model above is as identified):</p><ul class=\"effects\">",
+        );
+    }
     for a in &e.accepted {
         let size = describe_size(block, a.effect, &a.parameters, &a.parameter_std).join("; ");
         let _ = write!(h, "<li><b>{}</b>: {}</li>", esc(&a.name), esc(&size));

@@ -11,6 +11,7 @@ use crate::gui::app::{Command, RunEntry};
 use crate::ident::band::BandSetting;
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::model::BlockModel;
+use crate::model::effects::ModelEffects;
 
 /// `v ± std` with `decimals`, or with more where the deviation would round to zero (its first
 /// significant digit shown, at most 9 decimals): a deviation of 7e-5 ms reads `± 0.00007`, not
@@ -140,7 +141,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ));
         }
         ui.label(tau_label(name, m));
-        if m.effects.is_some() {
+        if m.effects.as_ref().is_some_and(ModelEffects::extends) {
             for line in effect_lines(name, m) {
                 ui.label(line);
             }
@@ -155,6 +156,9 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
                 },
                 if m.fit.stable { "stable" } else { "UNSTABLE" }
             ));
+            for line in effect_lines(name, m) {
+                ui.label(line);
+            }
         }
         ui.label(k_heading(m));
         for i in 0..3 {
@@ -172,7 +176,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
 
 /// The accepted effects of a block's model in words: what the model is, each effect's size
 /// with its standard deviation, what could not be added, and the fit with and without them.
-/// Empty without accepted effects.
+/// Empty without accepted effects; when none could be added, only that and why.
 #[must_use]
 pub fn effect_lines(block: &str, m: &BlockModel) -> Vec<String> {
     let Some(e) = &m.effects else { return Vec::new() };
@@ -181,6 +185,17 @@ pub fn effect_lines(block: &str, m: &BlockModel) -> Vec<String> {
     } else {
         Block::Accel
     };
+    let not_added = e
+        .not_added
+        .iter()
+        .map(|n| format!("not added: {} ({})", n.effect.name_on(b), n.reason));
+    if !e.extends() {
+        let mut out = vec![format!(
+            "{block} model: as identified (no accepted effect could be added)"
+        )];
+        out.extend(not_added);
+        return out;
+    }
     let mut out = vec![format!(
         "{block} model: K e^(-tau s) with {} accepted effect{} (identified without them: order {}, tau {:.3} ms)",
         e.accepted.len(),
@@ -196,9 +211,7 @@ pub fn effect_lines(block: &str, m: &BlockModel) -> Vec<String> {
                 .map(|l| format!("  {l}")),
         );
     }
-    for n in &e.not_added {
-        out.push(format!("not added: {} ({})", n.effect.name_on(b), n.reason));
-    }
+    out.extend(not_added);
     let worst = |g: &[f64; 3]| g.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     out.push(format!(
         "whole-record fit {:.1}-{:.1} Hz: chi2/dof {:.2} -> {:.2}, worst-channel gap {:.2} -> {:.2} dB",

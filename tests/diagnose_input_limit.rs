@@ -7,7 +7,9 @@
 //! the accelerometer's `K_base` 0.48 / 0.92 / 0.56 / 1.08 % off, against 1.67 / 2.59 / 1.22 /
 //! 1.83 % over 0.1-40 Hz; its band ends at 3.7-4.3 Hz). A band the
 //! user gives is kept, with the same limit said as a warning. A true accelerometer lag on the
-//! same reference keeps the whole band (the identifier gives it its pole) and is named. On a
+//! same reference keeps the whole band (the identifier gives it its pole): set aside where the
+//! accelerometer's inputs are their noise, named with less noise. On seeds where the band is not
+//! ended, no sensor effect is named either. On a
 //! clean run nothing is said and the whole band is searched. The diagnosis sees the loaded run only; the truth is read
 //! here, from the simulation.
 
@@ -134,20 +136,74 @@ fn a_noisy_slower_reference_ends_the_band_and_the_base_model_is_nearer_the_truth
     );
 }
 
-/// A true accelerometer lag on the same slower, noisier reference: its gain droop is an even
-/// gain at first order too, but the identifier (auto order) gives the block its pole, so the
-/// band is not ended and the lag is named. (Without that test the band ended at 3.5 Hz and the
-/// lag was lost: `no_missing_effect`.)
+/// A true accelerometer lag (3.5-4.7 ms) on the same slower, noisier reference: its gain droop
+/// is an even gain at first order too, but the identifier (auto order) gives the block its pole,
+/// so the band is not ended. (Without that test the band ended at 3.5 Hz and the lag was lost,
+/// unsaid: `no_missing_effect`.) The search finds it over the band; the band below, where a
+/// smooth finding must be confirmed, ends where the accelerometer's outputs stop being coherent
+/// with its inputs (3.7-4.0 Hz), where its droop is within K's deviation: set aside, and said. On
+/// the same reference with a quarter of the noise it is named.
 #[test]
-fn a_true_lag_keeps_the_whole_band_and_is_named() {
+fn a_true_lag_keeps_the_whole_band_and_is_set_aside_or_named_as_the_noise_allows() {
     for seed in [3_u64, 5] {
         let (_, run) = cruise_run(seed, &["sensor_lag:accel"], slow_noisy());
         // With the order selection on (the default) and with the order fixed at 0 (the
         // identifier's order selection is still asked: without it the lag was lost).
         for settings in [r"{}", r#"{"order": 0}"#] {
             let settings: Settings = serde_json::from_str(settings).expect("settings");
-            named_on_whole_band(&run, &settings, "accel", Effect::SensorLag, seed);
+            let report = diagnose_run(&run, &settings, &DiagnoseOptions::default()).expect("diagnosed");
+            let accel = &report.blocks["accel"];
+            assert_eq!(accel.band_hz, SEARCHED, "seed {seed}: {:?}", accel.input_limit);
+            let noisy = accel.noisy_angles.as_ref().expect("the noisy range");
+            let own = noisy.incoherent_from_hz.expect("the accelerometer's own range");
+            assert!(own < noisy.from_hz && noisy.below_top_hz() == own, "{noisy:?}");
+            assert!(
+                noisy.set_aside.contains(&Effect::SensorLag),
+                "seed {seed}: {noisy:?}"
+            );
+            let words = noisy.words("accel").expect("said");
+            assert!(
+                words.contains("sensor_lag") && words.contains("not named"),
+                "{words}"
+            );
         }
+        let quieter = StandImperfections {
+            coloured_noise_rad: 5e-5,
+            ..slow_noisy()
+        };
+        let (_, run) = cruise_run(seed, &["sensor_lag:accel"], quieter);
+        named_on_whole_band(&run, &Settings::default(), "accel", Effect::SensorLag, seed);
+    }
+}
+
+/// Clean runs on the slower, noisier reference of seeds the input limit was not measured on
+/// (10-12): its band is not ended there (the gain's fall moves K less than its deviation), and
+/// the search finds a lag and a lever-arm error over the band, where the accelerometer's inputs
+/// are their noise from about 4 Hz. Confirmed below the angles' range alone (from 9.7-10.8 Hz),
+/// both were named on all three; below where the accelerometer's own coherence ends, they are
+/// set aside and said.
+#[test]
+fn on_unseen_seeds_no_sensor_effect_is_named_where_the_block_s_inputs_are_noise() {
+    for seed in [10_u64, 11, 12] {
+        let (_, run) = cruise_run(seed, &[], slow_noisy());
+        let report =
+            diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
+        let named: Vec<_> = report.findings.iter().map(|f| (f.block, f.effect)).collect();
+        assert!(
+            report
+                .findings
+                .iter()
+                .all(|f| f.effect.is_stand_side() || f.block.name() != "accel"),
+            "seed {seed}: {named:?}"
+        );
+        let noisy = report.blocks["accel"]
+            .noisy_angles
+            .as_ref()
+            .expect("the noisy range");
+        assert!(
+            noisy.incoherent_from_hz.is_some_and(|f| f < 5.0) && !noisy.set_aside.is_empty(),
+            "seed {seed}: {noisy:?}"
+        );
     }
 }
 

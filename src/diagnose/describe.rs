@@ -236,21 +236,7 @@ mod tests {
     use crate::block::Block;
 
     fn finding(block: Block, effect: Effect, parameters: Value) -> Finding {
-        Finding {
-            block,
-            effect,
-            name: effect.name_on(block),
-            parameters,
-            parameter_std: Value::Null,
-            gap_before_db: -20.0,
-            gap_after_db: -30.0,
-            evidence: String::new(),
-            delta_chi2: 100.0,
-            added_parameters: 1,
-            criterion_gain: 80.0,
-            halves: None,
-            search_band: None,
-        }
+        Finding::sized(block, effect, parameters, Value::Null)
     }
 
     #[test]

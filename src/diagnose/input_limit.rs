@@ -25,7 +25,7 @@
 //! order selection on keeps order 0 over the band (no dynamics of the block's own: `dynamics`
 //! below), and the outputs' coherence
 //! with the inputs is below the usable band's threshold from some bin up to the band's top
-//! ([`crate::ident::band::untrusted_ranges`]). With `band_hz: "auto"` the diagnosis's band then
+//! ([`crate::ident::band::untrusted_to_top`]). With `band_hz: "auto"` the diagnosis's band then
 //! ends below that range, and the report says so ([`InputLimit`]); too few bins below it leave the
 //! band as it was, and that is said too. A band the user gives is kept as given, and the report
 //! says where inside it the inputs are not the motion. The band's bottom is kept: the outputs'
@@ -40,7 +40,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::ident::band::{native_bins, untrusted_ranges};
+use crate::ident::band::{native_bins, untrusted_to_top};
 use crate::ident::identify::BlockIdentification;
 use crate::ident::warnings::IdentWarning;
 
@@ -100,10 +100,7 @@ pub fn input_limit(
         .into_iter()
         .map(|k| f[k])
         .collect();
-    let untrusted = *untrusted_ranges(&b.spectra, searched_hz).last()?;
-    if untrusted[1] < *bins.last()? {
-        return None;
-    }
+    let untrusted = untrusted_to_top(&b.spectra, searched_hz)?;
     let first = bins.iter().position(|&x| x >= untrusted[0])?;
     let usable_top_hz = *bins.get(first.checked_sub(1)?)?;
     Some(InputLimit {

@@ -11,7 +11,7 @@ use super::noisy_angles::{Below, MIN_BELOW_BINS, NoisyAngles, noisy_angles_range
 use super::state::State;
 use crate::block::Block;
 use crate::ident::band::BandSetting;
-use crate::ident::band::native_bins;
+use crate::ident::band::{native_bins, untrusted_to_top};
 use crate::ident::identify::{BlockIdentification, resolve_band};
 use crate::ident::session::Session;
 use crate::ident::settings::{OrderSetting, Settings};
@@ -193,13 +193,14 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         if let Some(upper) = upper {
             base.set_upper(upper);
         }
-        let noisy = noisy_angles_range(&angle_snr, band);
+        let incoherent_from = untrusted_to_top(&b.spectra, band).map(|r| r[0]);
+        let noisy = noisy_angles_range(&angle_snr, band).map(|n| n.with_incoherent_from(incoherent_from));
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,
             input_limit,
             below: noisy.as_ref().and_then(|n| {
-                let below = [band[0], n.from_hz];
+                let below = [band[0], n.below_top_hz()];
                 if native_bins(&b.spectra, below).len() < MIN_BELOW_BINS {
                     return None;
                 }

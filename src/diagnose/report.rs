@@ -192,6 +192,29 @@ pub struct Finding {
     pub search_band: Option<Value>,
 }
 
+#[cfg(test)]
+impl Finding {
+    /// A finding of `effect` on `block` with these sizes and nothing else said, for the
+    /// diagnosis's module tests.
+    pub(crate) fn sized(block: Block, effect: Effect, parameters: Value, parameter_std: Value) -> Self {
+        Self {
+            block,
+            effect,
+            name: effect.name_on(block),
+            parameters,
+            parameter_std,
+            gap_before_db: -20.0,
+            gap_after_db: -30.0,
+            evidence: String::new(),
+            delta_chi2: 100.0,
+            added_parameters: 1,
+            criterion_gain: 80.0,
+            halves: None,
+            search_band: None,
+        }
+    }
+}
+
 /// A candidate's evidence in one round.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateSummary {

@@ -198,7 +198,72 @@ fn undetermined(searched: &Finding, there: &Finding) -> Option<(String, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::compared_band;
+    use serde_json::json;
+
+    use super::{at_bound, compared_band, rests_on_band_above, undetermined};
+    use crate::block::Block;
+    use crate::diagnose::Finding;
+    use crate::effect::Effect;
+
+    fn lag(t_s: f64, t_std: Option<f64>) -> Finding {
+        Finding::sized(
+            Block::Accel,
+            Effect::SensorLag,
+            json!({ "T_s": t_s }),
+            json!({ "T_s": t_std }),
+        )
+    }
+
+    /// A lag's time constant at zero or a damping at its floor over the usable band is at its
+    /// bound; a figure with a deviation over the band searched and none there is undetermined;
+    /// either way the evidence says the finding rests on the band above.
+    #[test]
+    fn a_size_at_its_bound_or_without_a_deviation_rests_on_the_band_above() {
+        let at = |effect, there| at_bound(effect, &there);
+        assert_eq!(
+            at(Effect::SensorLag, json!({"T_s": 5e-7})),
+            Some(("T_s".to_owned(), 5e-7))
+        );
+        assert_eq!(
+            at(Effect::ReferenceLag, json!({"T_s": 0.0})),
+            Some(("T_s".to_owned(), 0.0))
+        );
+        assert_eq!(at(Effect::SensorLag, json!({"T_s": 2e-3})), None);
+        assert_eq!(
+            at(
+                Effect::PlatformResonance,
+                json!({"damping": 0.005, "frequency_hz": 30.0})
+            ),
+            Some(("damping".to_owned(), 0.005))
+        );
+        assert_eq!(at(Effect::PlatformResonance, json!({"damping": 0.05})), None);
+        // Not a figure with a bound.
+        assert_eq!(
+            at(Effect::LeverArmError, json!({"offset_m": [0.0, 0.0, 0.0]})),
+            None
+        );
+
+        let searched = lag(1.9e-3, Some(2e-4));
+        assert_eq!(undetermined(&searched, &lag(1.7e-3, Some(3e-4))), None);
+        assert_eq!(
+            undetermined(&searched, &lag(1e-7, None)),
+            Some(("T_s".to_owned(), 1e-7))
+        );
+        // A figure without a deviation over the band searched asks nothing of the usable band.
+        assert_eq!(undetermined(&lag(1.9e-3, None), &lag(1e-7, None)), None);
+
+        let mut finding = searched;
+        rests_on_band_above(&mut finding, [0.12, 4.15], "T_s", 1e-7);
+        assert!(
+            finding
+                .evidence
+                .starts_with("; over the usable band 0.12-4.15 Hz")
+                && finding.evidence.contains("T_s 1.000e-7")
+                && finding.evidence.contains("the finding rests on the band above"),
+            "{}",
+            finding.evidence
+        );
+    }
 
     #[test]
     fn only_a_usable_band_narrower_at_the_top_is_compared() {

@@ -200,6 +200,18 @@ pub fn untrusted_ranges(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Vec<[f64; 
     out
 }
 
+/// The untrusted range ([`untrusted_ranges`]) that reaches the top bin of `band_hz`: where, up to
+/// the band's top, the block's outputs are not coherent with its inputs (the inputs from the
+/// angles are their noise there, or the outputs the sensor's). `None` where the top is trusted.
+#[must_use]
+pub fn untrusted_to_top(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<[f64; 2]> {
+    let top = spectra.frequency_hz[*native_bins(spectra, band_hz).last()?];
+    untrusted_ranges(spectra, band_hz)
+        .last()
+        .copied()
+        .filter(|r| r[1] >= top)
+}
+
 impl Serialize for BandSetting {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let values = match self {

@@ -132,6 +132,12 @@ fn untrusted_ranges_of_a_given_band() {
     assert_eq!(ranges.len(), 1, "{ranges:?}");
     assert_eq!(ranges[0], [13.0, 40.0]);
     assert!(untrusted_ranges(&sp, [1.0, 12.0]).is_empty());
+    assert_eq!(untrusted_to_top(&sp, [1.0, 40.0]), Some([13.0, 40.0]));
+    assert_eq!(untrusted_to_top(&sp, [1.0, 12.0]), None);
+    // A dip inside the band whose top is trusted: no range to the top.
+    let dip = spectra(|f| noise_for(if (10.0..=20.0).contains(&f) { 0.4 } else { 0.98 }));
+    assert_eq!(untrusted_ranges(&dip, [1.0, 40.0]).len(), 1);
+    assert_eq!(untrusted_to_top(&dip, [1.0, 40.0]), None);
 }
 
 #[test]

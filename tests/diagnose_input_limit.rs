@@ -155,7 +155,7 @@ fn a_true_lag_keeps_the_whole_band_and_is_set_aside_or_named_as_the_noise_allows
             let accel = &report.blocks["accel"];
             assert_eq!(accel.band_hz, SEARCHED, "seed {seed}: {:?}", accel.input_limit);
             let noisy = accel.noisy_angles.as_ref().expect("the noisy range");
-            let own = noisy.incoherent_from_hz.expect("the accelerometer's own range");
+            let own = noisy.usable_top_hz.expect("the accelerometer's own range");
             assert!(own < noisy.from_hz && noisy.below_top_hz() == own, "{noisy:?}");
             assert!(
                 noisy.set_aside.contains(&Effect::SensorLag),
@@ -201,7 +201,7 @@ fn on_unseen_seeds_no_sensor_effect_is_named_where_the_block_s_inputs_are_noise(
             .as_ref()
             .expect("the noisy range");
         assert!(
-            noisy.incoherent_from_hz.is_some_and(|f| f < 5.0) && !noisy.set_aside.is_empty(),
+            noisy.usable_top_hz.is_some_and(|f| f < 5.0) && !noisy.set_aside.is_empty(),
             "seed {seed}: {noisy:?}"
         );
     }

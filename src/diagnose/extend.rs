@@ -145,7 +145,10 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
     }
     let (input_names, _) = channel_names(pb.block);
     let chi2_per_dof = [pb.base.fitted.chi2() / pb.dof, state.fitted.chi2() / pb.dof];
-    let cov = covariance(&state, band, chi2_per_dof[1]);
+    // No covariance where nothing was added: the block keeps its identified model (below).
+    let cov = (!added.is_empty())
+        .then(|| covariance(&state, band, chi2_per_dof[1]))
+        .flatten();
     let accepted = added
         .iter()
         .map(|&(effect, index)| AcceptedEffect {

@@ -40,7 +40,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::ident::band::{native_bins, untrusted_to_top};
+use crate::ident::band::{last_bin_below, untrusted_to_top};
 use crate::ident::identify::BlockIdentification;
 use crate::ident::warnings::IdentWarning;
 
@@ -95,14 +95,8 @@ pub fn input_limit(
         return None;
     }
     let (gain_change, gain_change_std) = falling_gain(b)?;
-    let f = &b.spectra.frequency_hz;
-    let bins: Vec<f64> = native_bins(&b.spectra, searched_hz)
-        .into_iter()
-        .map(|k| f[k])
-        .collect();
     let untrusted = untrusted_to_top(&b.spectra, searched_hz)?;
-    let first = bins.iter().position(|&x| x >= untrusted[0])?;
-    let usable_top_hz = *bins.get(first.checked_sub(1)?)?;
+    let usable_top_hz = last_bin_below(&b.spectra, searched_hz, untrusted[0])?;
     Some(InputLimit {
         searched_hz,
         usable_top_hz,

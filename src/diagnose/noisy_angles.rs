@@ -36,20 +36,23 @@
 //! `f^2`) is confirmed where it is weakest, so a small true one may be set aside (said).
 //!
 //! The band below ends lower where the block's own outputs stop being coherent with its inputs
-//! up to the band's top below the angles' range ([`NoisyAngles::incoherent_from_hz`], the
+//! up to the band's top below the angles' range ([`NoisyAngles::usable_top_hz`], below the
 //! untrusted range of `crate::ident::band::untrusted_to_top`): the angles' SNR is the median
 //! axis's, and a block's inputs are not the angles themselves (the accelerometer's specific
 //! force takes gravity through roll and pitch only, and the lever arm through the angles'
 //! second derivatives). On a 120 Hz reference interpolated onto 500 Hz samples with 0.2 mrad of
 //! coloured noise (cruise, 120 s), the angles' range began at 9.7-10.8 Hz and the
-//! accelerometer's coherence ended at 3.5-4.2 Hz; confirmed below 9.7 Hz, a false `sensor_lag`
+//! accelerometer's coherence ended at 3.4-4.0 Hz; confirmed below 9.7 Hz, a false `sensor_lag`
 //! and `lever_arm_error` were named on three of four clean seeds the rules had not been measured
 //! on (10-12; the input limit, which ends the band there on other seeds, had not: the gain's
 //! fall moved `K` less than its deviation). Confirmed below the coherence's end they were set
 //! aside, and so was a true lag of 3.5-4.7 ms on that reference (four seeds; its droop below
 //! 4 Hz is within `K`'s deviation), named on the same reference with 0.05 mrad of noise. On 209
 //! campaign runs: clean runs with a finding 9 -> 4 of 45 with coloured angle noise, true
-//! findings 127 -> 126.
+//! findings 127 -> 127. Only where the angles have a noisy range: a block whose coherence ends
+//! low while the angles' SNR stays above pi to the top (its own sensor noise above little
+//! motion, say) is not asked to confirm anything; and where that coherence leaves fewer than
+//! [`MIN_BELOW_BINS`] below, its smooth findings are named unconfirmed, said as a warning.
 //!
 //! The median over the axes, as the usable band's coherence: two axes that carry the motion keep
 //! the range for the outputs they drive. Units: Hz; the ratio is of densities.
@@ -72,11 +75,13 @@ pub struct NoisyAngles {
     pub from_hz: f64,
     /// The SNR's median over the bands from `from_hz` to the band's top.
     pub snr: f64,
-    /// Where, below `from_hz`, the block's outputs stop being coherent with its inputs up to
-    /// the band's top (`ident::band::untrusted_to_top`), Hz: the band below ends there
-    /// ([`NoisyAngles::below_top_hz`]). Absent where that range starts at or above `from_hz`.
+    /// The last bin below the range where the block's outputs are not coherent with its inputs
+    /// up to the band's top (`ident::band::untrusted_to_top`, as the input limit's
+    /// `usable_top_hz`), where it lies below `from_hz`, Hz: the band below ends there
+    /// ([`NoisyAngles::below_top_hz`]). Absent where there is no such range or it lies at or above
+    /// `from_hz`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub incoherent_from_hz: Option<f64>,
+    pub usable_top_hz: Option<f64>,
     /// The smooth effects the search found significant over the band, which the band below did
     /// not confirm: not named (module docs).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -110,7 +115,7 @@ pub fn noisy_angles_range(snr: &[([f64; 2], [f64; 3])], searched_hz: [f64; 2]) -
         // Noisy from the first band inside: from the search's bottom.
         from_hz: if first == 0 { searched_hz[0] } else { noisy[0].0 },
         snr: super::tone::median(&mut values),
-        incoherent_from_hz: None,
+        usable_top_hz: None,
         set_aside: Vec::new(),
         unconfirmed: Vec::new(),
     })
@@ -130,11 +135,12 @@ pub fn asked_below(effect: Effect) -> bool {
     )
 }
 
-/// Fewest native Welch bins of the band below the noisy range (the usable band's least,
+/// Fewest native Welch bins of the band below ([`NoisyAngles::below_top_hz`]; the usable band's least,
 /// `ident::band::MIN_BAND_BINS`): fewer confirm nothing, and the findings are said unconfirmed.
 pub const MIN_BELOW_BINS: usize = crate::ident::band::MIN_BAND_BINS;
 
-/// The search's model over the band below the noisy range, kept beside its model over the band.
+/// The search's model over the band below ([`NoisyAngles::below_top_hz`]), kept beside its model
+/// over the band.
 #[derive(Clone, Debug)]
 pub struct Below {
     /// The model with the findings named so far, fitted on the band below.
@@ -146,23 +152,23 @@ pub struct Below {
 }
 
 impl NoisyAngles {
-    /// The range with the block's own: `incoherent_from_hz` (where its outputs stop being
-    /// coherent with its inputs up to the band's top) kept where it lies below `from_hz`.
+    /// The range with the block's own usable top: `usable_top_hz` (where its outputs are last
+    /// coherent with its inputs below a range that reaches the band's top) kept where it lies
+    /// below `from_hz`.
     #[must_use]
-    pub fn with_incoherent_from(self, incoherent_from_hz: Option<f64>) -> Self {
+    pub fn with_usable_top(self, usable_top_hz: Option<f64>) -> Self {
         Self {
-            incoherent_from_hz: incoherent_from_hz.filter(|f| *f < self.from_hz),
+            usable_top_hz: usable_top_hz.filter(|f| *f < self.from_hz),
             ..self
         }
     }
 
     /// The top of the band below, where a smooth finding must be confirmed: the lower of where
-    /// the angles are mostly their noise and where the block's outputs stop being coherent with
+    /// the angles are mostly their noise and where the block's outputs are last coherent with
     /// its inputs (module docs).
     #[must_use]
     pub fn below_top_hz(&self) -> f64 {
-        self.incoherent_from_hz
-            .map_or(self.from_hz, |f| f.min(self.from_hz))
+        self.usable_top_hz.map_or(self.from_hz, |f| f.min(self.from_hz))
     }
 
     /// Whether the words are a warning (a finding named without confirmation) rather than a note.
@@ -181,9 +187,9 @@ impl NoisyAngles {
              motion only as well as that model is known",
             self.from_hz, self.snr
         );
-        let range = match self.incoherent_from_hz {
+        let range = match self.usable_top_hz {
             Some(f) => format!(
-                "{range}; this block's outputs are not coherent with its inputs from {f:.1} Hz up, and the band below, \
+                "{range}; this block's outputs are coherent with its inputs only up to {f:.1} Hz, and the band below, \
                  where a smooth finding must be confirmed, ends there"
             ),
             None => range,
@@ -278,23 +284,27 @@ mod tests {
             "{w}"
         );
         assert!(said.is_warning());
-        // The block's outputs incoherent from below the range: the band below ends there, and
-        // the words say so; from above it, nothing changes.
+        // The block's outputs coherent only up to below the range: the band below ends there,
+        // and the words say so; at or above it, nothing changes.
         let range = noisy_angles_range(&bands(falling), searched).expect("a range");
         let from = range.from_hz;
-        let own = range.clone().with_incoherent_from(Some(4.0));
-        assert_eq!((own.incoherent_from_hz, own.below_top_hz()), (Some(4.0), 4.0));
+        assert!(from > 4.0, "{from}");
+        let own = range.clone().with_usable_top(Some(4.0));
+        assert_eq!((own.usable_top_hz, own.below_top_hz()), (Some(4.0), 4.0));
         let mut own_words = own;
         own_words.set_aside = vec![crate::effect::Effect::SensorLag];
         let w = own_words.words("accel").expect("words");
         assert!(
-            w.contains("not coherent with its inputs from 4.0 Hz up") && w.contains("not named"),
+            w.contains("coherent with its inputs only up to 4.0 Hz") && w.contains("not named"),
             "{w}"
         );
-        let above = range.clone().with_incoherent_from(Some(from + 1.0));
-        assert_eq!((above.incoherent_from_hz, above.below_top_hz()), (None, from));
+        for at_or_above in [from, from + 1.0] {
+            let kept = range.clone().with_usable_top(Some(at_or_above));
+            assert_eq!(kept.usable_top_hz, None);
+            assert_eq!(kept.below_top_hz().to_bits(), from.to_bits());
+        }
         assert_eq!(
-            range.with_incoherent_from(None).below_top_hz().to_bits(),
+            range.with_usable_top(None).below_top_hz().to_bits(),
             from.to_bits()
         );
         // Noisy from the search's bottom: the range starts there.
@@ -304,7 +314,7 @@ mod tests {
             NoisyAngles {
                 from_hz: 0.3,
                 snr: 0.5,
-                incoherent_from_hz: None,
+                usable_top_hz: None,
                 set_aside: Vec::new(),
                 unconfirmed: Vec::new(),
             }

@@ -11,7 +11,7 @@ use super::noisy_angles::{Below, MIN_BELOW_BINS, NoisyAngles, noisy_angles_range
 use super::state::State;
 use crate::block::Block;
 use crate::ident::band::BandSetting;
-use crate::ident::band::{native_bins, untrusted_to_top};
+use crate::ident::band::{last_bin_below, native_bins, untrusted_to_top};
 use crate::ident::identify::{BlockIdentification, resolve_band};
 use crate::ident::session::Session;
 use crate::ident::settings::{OrderSetting, Settings};
@@ -52,10 +52,11 @@ pub struct PreparedBlock {
     /// ([`super::input_limit`]).
     pub input_limit: Option<InputLimit>,
     /// Where the angles are mostly their noise, up to the band's top ([`super::noisy_angles`]):
-    /// a smooth finding must be confirmed below it.
+    /// a smooth finding must be confirmed below it, or below where the block's outputs are last
+    /// coherent with its inputs where that is lower ([`NoisyAngles::below_top_hz`]).
     pub noisy_angles: Option<NoisyAngles>,
-    /// The paper's model fitted on the band below `noisy_angles`, where the search confirms its
-    /// findings (`None`: no noisy range, or too little below it).
+    /// The paper's model fitted on the band below `noisy_angles` (up to its `below_top_hz`),
+    /// where the search confirms its findings (`None`: no noisy range, or too little below it).
     pub below: Option<Below>,
     /// A step in the delays of the stretches over the band searched
     /// ([`crate::ident::delay_step`]): the record's streams slipped, and the report says so.
@@ -193,8 +194,11 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         if let Some(upper) = upper {
             base.set_upper(upper);
         }
-        let incoherent_from = untrusted_to_top(&b.spectra, band).map(|r| r[0]);
-        let noisy = noisy_angles_range(&angle_snr, band).map(|n| n.with_incoherent_from(incoherent_from));
+        // Where the block's own outputs are last coherent with its inputs below a range that
+        // reaches the band's top (the band's bottom where none is).
+        let usable_top = untrusted_to_top(&b.spectra, band)
+            .map(|r| last_bin_below(&b.spectra, band, r[0]).unwrap_or(band[0]));
+        let noisy = noisy_angles_range(&angle_snr, band).map(|n| n.with_usable_top(usable_top));
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,

@@ -175,8 +175,9 @@ fn diagnose_block(
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
     let mut last_rule = None;
-    // The same model below where the angles are mostly their noise: a smooth effect is named only
-    // if it is significant there too (`super::noisy_angles`).
+    // The same model below where the angles are mostly their noise (or the block's outputs stop
+    // being coherent with its inputs, if lower): a smooth effect is named only if it is
+    // significant there too (`super::noisy_angles`).
     let mut below = pb.below.clone();
     let (mut set_aside, mut unconfirmed): (Vec<Effect>, Vec<Effect>) = (Vec::new(), Vec::new());
     let mut refusals: Vec<(usize, NotNamed)> = Vec::new();

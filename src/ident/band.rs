@@ -212,6 +212,18 @@ pub fn untrusted_to_top(spectra: &BlockSpectra, band_hz: [f64; 2]) -> Option<[f6
         .filter(|r| r[1] >= top)
 }
 
+/// The last native bin of `band_hz` below `hz`, Hz: where the block's outputs are last coherent
+/// with its inputs below [`untrusted_to_top`]'s range, with its start as `hz`. `None` where no bin
+/// lies below.
+#[must_use]
+pub fn last_bin_below(spectra: &BlockSpectra, band_hz: [f64; 2], hz: f64) -> Option<f64> {
+    native_bins(spectra, band_hz)
+        .into_iter()
+        .map(|k| spectra.frequency_hz[k])
+        .take_while(|&f| f < hz)
+        .last()
+}
+
 impl Serialize for BandSetting {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let values = match self {

@@ -1,4 +1,4 @@
-#![allow(clippy::float_cmp, reason = "bin frequencies are exact multiples of 1 Hz")]
+#![expect(clippy::float_cmp, reason = "bin frequencies are exact multiples of 1 Hz")]
 
 use std::path::Path;
 
@@ -133,6 +133,11 @@ fn untrusted_ranges_of_a_given_band() {
     assert_eq!(ranges[0], [13.0, 40.0]);
     assert!(untrusted_ranges(&sp, [1.0, 12.0]).is_empty());
     assert_eq!(untrusted_to_top(&sp, [1.0, 40.0]), Some([13.0, 40.0]));
+    assert_eq!(
+        untrusted_to_top(&sp, [1.0, 40.0]).map(|r| last_bin_below(&sp, [1.0, 40.0], r[0])),
+        Some(Some(12.0))
+    );
+    assert_eq!(last_bin_below(&sp, [1.0, 40.0], 1.0), None);
     assert_eq!(untrusted_to_top(&sp, [1.0, 12.0]), None);
     // A dip inside the band whose top is trusted: no range to the top.
     let dip = spectra(|f| noise_for(if (10.0..=20.0).contains(&f) { 0.4 } else { 0.98 }));

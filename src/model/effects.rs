@@ -5,7 +5,11 @@
 //! includes the effects that are filters:
 //! `H_ij(s) = e^(-(tau + skew_i) s) / (T s + 1) K_ij M_j(s)`, `M_j` a mount resonance on input
 //! axis `j`. The others (g-sensitivity, quadratic scale factor, lever-arm offset, tones, clock
-//! drift) are terms beside the response, sized in `accepted`.
+//! drift) are terms beside the response, sized in `accepted`. Where none of the accepted
+//! effects could be added ([`ModelEffects::extends`] false), the block's model is the identified
+//! one and these only list them under `not_added`: `identified` repeats the model, the response's
+//! terms are empty and `chi2_per_dof` and `gap_db` hold the whole-record fit without effects
+//! twice.
 //!
 //! Units: SI (s, Hz); sizes as in the discrepancy report's `parameters`, with `parameter_std`
 //! under the same keys (`null` where not determined).

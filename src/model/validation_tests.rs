@@ -184,3 +184,49 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
     assert_eq!(m.fit.warnings, vec![outside(None), kept]);
     assert_eq!(m.order, 0);
 }
+
+/// Accepted effects none of which could be added leave the model's own response: an order-1
+/// model keeps its pole (closed form `K e^(-j w tau) / (1 + j w T)`); the effects' response, a
+/// delayed gain, would drop it.
+#[test]
+fn effects_that_add_nothing_leave_the_identified_response() {
+    use crate::model::effects::{Identified, ModelEffects, NotAdded};
+    let (tau_s, t_s, f_hz) = (0.004, 0.01, 10.0);
+    let mut m = delayed_gain(K, tau_s, [0.1, 20.0]);
+    (m.order, m.denominator, m.even_gain) = (1, vec![t_s], None);
+    m.effects = Some(ModelEffects {
+        accepted: Vec::new(),
+        not_added: vec![NotAdded {
+            effect: crate::effect::Effect::PlatformResonance,
+            reason: "the band does not reach the mode".to_owned(),
+        }],
+        lag_s: None,
+        channel_skew_s: None,
+        resonances: Vec::new(),
+        identified: Identified {
+            k: K,
+            tau_s,
+            order: 1,
+        },
+        band_hz: [0.1, 20.0],
+        chi2_per_dof: [1.1, 1.1],
+        gap_db: [[-20.0; 3]; 2],
+    });
+    let w = 2.0 * std::f64::consts::PI * f_hz;
+    let closed =
+        |k: f64| Complex64::from(k) * Complex64::new(0.0, -w * tau_s).exp() / Complex64::new(1.0, w * t_s);
+    let r = m.response(f_hz);
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!(
+                (r[(i, j)] - closed(K[i][j])).norm() < 1e-12,
+                "{i}{j}: {}",
+                r[(i, j)]
+            );
+        }
+    }
+    let effects = m.effects.as_ref().expect("effects");
+    assert!(!effects.extends());
+    let dropped = effects.response(&K, tau_s, f_hz);
+    assert!((dropped[(0, 0)] - r[(0, 0)]).norm() > 0.1 * r[(0, 0)].norm());
+}

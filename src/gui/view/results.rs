@@ -141,11 +141,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ));
         }
         ui.label(tau_label(name, m));
-        if m.effects.as_ref().is_some_and(ModelEffects::extends) {
-            for line in effect_lines(name, m) {
-                ui.label(line);
-            }
-        } else {
+        if !m.effects.as_ref().is_some_and(ModelEffects::extends) {
             ui.label(format!(
                 "order {} ({}), {}",
                 m.order,
@@ -156,9 +152,9 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
                 },
                 if m.fit.stable { "stable" } else { "UNSTABLE" }
             ));
-            for line in effect_lines(name, m) {
-                ui.label(line);
-            }
+        }
+        for line in effect_lines(name, m) {
+            ui.label(line);
         }
         ui.label(k_heading(m));
         for i in 0..3 {

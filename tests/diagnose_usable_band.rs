@@ -164,7 +164,9 @@ fn a_false_lag_the_usable_band_does_not_determine_is_set_aside() {
         .as_ref()
         .expect("the noisy range");
     assert!(
-        noisy.usable_top_hz.is_some_and(|f| f < noisy.from_hz)
+        noisy
+            .usable_top_hz
+            .is_some_and(|f| noisy.angles.is_some_and(|a| f < a.from_hz))
             && noisy.set_aside.contains(&Effect::SensorLag),
         "{noisy:?}"
     );

@@ -102,15 +102,21 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     lines.extend(input_limit_lines(&report, None));
     lines.extend(tone_limit_lines(&report));
     lines.extend(unexplained_lines(&report, None));
+    // The recording's faults last, as `identify` says them: a finding on a channel that holds
+    // samples or clips may be the fault's (a glitch is bridged before the analysis).
+    lines.extend(report.recording_faults.iter().map(|f| match f {
+        crate::faults::RecordingFault::Glitch { .. } => format!("imu-attest: warning: {f}"),
+        _ => format!("imu-attest: warning: {f}; a finding on this channel may be the fault's"),
+    }));
     super::identify::print_messages(&lines);
     Ok(())
 }
 
 /// Each block's input limit ([`crate::diagnose::input_limit`]): a note where the band was ended
 /// below it, a warning where the band searched reaches into it; a warning of a step in the
-/// block's delay ([`crate::ident::delay_step`]); where the angles are mostly their noise
-/// ([`crate::diagnose::noisy_angles`]), a note of what was set aside, or a warning that nothing
-/// could be confirmed; the significant candidates not named and why
+/// block's delay ([`crate::ident::delay_step`]); where the inputs may not be the motion (the
+/// angles mostly their noise, or the block's coherence ended: [`crate::diagnose::noisy_angles`]),
+/// a note of what was set aside, or a warning that nothing could be confirmed; the significant candidates not named and why
 /// ([`crate::diagnose::not_named`]); after `run: ` when the lines of several runs are printed
 /// together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {

@@ -2,7 +2,8 @@
 //! command line's notes and warnings, the app's Missing effects tab, the certificate), made in
 //! one place and said in one order: where the inputs stop being the motion
 //! ([`super::input_limit`]), a step in the block's delay ([`crate::ident::delay_step`]), where the
-//! angles are mostly their noise ([`super::noisy_angles`]), the significant candidates not named
+//! inputs may not be the motion and a smooth finding is confirmed below (the angles mostly their
+//! noise, or the block's coherence ended: [`super::noisy_angles`]), the significant candidates not named
 //! ([`super::not_named`]), and what a search that named no tone could have seen
 //! ([`super::tone_limit`]).
 
@@ -16,7 +17,8 @@ pub enum LimitKind {
     InputLimit,
     /// A step in the block's delay through the record.
     DelayStep,
-    /// Where the angles are mostly their noise.
+    /// Where the inputs may not be the motion (the angles mostly their noise, or the block's
+    /// coherence ended), and what the band below did not confirm.
     NoisyAngles,
     /// Significant candidates the search did not name, and why.
     NotNamed,

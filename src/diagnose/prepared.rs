@@ -7,7 +7,7 @@ use super::DiagnoseError;
 use super::design::{Design, DesignSignals};
 use super::halves::HalvesSource;
 use super::input_limit::{InputLimit, falling_gain, input_limit};
-use super::noisy_angles::{Below, MIN_BELOW_BINS, NoisyAngles, noisy_angles_range};
+use super::noisy_angles::{Below, MIN_BELOW_BINS, NoisyAngles, confirmation_range, noisy_angles_range};
 use super::state::State;
 use crate::block::Block;
 use crate::ident::band::BandSetting;
@@ -36,6 +36,8 @@ pub struct Prepared {
     pub blocks: Vec<PreparedBlock>,
     /// The blocks the run cannot identify, beside those it can (not diagnosed).
     pub refused_blocks: BTreeMap<String, RefusedBlock>,
+    /// Faults of the recording itself (`crate::faults::detect`), as the model file has them.
+    pub recording_faults: Vec<crate::faults::RecordingFault>,
     /// What the record's halves are built from, to tell whether each finding is one property
     /// of the block over the run ([`super::halves`]; `None`: not compared).
     pub halves: Option<HalvesSource>,
@@ -51,12 +53,12 @@ pub struct PreparedBlock {
     /// Where the inputs from the angles are not the motion, at the top of the band asked for
     /// ([`super::input_limit`]).
     pub input_limit: Option<InputLimit>,
-    /// Where the angles are mostly their noise, up to the band's top ([`super::noisy_angles`]):
-    /// a smooth finding must be confirmed below it, or below where the block's outputs are last
-    /// coherent with its inputs where that is lower ([`NoisyAngles::below_top_hz`]).
+    /// Where the inputs may not be the motion up to the band's top ([`super::noisy_angles`]):
+    /// the angles mostly their noise, or the block's outputs no longer coherent with its inputs;
+    /// a smooth finding must be confirmed below the lower ([`NoisyAngles::below_top_hz`]).
     pub noisy_angles: Option<NoisyAngles>,
     /// The paper's model fitted on the band below `noisy_angles` (up to its `below_top_hz`),
-    /// where the search confirms its findings (`None`: no noisy range, or too little below it).
+    /// where the search confirms its findings (`None`: no such range, or too little below it).
     pub below: Option<Below>,
     /// A step in the delays of the stretches over the band searched
     /// ([`crate::ident::delay_step`]): the record's streams slipped, and the report says so.
@@ -195,16 +197,24 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             base.set_upper(upper);
         }
         // Where the block's own outputs are last coherent with its inputs below a range that
-        // reaches the band's top (the band's bottom where none is).
-        let usable_top = untrusted_to_top(&b.spectra, band)
-            .map(|r| last_bin_below(&b.spectra, band, r[0]).unwrap_or(band[0]));
-        let noisy = noisy_angles_range(&angle_snr, band).map(|n| n.with_usable_top(usable_top));
+        // reaches the band's top. With the angles' noisy range and no coherent bin below, the
+        // band below is empty (the band's bottom): the smooth findings are said unconfirmed.
+        // Without that range and no coherent bin below (a user's band above the usable band),
+        // the block is not asked (`super::noisy_angles::confirmation_range`).
+        let untrusted = untrusted_to_top(&b.spectra, band);
+        let last_coherent = untrusted.and_then(|r| last_bin_below(&b.spectra, band, r[0]));
+        let angles = noisy_angles_range(&angle_snr, band);
+        let usable_top = match angles {
+            Some(_) => untrusted.map(|_| last_coherent.unwrap_or(band[0])),
+            None => last_coherent,
+        };
+        let noisy = confirmation_range(angles, usable_top);
         blocks.push(PreparedBlock {
             block: b.block,
             band_hz: band,
             input_limit,
             below: noisy.as_ref().and_then(|n| {
-                let below = [band[0], n.below_top_hz()];
+                let below = [band[0], n.below_top_hz()?];
                 if native_bins(&b.spectra, below).len() < MIN_BELOW_BINS {
                     return None;
                 }
@@ -243,6 +253,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
         source: Source::of(run),
         blocks,
         refused_blocks: refused,
+        recording_faults: crate::faults::detect(run),
         halves: Some(HalvesSource {
             run: session.run().clone(),
             identification: id,

@@ -52,6 +52,11 @@ pub struct Report {
     /// not diagnosed, the verdict is the other blocks'. Absent when every block was diagnosed.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub refused_blocks: BTreeMap<String, RefusedBlock>,
+    /// Faults of the recording itself (`crate::faults::detect`, as in the model file): a finding
+    /// on a channel they spoil may be theirs (held samples read as a skew or a lag, clipping as
+    /// a nonlinearity). Absent when none was found.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recording_faults: Vec<crate::faults::RecordingFault>,
 }
 
 impl Report {
@@ -260,8 +265,10 @@ pub struct BlockReport {
     /// (the band then ended below it, or the user's band kept: [`super::input_limit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub input_limit: Option<super::input_limit::InputLimit>,
-    /// Where the angles are mostly their noise, up to the band's top, and the smooth effects the
-    /// band below did not confirm (not named) or could not (named, said) ([`super::noisy_angles`]).
+    /// Where the inputs may not be the motion up to the band's top (the angles mostly their
+    /// noise, or the block's outputs no longer coherent with its inputs), and the smooth effects
+    /// the band below did not confirm (not named) or could not (named, said)
+    /// ([`super::noisy_angles`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noisy_angles: Option<super::noisy_angles::NoisyAngles>,
     /// Significant candidates not named, and why ([`super::not_named`]).

@@ -136,7 +136,12 @@ fn the_same_lag_on_both_blocks_is_the_angle_measurements() {
     super::workflow::name_stand_side(&mut f);
     assert!(f.iter().all(|f| f.effect == Effect::ReferenceLag), "{f:?}");
     assert_eq!(f[0].name, "gyro angle-measurement lag (stand side)");
-    assert!(f[1].evidence.contains("not the sensors'"), "{}", f[1].evidence);
+    assert!(
+        f[1].evidence.contains("or a filter both sensor blocks share")
+            && f[1].evidence.contains("cannot tell the two apart"),
+        "{}",
+        f[1].evidence
+    );
     // 3.6 and 4.4 ms, a few hundredths of a ms each: two sensors' own lags.
     let mut f = vec![
         lag_finding(Block::Gyro, 3.6e-3, 0.02e-3),

@@ -128,6 +128,7 @@ pub fn diagnose_prepared(prep: &Prepared, options: &DiagnoseOptions<'_>) -> Repo
         },
         blocks,
         refused_blocks: prep.refused_blocks.clone(),
+        recording_faults: prep.recording_faults.clone(),
     }
 }
 
@@ -375,11 +376,15 @@ fn tone_limit(state: &State, chi2_needed: f64, from_hz: f64) -> Option<ToneLimit
 const SHARED_LAG_SIGMAS: f64 = 3.0;
 
 /// A first-order lag found on both blocks with the same time constant (within
-/// [`SHARED_LAG_SIGMAS`] of their combined standard deviation) is the angle measurement's, not
-/// the sensors': both blocks see the stand's band limit or latency through their inputs, and
+/// [`SHARED_LAG_SIGMAS`] of their combined standard deviation) is taken for the angle
+/// measurement's: both blocks see the stand's band limit or latency through their inputs, and
 /// per block an input lag and an output lag are the same filter. Both findings are renamed
 /// [`Effect::ReferenceLag`]. (The simulator draws a sensor lag on each block independently,
 /// 3.2-5 ms apart by up to 1.8 ms, far beyond the few hundredths of a ms their deviations are.)
+/// A filter both sensor blocks share (one anti-alias setting for the whole unit,
+/// `simulate --sensor-filter-hz`) looks the same, and the words say the run cannot tell the two
+/// apart (a helper's campaign, 30 Nov: a common 50-100 Hz filter was called the reference's
+/// on 5 of 6 runs, "not the sensors'").
 pub(super) fn name_stand_side(findings: &mut [Finding]) {
     // Over the band searched, where both were found: a block's size over its own usable band
     // (`super::usable_band`) is over a band the other block's need not share.
@@ -415,8 +420,9 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
         let _ = write!(
             f.evidence,
             "; the same lag on both blocks over the band searched (gyro {:.3} ± {:.3} ms, accelerometer {:.3} ± \
-             {:.3} ms): the angle \
-             measurement's band limit or latency, seen by both through their inputs, not the sensors'",
+             {:.3} ms): the angle measurement's band limit or latency, seen by both through their inputs, or a \
+             filter both sensor blocks share (one anti-alias setting for the whole unit); this run cannot tell the \
+             two apart (the reference's lag measured on its own, or the unit on another stand, can)",
             tg * 1e3,
             sg * 1e3,
             ta * 1e3,

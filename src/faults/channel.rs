@@ -58,6 +58,12 @@ impl Channel {
         }
     }
 
+    /// Whether this is one of the gyro's three channels.
+    #[must_use]
+    pub fn is_gyro(self) -> bool {
+        matches!(self, Channel::Gx | Channel::Gy | Channel::Gz)
+    }
+
     /// Whether this is one of the three angles.
     #[must_use]
     pub fn is_angle(self) -> bool {

@@ -153,9 +153,10 @@ impl fmt::Display for RecordingFault {
                 f,
                 "held samples in {}: {held} samples repeat the previous value ({expected:.0} expected \
                  by chance) in {runs} runs of up to {longest}, from t = {first_time_s:.4} s; results \
-                 using {} are unreliable",
+                 using {} are unreliable{}",
                 channel.name(),
-                channel.name()
+                channel.name(),
+                no_witness(*channel)
             ),
             RecordingFault::Clipping {
                 channel,
@@ -167,13 +168,35 @@ impl fmt::Display for RecordingFault {
             } => write!(
                 f,
                 "clipping in {}: {flat_tops} flat tops at its {} {level:.6e} {} ({samples} \
-                 samples), from t = {first_time_s:.4} s; results using {} are unreliable",
+                 samples), from t = {first_time_s:.4} s; results using {} are unreliable{}",
                 channel.name(),
                 if *side == Side::Max { "maximum" } else { "minimum" },
                 channel.unit(),
-                channel.name()
+                channel.name(),
+                no_witness(*channel)
             ),
         }
+    }
+}
+
+/// Whether `x` holds held samples or clipping ([`hold`]): a channel whose recording lost
+/// samples or range. A gyro channel so spoilt is no witness of the angles' noise
+/// (`ident::session`: its stale or flat samples would be read as the angles' noise, and every
+/// block's inputs shrunk by them).
+#[must_use]
+pub fn holds_or_clips(x: &[f64]) -> bool {
+    let clips = hold::find_clipping(x);
+    let levels: Vec<f64> = clips.iter().map(|c| c.level).collect();
+    !clips.is_empty() || hold::find_held(x, &levels).is_some()
+}
+
+/// What a held or clipped gyro channel costs the other block ([`holds_or_clips`]): empty for
+/// the other channels.
+fn no_witness(channel: Channel) -> &'static str {
+    if channel.is_gyro() {
+        "; the gyro is then no witness of the angles' noise, taken white for both blocks"
+    } else {
+        ""
     }
 }
 

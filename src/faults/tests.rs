@@ -128,3 +128,37 @@ fn faults_serialise_with_a_kind_and_read_as_a_sentence() {
         "glitch in gx at t = 12.5000 s (line 6252, 1 sample): +5.0000e1 rad/s off its neighbours"
     );
 }
+
+/// A channel that holds samples or clips spoils a witness; a clean one, a quantised slow one
+/// repeating by chance, and one glitch (bridged before the analysis) do not. A gyro channel's
+/// words say what it costs the other block; an accelerometer's do not.
+#[test]
+fn held_or_clipped_channels_are_no_witness_and_a_gyros_words_say_so() {
+    let clean = signal(7, 20_000);
+    assert!(!holds_or_clips(&clean));
+    let mut glitched = clean.clone();
+    glitched[9000] += 0.5;
+    assert!(!holds_or_clips(&glitched));
+    let mut held = clean.clone();
+    for i in (50..held.len()).step_by(100) {
+        held[i] = held[i - 1];
+    }
+    assert!(holds_or_clips(&held));
+    let clipped: Vec<f64> = clean.iter().map(|v| v.min(0.37)).collect();
+    assert!(holds_or_clips(&clipped));
+    let words = |channel| {
+        RecordingFault::HeldSamples {
+            channel,
+            held: 300,
+            expected: 0.0,
+            runs: 300,
+            longest: 1,
+            first_time_s: 0.1,
+        }
+        .to_string()
+    };
+    assert!(words(Channel::Gy).ends_with(
+        "results using gy are unreliable; the gyro is then no witness of the angles' noise, taken white for both blocks"
+    ));
+    assert!(words(Channel::Ay).ends_with("results using ay are unreliable"));
+}

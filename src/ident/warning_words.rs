@@ -450,7 +450,7 @@ pub(super) fn angle_noise_colour_unknown_words(
     write!(
         f,
         "no gyro block in this run to check the stand's angle noise against (none, or one with a \
-         channel that never moves): it is taken as \
+         channel that never moves, holds samples or clips): it is taken as \
          white, roll {:.1e}, yaw {:.1e}, pitch {:.1e} rad per sample ({}); if the stand's angle \
          noise is coloured (an optical reference, an encoder's interpolation), this block's gains \
          are biased low where the motion is weak and poles may stand in for its delay: certify \

@@ -338,7 +338,7 @@ fn an_accelerometer_only_run_says_its_angle_noise_colour_is_unknown() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("accel block: no gyro block in this run to check the stand's angle noise against"),
+        err.contains("accel block: no sound gyro in this run to check the stand's angle noise against"),
         "{err}"
     );
     let warning = warning_in(&out).expect("the accelerometer-only model says it");

@@ -102,8 +102,9 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     lines.extend(input_limit_lines(&report, None));
     lines.extend(tone_limit_lines(&report));
     lines.extend(unexplained_lines(&report, None));
-    // The recording's faults last, as `identify` says them: a finding on a channel that holds
-    // samples or clips may be the fault's (a glitch is bridged before the analysis).
+    // The recording's faults last, in `identify`'s words, and for a channel that holds samples
+    // or clips one more clause: a finding on it may be the fault's (a glitch is bridged before
+    // the analysis, so it has none).
     lines.extend(report.recording_faults.iter().map(|f| match f {
         crate::faults::RecordingFault::Glitch { .. } => format!("imu-attest: warning: {f}"),
         _ => format!("imu-attest: warning: {f}; a finding on this channel may be the fault's"),

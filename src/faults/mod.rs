@@ -179,10 +179,12 @@ impl fmt::Display for RecordingFault {
     }
 }
 
-/// Whether `x` holds held samples or clipping ([`hold`]): a channel whose recording lost
-/// samples or range. A gyro channel so spoilt is no witness of the angles' noise
-/// (`ident::session`: its stale or flat samples would be read as the angles' noise, and every
-/// block's inputs shrunk by them).
+/// Whether [`detect_channel`] would report held samples or clipping in `x` ([`hold`]): a
+/// channel whose recording lost samples or range. A gyro channel so spoilt is no witness of the
+/// angles' noise (`ident::session`: what its stale or flat samples miss of the motion would be
+/// read as the angles' noise, and every block's inputs shrunk by it), and the fault's words say
+/// so. That includes a dead start long enough to be reported (which the noise model's median
+/// over stretches would have borne): one rule, the one the report states.
 #[must_use]
 pub fn holds_or_clips(x: &[f64]) -> bool {
     let clips = hold::find_clipping(x);
@@ -194,7 +196,7 @@ pub fn holds_or_clips(x: &[f64]) -> bool {
 /// the other channels.
 fn no_witness(channel: Channel) -> &'static str {
     if channel.is_gyro() {
-        "; the gyro is then no witness of the angles' noise, taken white for both blocks"
+        "; the gyro is then no witness of the angles' noise, taken white for every block"
     } else {
         ""
     }

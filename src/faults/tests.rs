@@ -129,13 +129,31 @@ fn faults_serialise_with_a_kind_and_read_as_a_sentence() {
     );
 }
 
-/// A channel that holds samples or clips spoils a witness; a clean one, a quantised slow one
-/// repeating by chance, and one glitch (bridged before the analysis) do not. A gyro channel's
-/// words say what it costs the other block; an accelerometer's do not.
+/// A channel that holds samples or clips spoils a witness, as `detect` reports it (a dead start
+/// long enough to be reported too); a clean one, a quantised slow one repeating by chance and one
+/// with a glitch do not. A gyro channel's words say what it costs the other block; an
+/// accelerometer's do not.
 #[test]
 fn held_or_clipped_channels_are_no_witness_and_a_gyros_words_say_so() {
     let clean = signal(7, 20_000);
     assert!(!holds_or_clips(&clean));
+    let q = 1e-4;
+    let mut rng = Rng::new(3);
+    let slow: Vec<f64> = (0..30_000)
+        .map(|i| ((0.02 * (f64::from(i) / 500.0).sin() + 6e-4 * rng.normal()) / q).round() * q)
+        .collect();
+    assert!(!holds_or_clips(&slow));
+    let mut dead_ends = clean.clone();
+    let n = dead_ends.len();
+    for i in 1..700 {
+        dead_ends[i] = dead_ends[0];
+        dead_ends[n - 1 - i] = dead_ends[n - 1];
+    }
+    assert!(
+        find_held(&dead_ends, &[]).is_some(),
+        "the dead start is held samples to `detect`"
+    );
+    assert!(holds_or_clips(&dead_ends));
     let mut glitched = clean.clone();
     glitched[9000] += 0.5;
     assert!(!holds_or_clips(&glitched));
@@ -158,7 +176,7 @@ fn held_or_clipped_channels_are_no_witness_and_a_gyros_words_say_so() {
         .to_string()
     };
     assert!(words(Channel::Gy).ends_with(
-        "results using gy are unreliable; the gyro is then no witness of the angles' noise, taken white for both blocks"
+        "results using gy are unreliable; the gyro is then no witness of the angles' noise, taken white for every block"
     ));
     assert!(words(Channel::Ay).ends_with("results using ay are unreliable"));
 }

@@ -135,11 +135,13 @@ impl Session {
         // miss of the motion would be read as the angles' noise, and the accelerometer's inputs
         // shrunk by it (a turbulent cruise run at 250 Hz with held samples in `gy`: the
         // accelerometer's `K` 0.87 % off, 10 deviations, with no word for that block).
+        // Judged on the recorded samples, as `crate::faults::detect` reports them (a bridged
+        // glitch's points fall between a quantised channel's steps).
         let witness = self
             .run
             .outputs(Block::Gyro)
-            .map(|gyro| bridged(gyro.clone()))
-            .filter(|gyro| gyro.iter().all(|c| moves(c) && !crate::faults::holds_or_clips(c)));
+            .filter(|gyro| gyro.iter().all(|c| moves(c) && !crate::faults::holds_or_clips(c)))
+            .map(|gyro| bridged(gyro.clone()));
         let m = Arc::new(observe_with_witness(
             angles.each_ref().map(Vec::as_slice),
             self.run.sample_rate_hz,

@@ -449,12 +449,12 @@ pub(super) fn angle_noise_colour_unknown_words(
 ) -> fmt::Result {
     write!(
         f,
-        "no gyro block in this run to check the stand's angle noise against (none, or one with a \
+        "no sound gyro in this run to check the stand's angle noise against (none, or one with a \
          channel that never moves, holds samples or clips): it is taken as \
          white, roll {:.1e}, yaw {:.1e}, pitch {:.1e} rad per sample ({}); if the stand's angle \
          noise is coloured (an optical reference, an encoder's interpolation), this block's gains \
          are biased low where the motion is weak and poles may stand in for its delay: certify \
-         with a gyro on the stand, or fix the order at 0 and compare",
+         with a sound gyro on the stand, or fix the order at 0 and compare",
         angle_noise_rad[0],
         angle_noise_rad[1],
         angle_noise_rad[2],

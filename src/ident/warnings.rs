@@ -350,8 +350,9 @@ pub enum IdentWarning {
         /// Whether this factor's iteration converged.
         converged: bool,
     },
-    /// The run has no gyro block, so nothing in it measures the motion a second way and the
-    /// angle noise's colour cannot be estimated (`stand::colour`): the observer takes it as white
+    /// The run has no sound gyro (no gyro block, or one with a channel that never moves, holds
+    /// samples or clips: `ident::session`), so nothing in it measures the motion a second way
+    /// and the angle noise's colour cannot be estimated (`stand::colour`): the observer takes it as white
     /// at the level below. A stand whose angle noise is coloured inside the motion's band (an
     /// optical reference, an encoder's interpolation error) then passes it into this block's
     /// inputs as motion: gains biased low where the motion is weak, and a gain falling with

@@ -101,7 +101,7 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
             .filter_map(|t| {
                 let mut theta = current.theta.clone();
                 theta.lag_s = t;
-                theta.tau_s = (theta.tau_s - t).max(0.0);
+                theta.tau_s = lag_start_delay(theta.tau_s, t);
                 run_fit(&s, &theta)
             })
             .min_by(|a, b| a.profile.cost.total_cmp(&b.profile.cost));
@@ -147,6 +147,21 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
     out
 }
 
+/// The delay a candidate that adds `lag_s` of low-frequency phase lag starts from: the model's
+/// `tau_s` without that lag, not below 0 (a sensor's own delay is not negative) where the
+/// model's delay is not; where it is, the angles lag the outputs (a reference's latency beyond
+/// the sensor's delay) and nothing bounds it. Clamped at 0 there too, a run whose angles lagged
+/// by 50 ms (delay -47 ms) started every lag and resonance 47 ms off: their fits failed (chi2
+/// gains of -3e7), and a true gyro lag came second behind a false `g_sensitivity` (30 Nov, a
+/// helper's campaign; `tests/diagnose_negative_delay.rs`).
+fn lag_start_delay(tau_s: f64, lag_s: f64) -> f64 {
+    if tau_s < 0.0 {
+        tau_s - lag_s
+    } else {
+        (tau_s - lag_s).max(0.0)
+    }
+}
+
 /// The best point of a grid over a new resonance's frequency (log-spaced inside the band, from
 /// 1 Hz) and damping.
 fn resonance_start(
@@ -166,7 +181,7 @@ fn resonance_start(
             let mut theta = state.fitted.theta.clone();
             theta.resonances.push((f, zeta));
             // A resonance adds phase lag 2 zeta f / f_r below f_r: start tau without it.
-            theta.tau_s = (theta.tau_s - zeta / (PI * f)).max(0.0);
+            theta.tau_s = lag_start_delay(theta.tau_s, zeta / (PI * f));
             let c = cost_at(&state.design, &state.grams, structure, &theta);
             if best.as_ref().is_none_or(|(b, _)| c < *b) {
                 best = Some((c, theta));

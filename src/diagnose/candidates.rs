@@ -152,8 +152,9 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
 /// model's delay is not; where it is, the angles lag the outputs (a reference's latency beyond
 /// the sensor's delay) and nothing bounds it. Clamped at 0 there too, a run whose angles lagged
 /// by 50 ms (delay -47 ms) started every lag and resonance 47 ms off: their fits failed (chi2
-/// gains of -3e7), and a true gyro lag came second behind a false `g_sensitivity` (30 Nov, a
-/// helper's campaign; `tests/diagnose_negative_delay.rs`).
+/// gains of -3e7), a true gyro lag came second behind a false `g_sensitivity`, and a true mount
+/// resonance was named on one seed of three (30 Nov, a helper's campaign;
+/// `tests/diagnose_negative_delay.rs`).
 fn lag_start_delay(tau_s: f64, lag_s: f64) -> f64 {
     if tau_s < 0.0 {
         tau_s - lag_s

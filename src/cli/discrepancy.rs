@@ -105,9 +105,13 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
     // The recording's faults last, in `identify`'s words, and for a channel that holds samples
     // or clips one more clause: a finding on it may be the fault's (a glitch is bridged before
     // the analysis, so it has none).
-    lines.extend(report.recording_faults.iter().map(|f| match f {
-        crate::faults::RecordingFault::Glitch { .. } => format!("imu-attest: warning: {f}"),
-        _ => format!("imu-attest: warning: {f}; a finding on this channel may be the fault's"),
+    lines.extend(report.recording_faults.iter().map(|f| {
+        let clause = if f.spoils_recording() {
+            "; a finding on this channel may be the fault's"
+        } else {
+            ""
+        };
+        format!("imu-attest: warning: {f}{clause}")
     }));
     super::identify::print_messages(&lines);
     Ok(())
@@ -117,8 +121,8 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 /// below it, a warning where the band searched reaches into it; a warning of a step in the
 /// block's delay ([`crate::ident::delay_step`]); where the inputs may not be the motion (the
 /// angles mostly their noise, or the block's coherence ended: [`crate::diagnose::noisy_angles`]),
-/// a note of what was set aside, or a warning that nothing could be confirmed; the significant candidates not named and why
-/// ([`crate::diagnose::not_named`]); after `run: ` when the lines of several runs are printed
+/// a note of what was set aside, or a warning that nothing could be confirmed; the significant
+/// candidates not named and why ([`crate::diagnose::not_named`]); after `run: ` when the lines of several runs are printed
 /// together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
     limit_lines(report, run, |kind| kind != LimitKind::ToneLimit)

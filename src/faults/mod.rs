@@ -113,6 +113,16 @@ impl RecordingFault {
         format!("{what} in {}", self.channel().name())
     }
 
+    /// Whether it spoils the channel's recording beyond repair: held samples or clipping (a
+    /// glitch is bridged before the analysis). A gyro channel so spoilt is no witness of the
+    /// angles' noise (`ident::session`: what its stale or flat samples miss of the motion would
+    /// be read as the angles' noise, and every block's inputs shrunk by it), and the fault's
+    /// words say so; that includes a dead start long enough to be reported.
+    #[must_use]
+    pub fn spoils_recording(&self) -> bool {
+        !matches!(self, RecordingFault::Glitch { .. })
+    }
+
     /// The channel the fault is in.
     #[must_use]
     pub fn channel(&self) -> Channel {
@@ -179,21 +189,8 @@ impl fmt::Display for RecordingFault {
     }
 }
 
-/// Whether [`detect_channel`] would report held samples or clipping in `x` ([`hold`]): a
-/// channel whose recording lost samples or range. A gyro channel so spoilt is no witness of the
-/// angles' noise (`ident::session`: what its stale or flat samples miss of the motion would be
-/// read as the angles' noise, and every block's inputs shrunk by it), and the fault's words say
-/// so. That includes a dead start long enough to be reported (which the noise model's median
-/// over stretches would have borne): one rule, the one the report states.
-#[must_use]
-pub fn holds_or_clips(x: &[f64]) -> bool {
-    let clips = hold::find_clipping(x);
-    let levels: Vec<f64> = clips.iter().map(|c| c.level).collect();
-    !clips.is_empty() || hold::find_held(x, &levels).is_some()
-}
-
-/// What a held or clipped gyro channel costs the other block ([`holds_or_clips`]): empty for
-/// the other channels.
+/// What a held or clipped gyro channel costs the other block
+/// ([`RecordingFault::spoils_recording`]): empty for the other channels.
 fn no_witness(channel: Channel) -> &'static str {
     if channel.is_gyro() {
         "; the gyro is then no witness of the angles' noise, taken white for every block"

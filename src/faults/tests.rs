@@ -135,6 +135,12 @@ fn faults_serialise_with_a_kind_and_read_as_a_sentence() {
 /// accelerometer's do not.
 #[test]
 fn held_or_clipped_channels_are_no_witness_and_a_gyros_words_say_so() {
+    let holds_or_clips = |x: &[f64]| {
+        let time: Vec<f64> = (0..x.len()).map(|i| i as f64 / 500.0).collect();
+        detect_channel(Channel::Gx, &time, x)
+            .iter()
+            .any(RecordingFault::spoils_recording)
+    };
     let clean = signal(7, 20_000);
     assert!(!holds_or_clips(&clean));
     let q = 1e-4;

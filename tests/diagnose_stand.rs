@@ -1,7 +1,8 @@
 //! Issue 15: the stand side is not blamed on the sensors. On runs simulated with a real stand's
 //! angle measurement (`--stand real`: coloured angle noise, a 30 Hz band limit, 1.5 ms of latency)
 //! and no sensor effect, ten seeds over the three regimes, the diagnosis names no sensor effect:
-//! its verdict is `no_missing_effect`, or its findings are the stand's own (`reference_lag`).
+//! its verdict is `no_missing_effect`, or its findings are the stand's own (`reference_lag`,
+//! `reference_band_limit`).
 //! (Before the observer's coloured noise model, 7 of 10 such runs got a false accelerometer
 //! `lever_arm_error` and the cruise runs a lag on both blocks.) Only this test knows how the
 //! runs were made; the diagnosis sees the CSV and the sidecar's declared fields.

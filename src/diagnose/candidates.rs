@@ -49,7 +49,7 @@ pub struct Candidate {
 /// The flag of [`Structure`] that turns an effect on.
 type Switch = fn(&mut Structure) -> &mut bool;
 
-fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) -> Option<Candidate> {
+pub(super) fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) -> Option<Candidate> {
     let fitted = fitted?;
     let current = &state.fitted;
     Some(Candidate {
@@ -106,6 +106,9 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
             })
             .min_by(|a, b| a.profile.cost.total_cmp(&b.profile.cost));
         out.extend(structural(Effect::SensorLag, state, best));
+    }
+    if wanted(Effect::ReferenceBandLimit) && s0.band_limit.is_none() {
+        out.extend(super::band_limit::band_limit_candidates(state, band_hz));
     }
     for axis in 0..3 {
         if !wanted(Effect::PlatformResonance) || s0.resonance_axes.contains(&axis) {

@@ -114,6 +114,35 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
                 pm(sd1("T_s"), 1e3, 3)
             )]
         }),
+        Effect::ReferenceBandLimit => {
+            let rise = p.get("gain_rise_at_band_top").and_then(num);
+            let top = p.get("band_top_hz").and_then(num);
+            let corner = p.get("corner_hz").and_then(num);
+            let order = p.get("order").and_then(Value::as_i64);
+            let causal = p.get("causal").and_then(Value::as_bool);
+            match (rise, top, corner, order, causal) {
+                (Some(rise), Some(top), Some(corner), Some(m), Some(causal)) => {
+                    let mut lines = vec![format!(
+                        "the outputs rise over the inputs by {:.2}{} % at {top:.1} Hz: the angle measurement \
+                         through a {} order-{m} low-pass at {corner:.1}{} Hz (the inputs computed from it fall \
+                         short of the motion; the stand's, not the sensor's)",
+                        100.0 * rise,
+                        pm(sd1("gain_rise_at_band_top"), 100.0, 2),
+                        if causal { "causal" } else { "zero-phase" },
+                        pm(sd1("corner_hz"), 1.0, 1)
+                    )];
+                    if causal && corner > 0.0 {
+                        lines.push(format!(
+                            "the angles lag the motion by its group delay, {:.3} ms: the block's delay with it is \
+                             against the motion, that much later than against the angles",
+                            1e3 * std::f64::consts::SQRT_2 / (std::f64::consts::TAU * corner)
+                        ));
+                    }
+                    Some(lines)
+                }
+                _ => None,
+            }
+        }
         Effect::AxisTimeSkew => p.get("skew_s").and_then(three).map(|s| {
             vec![format!(
                 "channel delays relative to their mean, ms: {}",
@@ -203,7 +232,9 @@ pub(crate) fn size_keys(effect: Effect) -> &'static [&'static str] {
         Effect::ScaleNonlinearity => &["k2"],
         Effect::LeverArmError => &["offset_m"],
         Effect::GSensitivity => &["G"],
-        Effect::SensorLag | Effect::ReferenceLag => &["T_s"],
+        // The band limit's T (0: none), not its rise, which depends on the band's top (the
+        // usable band's refit and another run's band end elsewhere).
+        Effect::SensorLag | Effect::ReferenceLag | Effect::ReferenceBandLimit => &["T_s"],
         Effect::AxisTimeSkew => &["skew_s"],
         _ => &[],
     }

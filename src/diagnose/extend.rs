@@ -19,6 +19,7 @@ use crate::ident::identify::IdentStep;
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
+use crate::model::band_limit::FittedBandLimit;
 use crate::model::effects::{AcceptedEffect, Identified, NotAdded, Resonance};
 use crate::model::{BlockModel, Model, ModelEffects};
 
@@ -175,6 +176,10 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
                 damping,
             })
             .collect(),
+        reference_band_limit: f.structure.band_limit.map(|shape| FittedBandLimit {
+            shape,
+            t_s: f.theta.band_limit_t_s,
+        }),
         identified: Identified {
             k: entry.k,
             tau_s: entry.tau_s,
@@ -245,6 +250,7 @@ fn index_of(state: &State, effect: Effect) -> usize {
 #[cfg(test)]
 mod tests {
     use crate::diagnose::structure::{Filters, Structure, Theta};
+    use crate::model::band_limit::{BandLimitShape, FittedBandLimit};
     use crate::model::effects::{Identified, ModelEffects, Resonance};
 
     #[test]
@@ -254,12 +260,14 @@ mod tests {
             lag: true,
             skew: true,
             resonance_axes: vec![2, 0],
+            band_limit: Some(BandLimitShape::Causal2),
             ..Structure::default()
         };
         let theta = Theta {
             tau_s: 0.0042,
             skew_s: [0.0003, -0.0001],
             lag_s: 0.0015,
+            band_limit_t_s: 0.002,
             resonances: vec![(23.0, 0.05), (31.0, 0.2)],
         };
         let k = [
@@ -284,6 +292,10 @@ mod tests {
                     damping: 0.2,
                 },
             ],
+            reference_band_limit: Some(FittedBandLimit {
+                shape: BandLimitShape::Causal2,
+                t_s: theta.band_limit_t_s,
+            }),
             identified: Identified {
                 k,
                 tau_s: 0.004,

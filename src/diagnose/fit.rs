@@ -1,7 +1,8 @@
 //! Fitting one model structure: a Nelder-Mead search over the nonlinear parameters, each
 //! evaluation solving the linear ones ([`project`]). Parameters are searched in scaled units
-//! (delays and the lag in ms, resonance frequency in Hz, log damping) and kept inside their
-//! physical range (lag >= 0, damping in [0.005, 1], resonance inside the band).
+//! (delays, the lag and the band limit's time constant in ms, resonance frequency in Hz, log
+//! damping) and kept inside their physical range (lag and band limit's time constant >= 0,
+//! damping in [0.005, 1], resonance inside the band).
 
 use nalgebra::DMatrix;
 use num_complex::Complex64;
@@ -51,6 +52,10 @@ pub(super) fn pack(structure: &Structure, theta: &Theta) -> (Vec<f64>, Vec<f64>)
         x.push(theta.lag_s * 1e3);
         step.push(0.3 * (theta.lag_s * 1e3).max(0.5));
     }
+    if structure.band_limit.is_some() {
+        x.push(theta.band_limit_t_s * 1e3);
+        step.push(0.3 * (theta.band_limit_t_s * 1e3).max(0.5));
+    }
     for &(f, z) in &theta.resonances {
         x.extend([f, z.ln()]);
         step.extend([0.3 * z.max(0.02) * f, 0.3]);
@@ -72,6 +77,14 @@ pub(super) fn unpack(structure: &Structure, x: &[f64], band_hz: [f64; 2]) -> Opt
     if lag_s < 0.0 {
         return None;
     }
+    let band_limit_t_s = if structure.band_limit.is_some() {
+        next() * 1e-3
+    } else {
+        0.0
+    };
+    if band_limit_t_s < 0.0 {
+        return None;
+    }
     let mut resonances = Vec::new();
     for _ in &structure.resonance_axes {
         let (f, zeta) = (next(), next().exp());
@@ -84,6 +97,7 @@ pub(super) fn unpack(structure: &Structure, x: &[f64], band_hz: [f64; 2]) -> Opt
         tau_s,
         skew_s,
         lag_s,
+        band_limit_t_s,
         resonances,
     })
 }

@@ -18,6 +18,7 @@
 //! [`DiagnoseError::TooShort`]; non-finite samples cannot reach here (the loader refuses them).
 
 pub mod accepted;
+pub mod band_limit;
 pub mod candidates;
 pub mod clock;
 pub mod describe;
@@ -37,6 +38,7 @@ pub mod report;
 mod rules;
 pub mod simplex;
 pub mod state;
+pub mod step_caveat;
 pub mod structure;
 pub mod tone;
 pub mod tone_limit;

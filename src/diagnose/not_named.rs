@@ -70,6 +70,14 @@ pub enum Reason {
         /// With the effect, dB.
         worst_after_db: f64,
     },
+    /// A stand-side effect found on one block that makes the other block's fit worse: both see
+    /// the same angles, so it is not the stand's.
+    OtherBlockDisagrees {
+        /// The other block (`gyro`, `accel`).
+        block: String,
+        /// The other block's `chi2` gain with it (negative: worse).
+        delta_chi2: f64,
+    },
 }
 
 impl Reason {
@@ -105,7 +113,7 @@ fn may_hide(reason: &Reason, anything_named: bool) -> bool {
     match reason {
         Reason::OpensGap { .. } => true,
         Reason::OutOfReach { damping, .. } => anything_named && *damping <= MAX_RESONANCE_DAMPING,
-        Reason::FitFailed | Reason::TotalGrows { .. } => false,
+        Reason::FitFailed | Reason::TotalGrows { .. } | Reason::OtherBlockDisagrees { .. } => false,
     }
 }
 
@@ -145,6 +153,10 @@ pub fn words(not_named: &[NotNamed], block_name: &str, band_hz: [f64; 2]) -> Opt
                     band_hz[0], band_hz[1]
                 ),
                 Reason::FitFailed => "no fit with it was found".to_owned(),
+                Reason::OtherBlockDisagrees { block, delta_chi2 } => format!(
+                    "the same band limit makes the {block} block's fit worse (chi2 {delta_chi2:+.1}), and both \
+                     blocks see the same angles: not the stand's (a misfit of this form on this block alone)"
+                ),
                 Reason::TotalGrows { before_db, after_db } => format!(
                     "the three channels' residual power would not shrink ({before_db:.3} -> {after_db:.3} dB): its chi2 \
                      gain rests on the noise weights, not on explaining the outputs"
@@ -267,5 +279,24 @@ mod tests {
             said.contains("at the edge of the band searched (0.10-28.90 Hz)"),
             "{said}"
         );
+    }
+
+    #[test]
+    fn a_band_limit_the_other_block_refuses_is_said_and_no_warning() {
+        let refused = NotNamed {
+            effect: Effect::ReferenceBandLimit,
+            criterion_gain: 2.2,
+            reason: Reason::OtherBlockDisagrees {
+                block: "gyro".to_owned(),
+                delta_chi2: -812.4,
+            },
+        };
+        let said = words(std::slice::from_ref(&refused), "accel", [0.1, 40.0]).unwrap_or_default();
+        assert!(
+            said.contains("reference_band_limit (gain 2.2): the same band limit makes the gyro block's fit worse (chi2 -812.4)"),
+            "{said}"
+        );
+        assert!(!is_warning(std::slice::from_ref(&refused), None));
+        assert!(!refused.reason.may_be_accepted());
     }
 }

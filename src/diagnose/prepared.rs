@@ -63,6 +63,10 @@ pub struct PreparedBlock {
     /// A step in the delays of the stretches over the band searched
     /// ([`crate::ident::delay_step`]): the record's streams slipped, and the report says so.
     pub delay_step: Option<crate::ident::delay_step::DelayStep>,
+    /// The stretches' delays, s, where they are too few to test for a step
+    /// ([`super::step_caveat::TOO_FEW_FOR_A_STEP`] or fewer, no step found): a clock drift named
+    /// then may be a slipped sample, and its evidence says so with them. Empty otherwise.
+    pub untested_step_delays_s: Vec<f64>,
     /// Whether a clock drift is searched: not through a step, unless the slope its two sides
     /// share is a drift.
     pub search_drift: bool,
@@ -190,6 +194,11 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
                 [trend, trend_std]
             });
         let delay_step = stationarity.as_deref().and_then(|st| st.delay_step);
+        let untested_step_delays_s = stationarity
+            .as_deref()
+            .filter(|st| delay_step.is_none() && st.stretches.len() <= super::step_caveat::TOO_FEW_FOR_A_STEP)
+            .map(|st| st.stretches.iter().map(|s| s.tau_s).collect())
+            .unwrap_or_default();
         let drifts = stationarity
             .as_deref()
             .is_some_and(crate::ident::stretches::Stationarity::drifts);
@@ -229,6 +238,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             }),
             noisy_angles: noisy,
             delay_step,
+            untested_step_delays_s,
             search_drift: delay_step.is_none() || drifts,
             base,
             dof,

@@ -63,9 +63,9 @@ impl Report {
     /// What the model with the findings still leaves unexplained, per block, in words: where its
     /// chi2/dof after the findings stays above the identifier's [`POOR_FIT`], the disagreement is
     /// mostly not one of the catalogue's effects, and any finding there is a partial fit of it
-    /// whose size cannot be certified (angles measured through a 20 Hz filter: chi2/dof 5.1-5.3
-    /// after five findings that were none of the run's, 55-62 on an independent simulator's run
-    /// after ten). One sentence per block, naming it; empty when every block is explained; the
+    /// whose size cannot be certified (angles measured through a 20 Hz filter, before the stand's
+    /// band limit was a candidate or with it rejected: chi2/dof 5.1-5.3 after five findings that
+    /// were none of the run's; 55-62 on an independent simulator's run after ten). One sentence per block, naming it; empty when every block is explained; the
     /// real recordings leave 1.13-1.44.
     #[must_use]
     pub fn unexplained(&self) -> Vec<String> {
@@ -314,6 +314,22 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
             json!({"G": g, "units": "output units per m/s^2"})
         }
         Effect::SensorLag | Effect::ReferenceLag => json!({"T_s": theta.lag_s}),
+        Effect::ReferenceBandLimit => {
+            let top = state.design.frequency_hz.last().copied().unwrap_or(0.0);
+            let Some(shape) = f.structure.band_limit else {
+                return Value::Null;
+            };
+            let t = theta.band_limit_t_s;
+            json!({
+                "T_s": t,
+                // No corner for T = 0 (no band limit; infinite).
+                "corner_hz": (t > 0.0).then(|| 1.0 / (std::f64::consts::TAU * t)),
+                "order": shape.order(),
+                "causal": shape.causal(),
+                "band_top_hz": top,
+                "gain_rise_at_band_top": shape.rise_at(t, top),
+            })
+        }
         Effect::AxisTimeSkew => {
             let skew = theta.channel_skew_s();
             json!({"channel_delay_s": skew.map(|d| theta.tau_s + d), "skew_s": skew})

@@ -5,15 +5,20 @@
 //! (`tone.rs`), since they are incoherent with every regressor.
 //!
 //! Per output channel `i`, with `s = 2 pi i f`:
-//! `x_i = c_i(s) [sum_j K_ij M_j(s) u_j + k2_i q_i + sum_l dr_l df_i/dr_l] + e^(-tau s) sum_j G_ij f_j`,
-//! `c_i(s) = e^(-(tau + skew_i) s) / (T s + 1)`, `M_j(s) = w^2 / (s^2 + 2 zeta w s + w^2)` on
+//! `x_i = c_i(s) [sum_j K_ij M_j(s) u_j + k2_i q_i + sum_l dr_l df_i/dr_l] + d(s) sum_j G_ij f_j`,
+//! `d(s) = e^(-tau s) g(s)`,
+//! `c_i(s) = g(s) e^(-(tau + skew_i) s) / (T s + 1)`, `M_j(s) = w^2 / (s^2 + 2 zeta w s + w^2)` on
 //! resonant axes (1 elsewhere), `q_i = u_i |u_i|`. The lever-arm term uses `K ~ I` (its gain
-//! errors, of order 1e-3, change the offset's estimate by as little).
+//! errors, of order 1e-3, change the offset's estimate by as little). `g(s) = 1 / H(s)` undoes the
+//! stand's band limit (the angle measurement through a low-pass `H`, so the inputs computed from
+//! the angles fall short of the motion), 1 unless [`Structure::band_limit`] gives its shape
+//! (`super::band_limit`); its time constant `T >= 0` ([`Theta::band_limit_t_s`]) is searched.
 
 use std::f64::consts::PI;
 
 use num_complex::Complex64;
 
+use super::band_limit::BandLimitShape;
 use super::design::{AUX, Q, U};
 
 /// Which effects the model holds (besides tones).
@@ -33,6 +38,8 @@ pub struct Structure {
     pub g_sensitivity: bool,
     /// Accelerometer lever-arm offset.
     pub lever_arm: bool,
+    /// The shape of the angle measurement's low-pass (the stand's band limit); `None`: none.
+    pub band_limit: Option<BandLimitShape>,
     /// Input axes carrying a mount resonance, in the order of [`Theta::resonances`].
     pub resonance_axes: Vec<usize>,
 }
@@ -46,6 +53,8 @@ pub struct Theta {
     pub skew_s: [f64; 2],
     /// Lag time constant, s.
     pub lag_s: f64,
+    /// The stand's band limit's time constant `T`, s (module docs).
+    pub band_limit_t_s: f64,
     /// `(frequency_hz, damping)` per resonant axis.
     pub resonances: Vec<(f64, f64)>,
 }
@@ -58,6 +67,7 @@ impl Theta {
             tau_s,
             skew_s: [0.0; 2],
             lag_s: 0.0,
+            band_limit_t_s: 0.0,
             resonances: Vec::new(),
         }
     }
@@ -77,7 +87,7 @@ pub enum Filter {
     Channel,
     /// `c_i(s) M_j(s)`.
     ChannelResonant(usize),
-    /// `e^(-tau s)`.
+    /// `e^(-tau s) / H(s)` (the stand's band limit, where held, as the channels').
     Delay,
 }
 
@@ -175,7 +185,10 @@ impl Structure {
     /// Number of nonlinear parameters besides `tau`.
     #[must_use]
     pub fn n_nonlinear_extra(&self) -> usize {
-        2 * usize::from(self.skew) + usize::from(self.lag) + 2 * self.resonance_axes.len()
+        2 * usize::from(self.skew)
+            + usize::from(self.lag)
+            + usize::from(self.band_limit.is_some())
+            + 2 * self.resonance_axes.len()
     }
 }
 
@@ -205,7 +218,10 @@ impl Filters {
         } else {
             [0.0; 3]
         };
-        let channel = skew.map(|d| (-s * (theta.tau_s + d)).exp() * lag);
+        let reference = structure
+            .band_limit
+            .map_or(Complex64::from(1.0), |r| r.inverse_at(theta.band_limit_t_s, f));
+        let channel = skew.map(|d| (-s * (theta.tau_s + d)).exp() * lag * reference);
         let mut resonant = [Complex64::from(1.0); 3];
         for (&axis, &(f_r, zeta)) in structure.resonance_axes.iter().zip(&theta.resonances) {
             let w = 2.0 * PI * f_r;
@@ -214,7 +230,8 @@ impl Filters {
         Self {
             channel,
             resonant,
-            delay: (-s * theta.tau_s).exp(),
+            // The specific force the g-sensitivity reads is computed from the angles too.
+            delay: (-s * theta.tau_s).exp() * reference,
         }
     }
 

@@ -155,6 +155,65 @@ fn the_same_lag_on_both_blocks_is_the_angle_measurements() {
     assert_eq!(f[0].effect, Effect::SensorLag);
 }
 
+fn band_limit_finding(block: Block, order: i64, causal: bool, corner: f64, sd: f64) -> super::Finding {
+    super::Finding {
+        effect: Effect::ReferenceBandLimit,
+        name: Effect::ReferenceBandLimit.name_on(block),
+        parameters: serde_json::json!({"order": order, "causal": causal, "corner_hz": corner}),
+        parameter_std: serde_json::json!({"corner_hz": sd}),
+        ..lag_finding(block, 0.0, 0.0)
+    }
+}
+
+#[test]
+fn a_band_limit_says_whether_the_other_block_shows_the_same() {
+    let both = [Block::Gyro, Block::Accel];
+    // 40.2 +- 0.3 and 39.6 +- 0.4 Hz, both causal order 2: 1.2 sigma apart, one filter.
+    let mut f = vec![
+        band_limit_finding(Block::Gyro, 2, true, 40.2, 0.3),
+        band_limit_finding(Block::Accel, 2, true, 39.6, 0.4),
+    ];
+    super::workflow::say_shared_band_limit(&mut f, &both);
+    assert!(
+        f.iter()
+            .all(|f| f.evidence.contains("the same band limit on both blocks")),
+        "{f:?}"
+    );
+    // The same corners, another shape: said as approximate.
+    let mut f = vec![
+        band_limit_finding(Block::Gyro, 2, true, 40.2, 0.3),
+        band_limit_finding(Block::Accel, 4, false, 40.2, 0.3),
+    ];
+    super::workflow::say_shared_band_limit(&mut f, &both);
+    assert!(
+        f.iter().all(|f| f.evidence.contains("another shape or corner")),
+        "{f:?}"
+    );
+    // Corners 10 sigma apart.
+    let mut f = vec![
+        band_limit_finding(Block::Gyro, 1, false, 40.0, 0.3),
+        band_limit_finding(Block::Accel, 1, false, 44.0, 0.3),
+    ];
+    super::workflow::say_shared_band_limit(&mut f, &both);
+    assert!(
+        f[0].evidence.contains("44.0 Hz against 40.0 Hz"),
+        "{}",
+        f[0].evidence
+    );
+    // One block only: said not found on the other where the other was diagnosed, nothing where
+    // it was not (a gyro-only recording).
+    let mut f = vec![band_limit_finding(Block::Gyro, 1, false, 40.0, 0.3)];
+    super::workflow::say_shared_band_limit(&mut f, &both);
+    assert!(
+        f[0].evidence.contains("not found on the other block"),
+        "{}",
+        f[0].evidence
+    );
+    let mut f = vec![band_limit_finding(Block::Gyro, 1, false, 40.0, 0.3)];
+    super::workflow::say_shared_band_limit(&mut f, &[Block::Gyro]);
+    assert!(f[0].evidence.is_empty(), "{}", f[0].evidence);
+}
+
 /// Outputs that are one broadband motion seen by all three channels at very different scales
 /// (the lever-arm motion above the reference's band limit reaches an accelerometer's vertical and
 /// lateral channels, hardly its forward one), plus each channel's small noise of its own.

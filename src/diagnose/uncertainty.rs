@@ -38,6 +38,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::band_limit::BandLimitShape;
 use super::fit::{pack, unpack};
 use super::profile::{group_shares, normal_equations};
 use super::state::State;
@@ -210,6 +211,7 @@ fn sandwich_widening(
 struct Slots {
     skew: Option<usize>,
     lag: Option<usize>,
+    band_limit: Option<usize>,
     resonances: usize,
 }
 
@@ -217,11 +219,30 @@ fn slots(structure: &super::structure::Structure) -> Slots {
     let skew = structure.skew.then_some(1);
     let after_skew = 1 + 2 * usize::from(structure.skew);
     let lag = structure.lag.then_some(after_skew);
+    let after_lag = after_skew + usize::from(structure.lag);
     Slots {
         skew,
         lag,
-        resonances: after_skew + usize::from(structure.lag),
+        band_limit: structure.band_limit.map(|_| after_lag),
+        resonances: after_lag + usize::from(structure.band_limit.is_some()),
     }
+}
+
+/// The band limit's deviations (`T_s`, `corner_hz`, `gain_rise_at_band_top` at `top_hz`) from
+/// `cov`, `T` at nonlinear slot `at` (ms). The corner `1 / (2 pi T)` moves by `-1 / (2 pi T^2)`
+/// per s of `T` (no corner, and no deviation, at `T = 0`); the rise by its slope, by central
+/// difference.
+fn band_limit_std(shape: BandLimitShape, t: f64, top_hz: f64, cov: Option<&Covariance>, at: usize) -> Value {
+    let n = cov.map_or(0, |c| c.n_linear);
+    let h = 1e-3 * t.max(1e-6);
+    let slope =
+        (shape.rise_at(t + h, top_hz) - shape.rise_at((t - h).max(0.0), top_hz)) / (t + h - (t - h).max(0.0));
+    let corner = -1.0 / (std::f64::consts::TAU * t * t);
+    json!({
+        "T_s": cov.and_then(|c| c.nonlinear_std(at)).map(|v| v * 1e-3),
+        "corner_hz": cov.and_then(|c| c.std_of(&[(n + at, corner * 1e-3)])).filter(|_| t > 0.0),
+        "gain_rise_at_band_top": cov.and_then(|c| c.std_of(&[(n + at, slope * 1e-3)])),
+    })
 }
 
 /// Standard deviation of the delay `tau`, s.
@@ -248,6 +269,13 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
         }
         Effect::SensorLag | Effect::ReferenceLag => {
             json!({"T_s": slot.lag.and_then(|k| cov?.nonlinear_std(k)).map(|v| v * 1e-3)})
+        }
+        Effect::ReferenceBandLimit => {
+            let (Some(at), Some(shape)) = (slot.band_limit, f.structure.band_limit) else {
+                return Value::Null;
+            };
+            let top = state.design.frequency_hz.last().copied().unwrap_or(0.0);
+            band_limit_std(shape, f.theta.band_limit_t_s, top, cov, at)
         }
         Effect::AxisTimeSkew => {
             let Some(a) = slot.skew else { return Value::Null };
@@ -346,7 +374,10 @@ fn effective_channels(
 mod tests {
     use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 
-    use super::{TAPER_VARIANCE, sandwich_widening};
+    use super::{Covariance, TAPER_VARIANCE, band_limit_std, sandwich_widening, slots};
+    use crate::diagnose::band_limit::BandLimitShape;
+    use crate::diagnose::fit::pack;
+    use crate::diagnose::structure::{Structure, Theta};
     use crate::rng::Rng;
 
     /// Least squares on 800 groups (a design's count) weighted as if the noise were white;
@@ -461,5 +492,52 @@ mod tests {
             "{}",
             m4 / (m2 * m2)
         );
+    }
+
+    #[test]
+    fn each_nonlinear_slot_holds_its_own_parameter() {
+        let structure = Structure {
+            skew: true,
+            lag: true,
+            band_limit: Some(BandLimitShape::Causal2),
+            resonance_axes: vec![1, 2],
+            ..Structure::default()
+        };
+        let theta = Theta {
+            tau_s: 4e-3,
+            skew_s: [0.3e-3, -0.1e-3],
+            lag_s: 2e-3,
+            band_limit_t_s: 3e-3,
+            resonances: vec![(20.0, 0.05), (30.0, 0.2)],
+        };
+        let (x, _) = pack(&structure, &theta);
+        let slot = slots(&structure);
+        assert_eq!(x.len(), 1 + structure.n_nonlinear_extra());
+        assert!((x[slot.skew.expect("skew")] - 0.3).abs() < 1e-12);
+        assert!((x[slot.lag.expect("lag")] - 2.0).abs() < 1e-12);
+        assert!((x[slot.band_limit.expect("band limit")] - 3.0).abs() < 1e-12);
+        assert!((x[slot.resonances] - 20.0).abs() < 1e-12);
+        assert!((x[slot.resonances + 2] - 30.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_band_limits_deviations_follow_its_time_constants() {
+        // T = 2 ms with 0.1 ms of deviation (slot 1, ms units, after two linear parameters).
+        let matrix = DMatrix::from_diagonal(&DVector::from_column_slice(&[1.0, 1.0, 0.04, 0.01]));
+        let cov = Covariance { matrix, n_linear: 2 };
+        let (t, sd_t, top) = (2e-3, 0.1e-3, 30.0);
+        let v = band_limit_std(BandLimitShape::ZeroPhase { order: 1 }, t, top, Some(&cov), 1);
+        let read = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+        assert!((read("T_s") - sd_t).abs() < 1e-12, "{v}");
+        // sd(f_c) = sd(T) / (2 pi T^2).
+        let corner = sd_t / (std::f64::consts::TAU * t * t);
+        assert!((read("corner_hz") / corner - 1.0).abs() < 1e-9, "{v}");
+        // d/dT sqrt(1 + (w T)^2) = w^2 T / sqrt(1 + (w T)^2).
+        let w = std::f64::consts::TAU * top;
+        let rise = w * w * t / (1.0 + (w * t).powi(2)).sqrt() * sd_t;
+        assert!((read("gain_rise_at_band_top") / rise - 1.0).abs() < 1e-5, "{v}");
+        // No corner's deviation at T = 0.
+        let v = band_limit_std(BandLimitShape::Causal2, 0.0, top, Some(&cov), 1);
+        assert!(v["corner_hz"].is_null(), "{v}");
     }
 }

@@ -80,7 +80,7 @@ pub fn applies(state: &State, usable: [f64; 2]) -> bool {
 /// model then has no deviations over that band, and the finding rests on the band above.
 fn at_bound(effect: Effect, there: &serde_json::Value) -> Option<(String, f64)> {
     let (key, floor) = match effect {
-        Effect::SensorLag | Effect::ReferenceLag => ("T_s", MIN_LAG_S),
+        Effect::SensorLag | Effect::ReferenceLag | Effect::ReferenceBandLimit => ("T_s", MIN_LAG_S),
         Effect::PlatformResonance => ("damping", MIN_DAMPING),
         _ => return None,
     };

@@ -3,9 +3,11 @@
 //! (`diagnose::extend`). A block model that carries them has `K`, `tau_s` and their standard
 //! deviations from that joint fit, `order` 0, and its response ([`super::BlockModel::response`])
 //! includes the effects that are filters:
-//! `H_ij(s) = e^(-(tau + skew_i) s) / (T s + 1) K_ij M_j(s)`, `M_j` a mount resonance on input
-//! axis `j`. The others (g-sensitivity, quadratic scale factor, lever-arm offset, tones, clock
-//! drift) are terms beside the response, sized in `accepted`. Where none of the accepted
+//! `H_ij(s) = e^(-(tau + skew_i) s) / (T s + 1) K_ij M_j(s) / H(s)`, `M_j` a mount resonance on
+//! input axis `j`, `H` the stand's angle-measurement low-pass where `reference_band_limit` was
+//! accepted (the response is then the one against this stand's angles). The others
+//! (g-sensitivity, quadratic scale factor, lever-arm offset, tones, clock drift) are terms beside
+//! the response, sized in `accepted`. Where none of the accepted
 //! effects could be added ([`ModelEffects::extends`] false), the block's model is the identified
 //! one and these only list them under `not_added`: `identified` repeats the model, the response's
 //! terms are empty and `chi2_per_dof` and `gap_db` hold the whole-record fit without effects
@@ -18,6 +20,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use super::band_limit::FittedBandLimit;
 use crate::effect::Effect;
 
 /// One accepted effect with its size.
@@ -73,6 +76,10 @@ pub struct ModelEffects {
     /// Mount resonances.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub resonances: Vec<Resonance>,
+    /// The stand's angle-measurement low-pass (`reference_band_limit`), whose inverse the
+    /// response then carries: the response against this stand's angles, not the sensor's own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_band_limit: Option<FittedBandLimit>,
     /// The identified model the effects extend.
     pub identified: Identified,
     /// The band of the whole-record fit, Hz.
@@ -115,7 +122,12 @@ impl ModelEffects {
                 *m *= w * w / (s * s + 2.0 * r.damping * w * s + w * w);
             }
         }
-        nalgebra::Matrix3::from_fn(|i, j| (-s * (tau_s + skew[i])).exp() * lag * k[i][j] * resonant[j])
+        let reference = self
+            .reference_band_limit
+            .map_or(Complex64::from(1.0), |r| r.shape.inverse_at(r.t_s, f_hz));
+        nalgebra::Matrix3::from_fn(|i, j| {
+            (-s * (tau_s + skew[i])).exp() * lag * reference * k[i][j] * resonant[j]
+        })
     }
 
     /// The poles the effects give the response, `[re, im]` rad/s (the lag's, each resonance's

@@ -17,6 +17,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+pub mod band_limit;
 pub mod effects;
 pub mod refused;
 pub mod validation;

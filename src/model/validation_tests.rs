@@ -171,6 +171,7 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
         lag_s: None,
         channel_skew_s: None,
         resonances: Vec::new(),
+        reference_band_limit: None,
         identified: Identified {
             k: K,
             tau_s: 0.046,
@@ -203,6 +204,7 @@ fn effects_that_add_nothing_leave_the_identified_response() {
         lag_s: None,
         channel_skew_s: None,
         resonances: Vec::new(),
+        reference_band_limit: None,
         identified: Identified {
             k: K,
             tau_s,

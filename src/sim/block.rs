@@ -282,8 +282,9 @@ pub fn draw_effect(
             time_constant_s: scale * 4e-3 * rng.uniform_in(0.8, 1.25),
         },
         // Stand side: not a sensor effect, never drawn (`EffectSpec` parses only `Effect::ALL`;
-        // the stand's lag is `--stand real` / `--angle-latency`). A zero lag changes nothing.
-        Effect::ReferenceLag => EffectTruth::SensorLag { time_constant_s: 0.0 },
+        // the stand's lag and band limit are `--stand real`, `--angle-latency`, `--angle-band-hz`,
+        // `--angle-filter-hz`, `--angle-rate-hz`). A zero lag changes nothing.
+        Effect::ReferenceLag | Effect::ReferenceBandLimit => EffectTruth::SensorLag { time_constant_s: 0.0 },
         Effect::AxisTimeSkew => {
             let mut d = [0.0, 1.2e-3, 0.8e-3].map(|v| scale * v * sign(rng));
             d.rotate_left((rng.next_u64() % 3) as usize);

@@ -1,0 +1,122 @@
+//! The stand's band limit as the diagnosis fits it ([`Effect::ReferenceBandLimit`]): the angle
+//! measurement passed through a low-pass `H(s)` (a motion-capture reference interpolated from a
+//! slower rate, a zero-phase band limit, a tracker's or an encoder's own filter), so every input
+//! computed from the angles is `H u` and the block's outputs, `K e^(-tau s) u`, read as
+//! `K e^(-tau s) u_measured / H(s)` against them. Both blocks see the same `H`; no sensor's own
+//! response rises over its input with no phase of its own or with a filter's lead, so a rise of
+//! these forms is the stand's.
+//!
+//! `1 / H` is searched in one of a few shapes, each with one time constant `T` (corner
+//! `f_c = 1 / (2 pi T)`):
+//! - [`BandLimitShape::ZeroPhase`] of order `m`: `sqrt(1 + (w T)^(2m))`, an inverse Butterworth
+//!   magnitude with no phase (`m = 1` takes linear interpolation from a rate `f_r`, whose
+//!   `1 / sinc^2(f / f_r)` is `1 + w^2 / (12 f_r^2)` at low frequency: `T = 1 / (sqrt(6) f_r)`;
+//!   `m = 2, 4, 8` the steeper droops of splines and symmetric band limits);
+//! - [`BandLimitShape::Causal2`]: `1 + sqrt(2) s T + (s T)^2`, the inverse of a causal
+//!   second-order Butterworth: the angles lag the motion by its group delay `sqrt(2) T`, and the
+//!   block's delay with it is the delay against the motion, that much later than the delay-only
+//!   model's against the angles.
+//!
+//! A first-order causal filter is a lag of the inputs, the lag candidate's
+//! ([`Effect::ReferenceLag`] when both blocks share it). Each shape is a candidate of its own
+//! (as each axis's resonance is) with one parameter, `T`.
+//!
+//! Units: `T` in s, `omega` in rad/s, frequencies in Hz. Non-finite or non-positive band tops
+//! give no candidate.
+
+use std::f64::consts::PI;
+
+use super::candidates::{Candidate, structural};
+use super::design::WINDOW_ENBW;
+use super::fit::{cost_at, fit};
+use super::report::Finding;
+use super::state::State;
+use crate::effect::Effect;
+pub use crate::model::band_limit::BandLimitShape;
+
+/// The rises at the band's top each shape's search starts from (the best of them).
+const START_RISES: [f64; 3] = [0.005, 0.02, 0.08];
+
+/// The candidates, one per shape: each from the best of a few starting points (by their rise at
+/// the band's top), fitted. Each shape is a candidate of its own, so the search's look-elsewhere
+/// cost counts every shape tried (on perfect simulated stands the best of the shapes, one
+/// parameter each, came within a few units of chi2 of the threshold on 2 of 54 runs when
+/// counted as one).
+pub(super) fn band_limit_candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
+    let current = &state.fitted;
+    let top = band_hz[1];
+    if !(top.is_finite() && top > 0.0) {
+        return Vec::new();
+    }
+    BandLimitShape::SHAPES
+        .into_iter()
+        .filter_map(|shape| {
+            let mut s = current.structure.clone();
+            s.band_limit = Some(shape);
+            let start = START_RISES
+                .into_iter()
+                .map(|rise| {
+                    // |1/H| = 1 + rise at the top for the shape's order (the causal shape's
+                    // magnitude is the order-2 zero-phase one).
+                    let m = f64::from(shape.order());
+                    let x = ((1.0 + rise).powi(2) - 1.0).powf(1.0 / (2.0 * m));
+                    let mut theta = current.theta.clone();
+                    theta.band_limit_t_s = x / (2.0 * PI * top);
+                    theta.tau_s += shape.group_delay_s(theta.band_limit_t_s);
+                    (cost_at(&state.design, &state.grams, &s, &theta), theta)
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))?
+                .1;
+            structural(
+                Effect::ReferenceBandLimit,
+                state,
+                fit(&state.design, &state.grams, &s, &start, band_hz),
+            )
+        })
+        .collect()
+}
+
+/// The finding's band limit (its shape and `T`, over the band searched where it was sized over
+/// another), `None` for another effect or unreadable parameters.
+fn found_shape(f: &Finding) -> Option<(BandLimitShape, f64)> {
+    if f.effect != Effect::ReferenceBandLimit {
+        return None;
+    }
+    let p = f.search_band.as_ref().map_or(&f.parameters, |s| &s["parameters"]);
+    let order = i32::try_from(p.get("order")?.as_i64()?).ok()?;
+    let shape = if p.get("causal")?.as_bool()? {
+        BandLimitShape::Causal2
+    } else {
+        BandLimitShape::ZeroPhase { order }
+    };
+    Some((shape, p.get("T_s")?.as_f64()?))
+}
+
+/// How much the band limit of finding `f` (found on one block) improves the other block's model
+/// `other` (its final model over its own band, with its own findings), in `chi2`: the other
+/// block sees the same angles, so the stand's band limit must not make its fit worse. The linear
+/// parameters are re-solved and the delay searched again (a causal shape moves it by its group
+/// delay), the other nonlinear parameters kept. `None` where `f` is no band limit, the other
+/// block holds a band limit of its own (the two are compared in words, not refused), or no cost
+/// is finite.
+pub(super) fn gain_on_other_block(f: &Finding, other: &State) -> Option<f64> {
+    let (shape, t) = found_shape(f)?;
+    let current = &other.fitted;
+    if current.structure.band_limit.is_some() {
+        return None;
+    }
+    let mut structure = current.structure.clone();
+    structure.band_limit = Some(shape);
+    let mut theta = current.theta.clone();
+    theta.band_limit_t_s = t;
+    let start = current.theta.tau_s + shape.group_delay_s(t);
+    let mut at_delay = |x: &[f64]| {
+        let mut th = theta.clone();
+        th.tau_s = x[0] * 1e-3;
+        cost_at(&other.design, &other.grams, &structure, &th)
+    };
+    let (x, cost) = super::simplex::minimise(&mut at_delay, &[start * 1e3], &[0.05], 1e-7, 80);
+    let cost = if cost.is_finite() { cost } else { at_delay(&x) };
+    let gain = 2.0 * (current.profile.cost - cost) / WINDOW_ENBW;
+    gain.is_finite().then_some(gain)
+}

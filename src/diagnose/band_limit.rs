@@ -29,7 +29,6 @@ use std::f64::consts::PI;
 use super::candidates::{Candidate, structural};
 use super::design::WINDOW_ENBW;
 use super::fit::{cost_at, fit};
-use super::report::Finding;
 use super::state::State;
 use crate::effect::Effect;
 pub use crate::model::band_limit::BandLimitShape;
@@ -76,31 +75,16 @@ pub(super) fn band_limit_candidates(state: &State, band_hz: [f64; 2]) -> Vec<Can
         .collect()
 }
 
-/// The finding's band limit (its shape and `T`, over the band searched where it was sized over
-/// another), `None` for another effect or unreadable parameters.
-fn found_shape(f: &Finding) -> Option<(BandLimitShape, f64)> {
-    if f.effect != Effect::ReferenceBandLimit {
-        return None;
-    }
-    let p = f.search_band.as_ref().map_or(&f.parameters, |s| &s["parameters"]);
-    let order = i32::try_from(p.get("order")?.as_i64()?).ok()?;
-    let shape = if p.get("causal")?.as_bool()? {
-        BandLimitShape::Causal2
-    } else {
-        BandLimitShape::ZeroPhase { order }
-    };
-    Some((shape, p.get("T_s")?.as_f64()?))
-}
-
-/// How much the band limit of finding `f` (found on one block) improves the other block's model
-/// `other` (its final model over its own band, with its own findings), in `chi2`: the other
+/// How much the band limit in one block's final model `own` (over the band searched, where it
+/// was found) improves the other block's final model `other` (over its own band, with its own
+/// findings), in `chi2`: the other
 /// block sees the same angles, so the stand's band limit must not make its fit worse. The linear
 /// parameters are re-solved and the delay searched again (a causal shape moves it by its group
-/// delay), the other nonlinear parameters kept. `None` where `f` is no band limit, the other
-/// block holds a band limit of its own (the two are compared in words, not refused), or no cost
-/// is finite.
-pub(super) fn gain_on_other_block(f: &Finding, other: &State) -> Option<f64> {
-    let (shape, t) = found_shape(f)?;
+/// delay), the other nonlinear parameters kept. `None` where `own` holds no band limit, the other
+/// block holds one of its own (the two are compared in words, not refused), or no cost is finite.
+pub(super) fn gain_on_other_block(own: &State, other: &State) -> Option<f64> {
+    let shape = own.fitted.structure.band_limit?;
+    let t = own.fitted.theta.band_limit_t_s;
     let current = &other.fitted;
     if current.structure.band_limit.is_some() {
         return None;
@@ -115,8 +99,7 @@ pub(super) fn gain_on_other_block(f: &Finding, other: &State) -> Option<f64> {
         th.tau_s = x[0] * 1e-3;
         cost_at(&other.design, &other.grams, &structure, &th)
     };
-    let (x, cost) = super::simplex::minimise(&mut at_delay, &[start * 1e3], &[0.05], 1e-7, 80);
-    let cost = if cost.is_finite() { cost } else { at_delay(&x) };
+    let (_, cost) = super::simplex::minimise(&mut at_delay, &[start * 1e3], &[0.05], 1e-7, 80);
     let gain = 2.0 * (current.profile.cost - cost) / WINDOW_ENBW;
     gain.is_finite().then_some(gain)
 }

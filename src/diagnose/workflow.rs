@@ -470,12 +470,13 @@ fn set_aside_contradicted_band_limits(
     let mut k = 0;
     while k < findings.len() {
         let f = &findings[k];
-        let other = finals
+        let own = finals
             .iter()
-            .find(|(b, _, _)| *b != f.block)
+            .find(|(b, _, _)| *b == f.block)
             .filter(|_| f.effect == Effect::ReferenceBandLimit);
-        let verdict = other.and_then(|(b, dof, state)| {
-            super::band_limit::gain_on_other_block(f, state).map(|g| (*b, *dof, g))
+        let other = finals.iter().find(|(b, _, _)| *b != f.block);
+        let verdict = own.zip(other).and_then(|((_, _, own), (b, dof, state))| {
+            super::band_limit::gain_on_other_block(own, state).map(|g| (*b, *dof, g))
         });
         match verdict {
             Some((other_block, dof, gain)) if gain < -dof.ln() => {

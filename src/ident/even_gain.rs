@@ -178,6 +178,7 @@ pub fn over_even_gain(
             rise_std,
             outputs,
             k_relative_std,
+            largest_change,
             band_hz,
             ..
         } => IdentWarning::GainChangesAcrossBand {
@@ -186,6 +187,7 @@ pub fn over_even_gain(
             k_bias: applied,
             outputs,
             k_relative_std,
+            largest_change,
             band_hz,
             k_at_low_frequency: true,
         },

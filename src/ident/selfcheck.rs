@@ -53,7 +53,7 @@ use super::signals::channel_names;
 use super::spectra::BlockSpectra;
 use super::structural::gain_delay::DELAY_REACH_S;
 use super::structural::{StructuralFit, StructuralSettings};
-use super::warnings::IdentWarning;
+use super::warnings::{ElementChange, IdentWarning};
 use super::wiener::WienerEstimate;
 use crate::block::Block;
 
@@ -123,7 +123,8 @@ pub fn chi2_per_bin(
 /// The gain-curvature check (module docs, [`gain_curvature`]) on the band's `bins`
 /// ([`band_bins`]): the common even gain of the chosen model's residual; said when its rise
 /// across the band is beyond [`CURVATURE_SIGMAS`] of its deviation and the bias it gives a row of
-/// `K` exceeds `K`'s relative deviation.
+/// `K` exceeds `K`'s relative deviation, or the change it gives an element of `K` exceeds that
+/// element's own deviation.
 #[must_use]
 pub fn gain_changes(
     block: Block,
@@ -136,15 +137,30 @@ pub fn gain_changes(
     let k_relative_std = norm(&fit.k_std) / norm(&fit.k);
     let k_bias = c.row_bias;
     let largest = k_bias.iter().fold(0.0, |m: f64, b| m.max(b.abs()));
-    let said = c.rise().abs() > CURVATURE_SIGMAS * c.rise_std() && largest > k_relative_std;
+    // The element the change moves furthest against its own deviation: a row's scale measured
+    // against the whole `K`'s relative deviation is blind to a well-determined row beside
+    // poorly determined off-diagonals (an accelerometer's z row behind a 500 Hz reference: its
+    // rise 9 deviations, `K_zz` 3.7 of its own off, the row's scale below `K`'s 0.15 %).
+    let (inputs, output_names) = channel_names(block);
+    let (sigmas, (i, j)) = (0..9)
+        .map(|e| (e / 3, e % 3))
+        .filter(|&(i, j)| fit.k_std[i][j] > 0.0 && c.row_change[i][j].is_finite())
+        .map(|(i, j)| (c.row_change[i][j].abs() / fit.k_std[i][j], (i, j)))
+        .fold((0.0, (0, 0)), |best, x| if x.0 > best.0 { x } else { best });
+    let said = c.rise().abs() > CURVATURE_SIGMAS * c.rise_std() && (largest > k_relative_std || sigmas > 1.0);
     let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
     said.then(|| {
         let warning = IdentWarning::GainChangesAcrossBand {
             rise: c.rise(),
             rise_std: c.rise_std(),
             k_bias,
-            outputs: channel_names(block).1.map(str::to_owned),
+            outputs: output_names.map(str::to_owned),
             k_relative_std,
+            largest_change: ElementChange {
+                output: output_names[i].to_owned(),
+                input: inputs[j].to_owned(),
+                sigmas,
+            },
             band_hz: [to_hz(c.omega_range[0]), to_hz(c.omega_range[1])],
             k_at_low_frequency: false,
         };

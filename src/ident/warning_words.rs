@@ -3,6 +3,8 @@
 
 use std::fmt;
 
+use super::warnings::ElementChange;
+
 /// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
 fn relative(x: f64) -> String {
     if x.abs() >= 1e-4 {
@@ -56,9 +58,22 @@ pub(super) fn gain_change_words(
     k_bias: &[f64; 3],
     outputs: &[String; 3],
     k_relative_std: f64,
+    largest: &ElementChange,
     band_hz: [f64; 2],
     k_at_low_frequency: bool,
 ) -> String {
+    // Model files written before the element was said have none: the relative deviation alone.
+    let deviation = if largest.output.is_empty() {
+        format!("K's deviation ({})", relative(k_relative_std))
+    } else {
+        format!(
+            "K's deviations (K's relative deviation {}; K[{}][{}] moves by {:.1} of its own)",
+            relative(k_relative_std),
+            largest.output,
+            largest.input,
+            largest.sigmas
+        )
+    };
     let rows: Vec<String> = k_bias
         .iter()
         .zip(outputs)
@@ -73,18 +88,16 @@ pub(super) fn gain_change_words(
     let what = if k_at_low_frequency {
         format!(
             "the delay-only fit's K, the band's mean gain, read its rows about {} off the gain at \
-             low frequency, more than K's deviation ({}): the block is fitted again over the even \
+             low frequency, more than {deviation}: the block is fitted again over the even \
              gain, K is given at low frequency (its deviations not below the delay-only fit's) and \
              the model carries the change; a lower band top lessens it",
             rows.join(", "),
-            relative(k_relative_std)
         )
     } else {
         format!(
             "K is the band's mean gain, and its rows read about {} off the gain at low \
-             frequency, more than K's deviation ({}): a lower band top lessens it",
+             frequency, more than {deviation}: a lower band top lessens it",
             rows.join(", "),
-            relative(k_relative_std)
         )
     };
     format!(

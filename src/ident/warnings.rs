@@ -60,6 +60,18 @@ pub const OVERLAP_LOSS_SAID: f64 = 1e-3;
 /// upper one (it holds the gyro's own noise too) and a median over the band.
 pub const ANGLE_NOISE_OVERSTATED: f64 = 2.0;
 
+/// The element of `K` a change moves furthest against its own deviation
+/// (`gain_changes_across_band`): its output and input channels and the change in its deviations.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ElementChange {
+    /// The output channel (`K`'s row).
+    pub output: String,
+    /// The input channel (`K`'s column).
+    pub input: String,
+    /// The change over the element's standard deviation, unsigned.
+    pub sigmas: f64,
+}
+
 /// One warning of a block's identification.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -113,6 +125,10 @@ pub enum IdentWarning {
         outputs: [String; 3],
         /// `K`'s own relative deviation, `||K_std||_F / ||K||_F`.
         k_relative_std: f64,
+        /// The element of `K` the change moves furthest against its own deviation (absent in
+        /// model files written before it was said).
+        #[serde(default)]
+        largest_change: ElementChange,
         /// The band, Hz.
         band_hz: [f64; 2],
         /// Whether the model's `K` is the gain at low frequency (the block fitted again over the
@@ -471,6 +487,7 @@ impl fmt::Display for IdentWarning {
                 k_bias,
                 outputs,
                 k_relative_std,
+                largest_change,
                 band_hz,
                 k_at_low_frequency,
             } => f.write_str(&gain_change_words(
@@ -479,6 +496,7 @@ impl fmt::Display for IdentWarning {
                 k_bias,
                 outputs,
                 *k_relative_std,
+                largest_change,
                 *band_hz,
                 *k_at_low_frequency,
             )),

@@ -384,3 +384,47 @@ fn an_extended_model_gives_its_own_gain_without_the_even_gain() {
     let f = gyro.band_hz[1];
     assert_eq!(gyro.response(f), e.response(&gyro.k, gyro.tau_s, f));
 }
+
+/// A band limit accepted on a run without one fits at its bound (`T = 0`, where its gain moves
+/// as `T^(2n)`, no curvature, and a step below leaves its range): it is held there, and `K`'s
+/// and the delay's deviations are those of the model given it. Before, that one parameter left
+/// every deviation of both blocks `null` in the model file (cruise, 120 s: all four runs of a
+/// campaign's clean cruise seeds).
+#[test]
+fn a_band_limit_at_its_bound_leaves_the_other_deviations_determined() {
+    let mut at_bound = 0;
+    for (regime, seed) in [(Regime::Cruise, 11), (Regime::Cruise, 12), (Regime::Approach, 13)] {
+        let (_, run) = simulated_run_of(120.0, regime, seed, &[]);
+        let bare = extend(run.clone(), &[]);
+        let model = extend(
+            run,
+            &[
+                (Block::Gyro, Effect::ReferenceBandLimit),
+                (Block::Accel, Effect::ReferenceBandLimit),
+            ],
+        );
+        for (name, b) in &model.blocks {
+            let accepted = &b.effects.as_ref().expect("effects").accepted[0];
+            let t = accepted.parameters["T_s"].as_f64().expect("T");
+            let t_std = accepted.parameter_std["T_s"].as_f64();
+            eprintln!("{regime:?} {seed} {name}: T {t:e} +- {t_std:?}");
+            at_bound += usize::from(t_std.is_none());
+            let reference = &bare.blocks[name].fit;
+            for i in 0..3 {
+                for j in 0..3 {
+                    let sd = b.fit.k_std[i][j].expect("K's deviation");
+                    let bare_sd = reference.k_std[i][j].expect("K's deviation");
+                    // Of the bare model's size (the extended fit's deviations are the diagnosis's
+                    // covariance, not the identifier's widenings: 0.50-1.90 of them measured).
+                    assert!(
+                        sd > 0.3 * bare_sd && sd < 5.0 * bare_sd,
+                        "{name} K[{i}][{j}] {sd} against {bare_sd}"
+                    );
+                }
+            }
+            let tau_sd = b.fit.tau_std_s.expect("tau's deviation");
+            assert!(tau_sd > 0.0 && tau_sd.is_finite());
+        }
+    }
+    assert!(at_bound > 0, "no band limit at its bound: the test tests nothing");
+}

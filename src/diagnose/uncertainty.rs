@@ -92,7 +92,10 @@ impl Covariance {
 }
 
 /// The covariance of `state`'s fitted parameters, widened by `chi2_per_dof` when above 1.
-/// `None` when the Hessian is not positive definite or a step leaves the physical range.
+/// A nonlinear parameter the cost does not curve in is held at its value (its row and column
+/// NaN, the others' covariance conditional on it). `None` when a linear parameter has no
+/// curvature, the Hessian of the others is not positive definite, or a step leaves the physical
+/// range.
 #[must_use]
 pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option<Covariance> {
     let f = &state.fitted;
@@ -119,15 +122,24 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
         x
     };
     let c0 = cost(&x0)?;
+    // A step that leaves the physical range (a band limit's `T` at its bound 0) holds that
+    // parameter: its diagonal stays 0 (below).
+    let mut held = vec![false; q];
     for a in 0..q {
         let (up, down) = (shifted(&[(a, hs[a])]), shifted(&[(a, -hs[a])]));
-        let mixed = (gradient(&up)? - gradient(&down)?) / (2.0 * hs[a]);
+        let (Some(g_up), Some(g_down), Some(c_up), Some(c_down)) =
+            (gradient(&up), gradient(&down), cost(&up), cost(&down))
+        else {
+            held[a] = true;
+            continue;
+        };
+        let mixed = (g_up - g_down) / (2.0 * hs[a]);
         for k in 0..p {
             h[(k, p + a)] = mixed[k];
             h[(p + a, k)] = mixed[k];
         }
-        h[(p + a, p + a)] = (cost(&up)? - 2.0 * c0 + cost(&down)?) / (hs[a] * hs[a]);
-        for b in 0..a {
+        h[(p + a, p + a)] = (c_up - 2.0 * c0 + c_down) / (hs[a] * hs[a]);
+        for b in (0..a).filter(|&b| !held[b]) {
             let corner = |sa: f64, sb: f64| cost(&shifted(&[(a, sa * hs[a]), (b, sb * hs[b])]));
             let v = (corner(1.0, 1.0)? - corner(1.0, -1.0)? - corner(-1.0, 1.0)? + corner(-1.0, -1.0)?)
                 / (4.0 * hs[a] * hs[b]);
@@ -135,44 +147,88 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
             h[(p + b, p + a)] = v;
         }
     }
-    // Scale to unit diagonal before inverting: K (near 1) and k2 (1e-3) differ by orders.
+    // A nonlinear parameter the cost does not curve in, or that sits at a bound of its range (a
+    // band limit fitted at `T = 0`, whose gain moves as `T^(2n)` there) is held at its value: the others' covariance is the one given
+    // it (conditional), and its own is undetermined (`None`). Before, one such parameter left
+    // every deviation of the model undetermined, `K`'s and the delay's too. A linear parameter
+    // with no curvature leaves the model undetermined, as before.
     let d: Vec<f64> = (0..p + q).map(|k| h[(k, k)]).collect();
-    if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+    let curved = |k: usize| d[k].is_finite() && d[k] > 0.0 && (k < p || !held[k - p]);
+    if (0..p).any(|k| !curved(k)) {
         return None;
     }
-    let s = DVector::from_iterator(p + q, d.iter().map(|v| 1.0 / v.sqrt()));
-    let scaled = DMatrix::from_fn(p + q, p + q, |i, j| h[(i, j)] * s[i] * s[j]);
+    let keep: Vec<usize> = (0..p + q).filter(|&k| curved(k)).collect();
+    let n = keep.len();
+    let h = DMatrix::from_fn(n, n, |i, j| h[(keep[i], keep[j])]);
+    let reduced = reduced_covariance(
+        &h,
+        chi2_per_dof,
+        |x: &[f64]| {
+            let theta = unpack(structure, x, band_hz)?;
+            let shares = group_shares(design, grams, structure, layout, &theta, &beta);
+            (!shares.is_empty()).then_some(shares)
+        },
+        &x0,
+        &hs,
+        &keep,
+        p,
+    )?;
+    // Back to every parameter's place, NaN where held.
+    let mut matrix = DMatrix::from_element(p + q, p + q, f64::NAN);
+    for (i, &a) in keep.iter().enumerate() {
+        for (j, &b) in keep.iter().enumerate() {
+            matrix[(a, b)] = reduced[(i, j)];
+        }
+    }
+    Some(Covariance { matrix, n_linear: p })
+}
+
+/// The covariance of the parameters `keep` (all linear ones first, then the curved nonlinear
+/// ones, in `fit::pack`'s order) from their Hessian `h`, widened by `chi2_per_dof` and the
+/// sandwich. `shares_at(x)` gives each group's cost and linear scores at packed `x`; the
+/// nonlinear scores are their central differences at the steps `hs` around `x0`.
+fn reduced_covariance(
+    h: &DMatrix<f64>,
+    chi2_per_dof: f64,
+    shares_at: impl Fn(&[f64]) -> Option<Vec<(f64, DVector<f64>)>>,
+    x0: &[f64],
+    hs: &[f64],
+    keep: &[usize],
+    p: usize,
+) -> Option<DMatrix<f64>> {
+    let n = h.nrows();
+    // Scale to unit diagonal before inverting: K (near 1) and k2 (1e-3) differ by orders.
+    let s = DVector::from_iterator(n, (0..n).map(|k| 1.0 / h[(k, k)].sqrt()));
+    let scaled = DMatrix::from_fn(n, n, |i, j| h[(i, j)] * s[i] * s[j]);
     let inverse = scaled.cholesky()?.inverse();
     let factor = TAPER_VARIANCE * chi2_per_dof.max(1.0);
-    let mut matrix = DMatrix::from_fn(p + q, p + q, |i, j| factor * inverse[(i, j)] * s[i] * s[j]);
+    let matrix = DMatrix::from_fn(n, n, |i, j| factor * inverse[(i, j)] * s[i] * s[j]);
     // The sandwich: where the misfit is not spread like the weights say (a real record's misfit
     // piles up where some regressors live), the scores' own spread is the honest variance.
-    let shares_at = |x: &[f64]| {
-        let theta = unpack(structure, x, band_hz)?;
-        let shares = group_shares(design, grams, structure, layout, &theta, &beta);
-        (!shares.is_empty()).then_some(shares)
+    let Some(at_x0) = shares_at(x0) else {
+        return Some(matrix);
     };
-    let Some(at_x0) = shares_at(&x0) else {
-        return Some(Covariance { matrix, n_linear: p });
+    let shifted = |k: usize, d: f64| {
+        let mut x = x0.to_vec();
+        x[k] += d;
+        x
     };
     let mut scores: Vec<DVector<f64>> = at_x0.iter().map(|(_, u)| -2.0 * u).collect();
-    for a in 0..q {
-        let (Some(up), Some(down)) = (
-            shares_at(&shifted(&[(a, hs[a])])),
-            shares_at(&shifted(&[(a, -hs[a])])),
-        ) else {
-            return Some(Covariance { matrix, n_linear: p });
+    for (row, &k) in keep.iter().enumerate().skip(p) {
+        let a = k - p;
+        let (Some(up), Some(down)) = (shares_at(&shifted(a, hs[a])), shares_at(&shifted(a, -hs[a]))) else {
+            return Some(matrix);
         };
         for (g, score) in scores.iter_mut().enumerate() {
             let slope = (up[g].0 - down[g].0) / (2.0 * hs[a]);
-            *score = score.clone().insert_row(p + a, slope);
+            *score = score.clone().insert_row(row, slope);
         }
     }
-    let bread = DMatrix::from_fn(p + q, p + q, |i, j| inverse[(i, j)] * s[i] * s[j]);
-    if let Some(widening) = sandwich_widening(&bread, &scores, &matrix) {
-        matrix = DMatrix::from_fn(p + q, p + q, |i, j| widening[i] * widening[j] * matrix[(i, j)]);
-    }
-    Some(Covariance { matrix, n_linear: p })
+    let bread = DMatrix::from_fn(n, n, |i, j| inverse[(i, j)] * s[i] * s[j]);
+    Some(match sandwich_widening(&bread, &scores, &matrix) {
+        Some(widening) => DMatrix::from_fn(n, n, |i, j| widening[i] * widening[j] * matrix[(i, j)]),
+        None => matrix,
+    })
 }
 
 /// Clusters of adjacent groups the sandwich's scores are summed over (many bins each, so the

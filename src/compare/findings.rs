@@ -188,6 +188,25 @@ fn over_like_bands(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
     }
 }
 
+/// Two band limits' shapes (`shape` and `order`) where they differ, in words: a time constant
+/// `T` is another figure in each shape (an interpolated reference's is its sample period, about
+/// `sqrt 6` times an order-1 shape's of the same rise), so their sizes are not compared.
+fn band_limit_shapes_differ(a: &Finding, b: &Finding) -> Option<String> {
+    if a.effect != Effect::ReferenceBandLimit {
+        return None;
+    }
+    let shape = |f: &Finding| {
+        let p = &f.parameters;
+        let name = p.get("shape").and_then(Value::as_str).unwrap_or("?").to_owned();
+        match p.get("order").and_then(Value::as_i64) {
+            Some(m) => format!("{name} order {m}"),
+            None => name,
+        }
+    };
+    let (sa, sb) = (shape(a), shape(b));
+    (sa != sb).then(|| format!("{sa} against {sb}"))
+}
+
 /// Every pair of runs `a < b`, every (block, effect) named on either, compared. `names` labels
 /// the runs in the words (their files); `findings[i]` is run `i`'s diagnosis's findings. Sizes
 /// are compared over like bands: where only one run's were fitted over its usable band
@@ -215,8 +234,12 @@ pub fn compare_findings(findings: &[&[Finding]], names: &[String]) -> Vec<Findin
                         (Some(_), None) => Presence::OnlyA,
                         _ => Presence::OnlyB,
                     };
+                    let other_shapes = match (fa.get(k), fb.get(k)) {
+                        (Some(x), Some(y)) => band_limit_shapes_differ(x, y),
+                        _ => None,
+                    };
                     let sizes = match (fa.get(k), fb.get(k)) {
-                        (Some(x), Some(y)) => over_like_bands(x, y),
+                        (Some(x), Some(y)) if other_shapes.is_none() => over_like_bands(x, y),
                         _ => Vec::new(),
                     };
                     let judged: Vec<bool> = sizes.iter().filter_map(|s| s.delta.significant).collect();
@@ -228,7 +251,13 @@ pub fn compare_findings(findings: &[&[Finding]], names: &[String]) -> Vec<Findin
                         effect: key.1,
                         runs: [a, b],
                         presence,
-                        words: words(presence, &sizes, [label(a), label(b)]),
+                        words: match &other_shapes {
+                            Some(shapes) => format!(
+                                "named on both, in other shapes ({shapes}): their time constants are not \
+                                 one figure, sizes not compared"
+                            ),
+                            None => words(presence, &sizes, [label(a), label(b)]),
+                        },
                         sizes,
                         consistent,
                     });

@@ -132,3 +132,39 @@ fn a_run_sized_over_its_usable_band_is_compared_over_the_band_searched_with_one_
     let out = compare_findings(&[&[plain], &searched], &names());
     assert_eq!(out[0].consistent, Some(false), "{}", out[0].words);
 }
+
+#[test]
+fn band_limits_of_other_shapes_are_not_compared_by_their_time_constants() {
+    let band_limit = |shape: Value, t: f64| {
+        let mut p = json!({ "T_s": t, "causal": false });
+        for (k, v) in shape.as_object().expect("shape") {
+            p[k] = v.clone();
+        }
+        finding(Effect::ReferenceBandLimit, p, json!({ "T_s": 1e-5 }))
+    };
+    // A 120 Hz reference read once as interpolated (T = 1 / 120 s), once as order 1 (T about
+    // sqrt 6 times shorter): 400 deviations apart as figures, one stand.
+    let interpolated = [band_limit(json!({ "shape": "interpolated" }), 1.0 / 120.0)];
+    let order_one = [band_limit(
+        json!({ "shape": "zero_phase", "order": 1 }),
+        1.0 / (6f64.sqrt() * 120.0),
+    )];
+    let out = compare_findings(&[&interpolated, &order_one], &names());
+    assert_eq!(out.len(), 1);
+    assert_eq!(out[0].presence, Presence::Both);
+    assert!(
+        out[0].sizes.is_empty() && out[0].consistent.is_none(),
+        "{:?}",
+        out[0]
+    );
+    assert!(
+        out[0].words.contains("interpolated against zero_phase order 1"),
+        "{}",
+        out[0].words
+    );
+    // The same shape: compared as before.
+    let again = [band_limit(json!({ "shape": "interpolated" }), 1.0 / 120.0 + 2e-5)];
+    let out = compare_findings(&[&interpolated, &again], &names());
+    assert_eq!(out[0].sizes.len(), 1);
+    assert_eq!(out[0].consistent, Some(true), "{}", out[0].words);
+}

@@ -114,35 +114,7 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
                 pm(sd1("T_s"), 1e3, 3)
             )]
         }),
-        Effect::ReferenceBandLimit => {
-            let rise = p.get("gain_rise_at_band_top").and_then(num);
-            let top = p.get("band_top_hz").and_then(num);
-            let corner = p.get("corner_hz").and_then(num);
-            let order = p.get("order").and_then(Value::as_i64);
-            let causal = p.get("causal").and_then(Value::as_bool);
-            match (rise, top, corner, order, causal) {
-                (Some(rise), Some(top), Some(corner), Some(m), Some(causal)) => {
-                    let mut lines = vec![format!(
-                        "the outputs rise over the inputs by {:.2}{} % at {top:.1} Hz: the angle measurement \
-                         through a {} order-{m} low-pass at {corner:.1}{} Hz (the inputs computed from it fall \
-                         short of the motion; the stand's, not the sensor's)",
-                        100.0 * rise,
-                        pm(sd1("gain_rise_at_band_top"), 100.0, 2),
-                        if causal { "causal" } else { "zero-phase" },
-                        pm(sd1("corner_hz"), 1.0, 1)
-                    )];
-                    if causal && corner > 0.0 {
-                        lines.push(format!(
-                            "the angles lag the motion by its group delay, {:.3} ms: the block's delay with it is \
-                             against the motion, that much later than against the angles",
-                            1e3 * std::f64::consts::SQRT_2 / (std::f64::consts::TAU * corner)
-                        ));
-                    }
-                    Some(lines)
-                }
-                _ => None,
-            }
-        }
+        Effect::ReferenceBandLimit => band_limit_size(p, &sd1),
         Effect::AxisTimeSkew => p.get("skew_s").and_then(three).map(|s| {
             vec![format!(
                 "channel delays relative to their mean, ms: {}",
@@ -259,6 +231,49 @@ pub fn size_within_noise(f: &Finding) -> bool {
 pub const SIZE_WITHIN_NOISE: &str = "its size is within two standard deviations of zero in every component: \
      the data show a misfit of this form, not a size to certify";
 
+/// A band limit's size in words ([`Effect::ReferenceBandLimit`]): the rise at the band's top and
+/// the low-pass it comes from (a Butterworth's order and corner, or the interpolated reference's
+/// rate); `None` where a figure is missing.
+fn band_limit_size(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>) -> Option<Vec<String>> {
+    let rise = p.get("gain_rise_at_band_top").and_then(num);
+    let top = p.get("band_top_hz").and_then(num);
+    let corner = p.get("corner_hz").and_then(num);
+    let order = p.get("order").and_then(Value::as_i64);
+    let causal = p.get("causal").and_then(Value::as_bool);
+    let rate = p.get("reference_rate_hz").and_then(num);
+    let (Some(rise), Some(top), Some(corner), Some(causal)) = (rise, top, corner, causal) else {
+        return None;
+    };
+    let through = match (order, rate) {
+        (Some(m), _) => format!(
+            "through a {} order-{m} low-pass at {corner:.1}{} Hz",
+            if causal { "causal" } else { "zero-phase" },
+            pm(sd1("corner_hz"), 1.0, 1)
+        ),
+        (None, Some(rate)) => format!(
+            "sampled at {rate:.1}{} Hz and interpolated linearly (sinc^2, corner {corner:.1} Hz; a \
+             motion-capture reference resampled)",
+            pm(sd1("reference_rate_hz"), 1.0, 1)
+        ),
+        (None, None) => return None,
+    };
+    let mut lines = vec![format!(
+        "the outputs rise over the inputs by {:.2}{} % at {top:.1} Hz: the angle measurement \
+         {through} (the inputs computed from it fall short of the motion; the stand's, not the \
+         sensor's)",
+        100.0 * rise,
+        pm(sd1("gain_rise_at_band_top"), 100.0, 2),
+    )];
+    if causal && corner > 0.0 {
+        lines.push(format!(
+            "the angles lag the motion by its group delay, {:.3} ms: the block's delay with it is \
+             against the motion, that much later than against the angles",
+            1e3 * std::f64::consts::SQRT_2 / (std::f64::consts::TAU * corner)
+        ));
+    }
+    Some(lines)
+}
+
 #[cfg(test)]
 mod tests {
     use serde_json::json;
@@ -268,6 +283,38 @@ mod tests {
 
     fn finding(block: Block, effect: Effect, parameters: Value) -> Finding {
         Finding::sized(block, effect, parameters, Value::Null)
+    }
+
+    #[test]
+    fn a_band_limit_is_said_in_its_own_shape() {
+        let interpolated = json!({
+            "T_s": 1.0 / 120.0, "shape": "interpolated", "causal": false, "band_top_hz": 38.0,
+            "gain_rise_at_band_top": 0.398, "corner_hz": 38.27, "reference_rate_hz": 120.0
+        });
+        let sd = json!({"T_s": 3e-5, "corner_hz": 0.14, "reference_rate_hz": 0.43, "gain_rise_at_band_top": 0.004});
+        let lines = describe_size(Block::Gyro, Effect::ReferenceBandLimit, &interpolated, &sd);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(
+            lines[0].contains("by 39.80 ± 0.40 % at 38.0 Hz")
+                && lines[0]
+                    .contains("sampled at 120.0 ± 0.4 Hz and interpolated linearly (sinc^2, corner 38.3 Hz"),
+            "{lines:?}"
+        );
+        let causal = json!({
+            "T_s": 0.004, "shape": "causal2", "order": 2, "causal": true, "band_top_hz": 38.0,
+            "gain_rise_at_band_top": 0.33, "corner_hz": 39.79
+        });
+        let lines = describe_size(Block::Gyro, Effect::ReferenceBandLimit, &causal, &Value::Null);
+        assert!(
+            lines[0].contains("through a causal order-2 low-pass at 39.8 Hz"),
+            "{lines:?}"
+        );
+        // The group delay sqrt(2) / (2 pi 39.79 Hz) = 5.657 ms.
+        assert!(lines[1].contains("group delay, 5.657 ms"), "{lines:?}");
+        // Neither an order nor a rate: no words.
+        let neither = json!({"T_s": 0.004, "causal": false, "band_top_hz": 38.0, "gain_rise_at_band_top": 0.1, "corner_hz": 39.8});
+        let lines = describe_size(Block::Gyro, Effect::ReferenceBandLimit, &neither, &Value::Null);
+        assert!(lines.iter().all(|l| !l.contains("low-pass")), "{lines:?}");
     }
 
     #[test]

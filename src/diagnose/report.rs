@@ -231,6 +231,10 @@ pub struct CandidateSummary {
     pub added_parameters: usize,
     /// `delta_chi2 - added_parameters ln(n) - 2 ln(m)`.
     pub criterion_gain: f64,
+    /// A band limit's shape (`reference_band_limit` is tried in several, each a candidate of
+    /// its own); absent for the other effects.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band_limit: Option<crate::model::band_limit::BandLimitShape>,
 }
 
 /// One block's details.
@@ -320,15 +324,26 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
                 return Value::Null;
             };
             let t = theta.band_limit_t_s;
-            json!({
+            let mut p = json!({
                 "T_s": t,
-                // No corner for T = 0 (no band limit; infinite).
-                "corner_hz": (t > 0.0).then(|| 1.0 / (std::f64::consts::TAU * t)),
-                "order": shape.order(),
+                "shape": shape.name(),
                 "causal": shape.causal(),
                 "band_top_hz": top,
                 "gain_rise_at_band_top": shape.rise_at(t, top),
-            })
+            });
+            // Present only where they exist (a report holds no null outside deviations): the
+            // corner (none at T = 0), the Butterworth order (none for the interpolated shape),
+            // the interpolated shape's reference rate 1 / T.
+            if let Some(c) = shape.corner_hz(t) {
+                p["corner_hz"] = json!(c);
+            }
+            if let Some(m) = shape.order() {
+                p["order"] = json!(m);
+            }
+            if let Some(r) = shape.reference_rate_hz(t) {
+                p["reference_rate_hz"] = json!(r);
+            }
+            p
         }
         Effect::AxisTimeSkew => {
             let skew = theta.channel_skew_s();

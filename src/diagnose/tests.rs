@@ -159,36 +159,60 @@ fn band_limit_finding(block: Block, order: i64, causal: bool, corner: f64, sd: f
     super::Finding {
         effect: Effect::ReferenceBandLimit,
         name: Effect::ReferenceBandLimit.name_on(block),
-        parameters: serde_json::json!({"order": order, "causal": causal, "corner_hz": corner}),
+        parameters: serde_json::json!({
+            "shape": if causal { "causal2" } else { "zero_phase" },
+            "order": order,
+            "causal": causal,
+            "corner_hz": corner
+        }),
         parameter_std: serde_json::json!({"corner_hz": sd}),
         ..lag_finding(block, 0.0, 0.0)
     }
 }
 
+/// `say_shared_band_limit` on a gyro's and an accelerometer's band limit: whether both findings'
+/// evidence says `words`.
+fn both_say(gyro: super::Finding, accel: super::Finding, words: &str) -> bool {
+    let mut f = vec![gyro, accel];
+    super::workflow::say_shared_band_limit(&mut f, &[Block::Gyro, Block::Accel]);
+    f.iter().all(|f| f.evidence.contains(words))
+}
+
 #[test]
 fn a_band_limit_says_whether_the_other_block_shows_the_same() {
     let both = [Block::Gyro, Block::Accel];
+    let (same, other) = ("the same band limit on both blocks", "another shape or corner");
     // 40.2 +- 0.3 and 39.6 +- 0.4 Hz, both causal order 2: 1.2 sigma apart, one filter.
-    let mut f = vec![
+    assert!(both_say(
         band_limit_finding(Block::Gyro, 2, true, 40.2, 0.3),
         band_limit_finding(Block::Accel, 2, true, 39.6, 0.4),
-    ];
-    super::workflow::say_shared_band_limit(&mut f, &both);
-    assert!(
-        f.iter()
-            .all(|f| f.evidence.contains("the same band limit on both blocks")),
-        "{f:?}"
-    );
+        same
+    ));
     // The same corners, another shape: said as approximate.
-    let mut f = vec![
+    assert!(both_say(
         band_limit_finding(Block::Gyro, 2, true, 40.2, 0.3),
         band_limit_finding(Block::Accel, 4, false, 40.2, 0.3),
-    ];
-    super::workflow::say_shared_band_limit(&mut f, &both);
-    assert!(
-        f.iter().all(|f| f.evidence.contains("another shape or corner")),
-        "{f:?}"
-    );
+        other
+    ));
+    // Two interpolated references (no order): the same within their deviations.
+    let interpolated = |block, corner: f64| super::Finding {
+        parameters: serde_json::json!({
+            "shape": "interpolated", "causal": false, "corner_hz": corner,
+            "reference_rate_hz": corner / crate::model::band_limit::INTERPOLATED_CORNER
+        }),
+        ..band_limit_finding(block, 1, false, corner, 0.3)
+    };
+    assert!(both_say(
+        interpolated(Block::Gyro, 38.2),
+        interpolated(Block::Accel, 38.4),
+        same
+    ));
+    // An interpolated reference against an order-1 one at the same corner: another shape.
+    assert!(both_say(
+        interpolated(Block::Gyro, 38.2),
+        band_limit_finding(Block::Accel, 1, false, 38.2, 0.3),
+        other
+    ));
     // Corners 10 sigma apart.
     let mut f = vec![
         band_limit_finding(Block::Gyro, 1, false, 40.0, 0.3),

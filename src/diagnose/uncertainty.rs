@@ -92,10 +92,10 @@ impl Covariance {
 }
 
 /// The covariance of `state`'s fitted parameters, widened by `chi2_per_dof` when above 1.
-/// A nonlinear parameter the cost does not curve in is held at its value (its row and column
-/// NaN, the others' covariance conditional on it). `None` when a linear parameter has no
-/// curvature, the Hessian of the others is not positive definite, or a step leaves the physical
-/// range.
+/// A nonlinear parameter at a bound of its range (a step to either side leaves it: a band limit
+/// or a lag fitted at 0, a mode at the band's edge) is held at its value (its row and column NaN,
+/// the others' covariance conditional on it). `None` when any other parameter has no curvature,
+/// their Hessian is not positive definite, or a cross term's step leaves the range.
 #[must_use]
 pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option<Covariance> {
     let f = &state.fitted;
@@ -147,17 +147,18 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
             h[(p + b, p + a)] = v;
         }
     }
-    // A nonlinear parameter the cost does not curve in, or that sits at a bound of its range (a
-    // band limit fitted at `T = 0`, whose gain moves as `T^(2n)` there) is held at its value: the others' covariance is the one given
-    // it (conditional), and its own is undetermined (`None`). Before, one such parameter left
-    // every deviation of the model undetermined, `K`'s and the delay's too. A linear parameter
-    // with no curvature leaves the model undetermined, as before.
+    // A nonlinear parameter at a bound (a band limit fitted at `T = 0`, whose gain moves as
+    // `T^(2n)` there, no curvature, and a step below leaves the range) is held at its value: the
+    // others' covariance is the one given it (conditional), its own undetermined (`None`).
+    // Before, one such parameter left every deviation of the model undetermined, `K`'s and the
+    // delay's too. Any other parameter with no curvature leaves the model undetermined.
     let d: Vec<f64> = (0..p + q).map(|k| h[(k, k)]).collect();
-    let curved = |k: usize| d[k].is_finite() && d[k] > 0.0 && (k < p || !held[k - p]);
-    if (0..p).any(|k| !curved(k)) {
+    let held_at = |k: usize| k >= p && held[k - p];
+    let curved = |k: usize| d[k].is_finite() && d[k] > 0.0;
+    if (0..p + q).any(|k| !(held_at(k) || curved(k))) {
         return None;
     }
-    let keep: Vec<usize> = (0..p + q).filter(|&k| curved(k)).collect();
+    let keep: Vec<usize> = (0..p + q).filter(|&k| !held_at(k)).collect();
     let n = keep.len();
     let h = DMatrix::from_fn(n, n, |i, j| h[(keep[i], keep[j])]);
     let reduced = reduced_covariance(
@@ -284,21 +285,28 @@ fn slots(structure: &super::structure::Structure) -> Slots {
     }
 }
 
-/// The band limit's deviations (`T_s`, `corner_hz`, `gain_rise_at_band_top` at `top_hz`) from
-/// `cov`, `T` at nonlinear slot `at` (ms). The corner `1 / (2 pi T)` moves by `-1 / (2 pi T^2)`
-/// per s of `T` (no corner, and no deviation, at `T = 0`); the rise by its slope, by central
-/// difference.
+/// The band limit's deviations (`T_s`, `corner_hz`, `reference_rate_hz` for the interpolated
+/// shape, `gain_rise_at_band_top` at `top_hz`) from `cov`, `T` at nonlinear slot `at` (ms). The
+/// corner `c / T` moves by `-c / T^2` per s of `T`, the rate `1 / T` by `-1 / T^2` (no corner or
+/// rate, and no deviation, at `T = 0`); the rise by its slope, by central difference.
 fn band_limit_std(shape: BandLimitShape, t: f64, top_hz: f64, cov: Option<&Covariance>, at: usize) -> Value {
     let n = cov.map_or(0, |c| c.n_linear);
     let h = 1e-3 * t.max(1e-6);
     let slope =
         (shape.rise_at(t + h, top_hz) - shape.rise_at((t - h).max(0.0), top_hz)) / (t + h - (t - h).max(0.0));
-    let corner = -1.0 / (std::f64::consts::TAU * t * t);
-    json!({
+    let corner = -shape.corner_times_t() / (t * t);
+    let rate = -1.0 / (t * t);
+    let of = |slope: f64| cov.and_then(|c| c.std_of(&[(n + at, slope * 1e-3)]));
+    let mut v = json!({
         "T_s": cov.and_then(|c| c.nonlinear_std(at)).map(|v| v * 1e-3),
-        "corner_hz": cov.and_then(|c| c.std_of(&[(n + at, corner * 1e-3)])).filter(|_| t > 0.0),
-        "gain_rise_at_band_top": cov.and_then(|c| c.std_of(&[(n + at, slope * 1e-3)])),
-    })
+        "corner_hz": of(corner).filter(|_| shape.corner_hz(t).is_some()),
+        "gain_rise_at_band_top": of(slope),
+    });
+    // Under the same keys as the parameters: a reference rate for the interpolated shape only.
+    if shape == BandLimitShape::Interpolated {
+        v["reference_rate_hz"] = json!(of(rate).filter(|_| shape.reference_rate_hz(t).is_some()));
+    }
+    v
 }
 
 /// Standard deviation of the delay `tau`, s.
@@ -427,173 +435,5 @@ fn effective_channels(
 }
 
 #[cfg(test)]
-mod tests {
-    use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-
-    use super::{Covariance, TAPER_VARIANCE, band_limit_std, sandwich_widening, slots};
-    use crate::diagnose::band_limit::BandLimitShape;
-    use crate::diagnose::fit::pack;
-    use crate::diagnose::structure::{Structure, Theta};
-    use crate::rng::Rng;
-
-    /// Least squares on 800 groups (a design's count) weighted as if the noise were white;
-    /// `loud` is its standard deviation on the last tenth, where the second regressor lives.
-    /// The variance ratios (widening squared) of noise draw `seed`, and the closed form's,
-    /// `(X'X)^-1 X' Sigma X (X'X)^-1` over `(X'X)^-1`.
-    fn ratios_against_closed_form(loud: f64, seed: u64) -> ([f64; 2], [f64; 2]) {
-        let n = 800;
-        let mut rng = Rng::new(1);
-        let x: Vec<Vector2<f64>> = (0..n)
-            .map(|g| {
-                let second = if g >= 9 * n / 10 {
-                    1.0 + rng.normal()
-                } else {
-                    0.05 * rng.normal()
-                };
-                Vector2::new(1.0 + 0.3 * rng.normal(), second)
-            })
-            .collect();
-        let sigma = |g: usize| if g >= 9 * n / 10 { loud } else { 1.0 };
-        let xtx: Matrix2<f64> = x.iter().map(|v| v * v.transpose()).sum();
-        let meat: Matrix2<f64> = x
-            .iter()
-            .enumerate()
-            .map(|(g, v)| sigma(g).powi(2) * v * v.transpose())
-            .sum();
-        let inv = xtx.try_inverse().expect("regular");
-        let truth = inv * meat * inv;
-        // Cost sum (y - x b)^2: Hessian 2 X'X, group scores -2 x_g e_g.
-        let bread = DMatrix::from_fn(2, 2, |i, j| inv[(i, j)] / 2.0);
-        let mut noise = Rng::new(seed);
-        let scores: Vec<DVector<f64>> = x
-            .iter()
-            .enumerate()
-            .map(|(g, v)| DVector::from_column_slice(&(-2.0 * sigma(g) * noise.normal() * v).data.0[0]))
-            .collect();
-        // Real observations of unit variance: the model's covariance is (X'X)^-1 = 2 H^-1.
-        let model = DMatrix::from_fn(2, 2, |i, j| inv[(i, j)]);
-        let widening = sandwich_widening(&bread, &scores, &model).expect("enough clusters");
-        (
-            [widening[0].powi(2), widening[1].powi(2)],
-            [0, 1].map(|i| truth[(i, i)] / inv[(i, i)]),
-        )
-    }
-
-    #[test]
-    fn the_sandwich_widens_where_the_misfit_piles_up_and_only_there() {
-        // The estimate of one draw scatters (the second parameter's information lies in 20 of
-        // the 200 clusters); over 40 draws its mean is the closed form's, less the sandwich's
-        // known small-sample bias where few clusters carry a parameter (each of the 20 has a
-        // leverage near 1/20 on it: about 10 % low here, 1 % on the first parameter).
-        let draws = 40;
-        let mut mean = [0.0; 2];
-        let mut expected = [0.0; 2];
-        for seed in 0..draws {
-            let (got, closed) = ratios_against_closed_form(4.0, 100 + seed);
-            expected = closed;
-            for i in 0..2 {
-                mean[i] += got[i] / draws as f64;
-            }
-        }
-        assert!(expected[1] > 9.0, "{expected:?}");
-        for (i, tolerance) in [(0, 0.05), (1, 0.15)] {
-            assert!(
-                (mean[i] / expected[i] - 1.0).abs() < tolerance,
-                "variance ratios {mean:?}, closed form {expected:?}"
-            );
-        }
-        // White noise as weighted: nothing to widen beyond the estimate's own scatter.
-        let mut white = [0.0; 2];
-        for seed in 0..draws {
-            let (got, _) = ratios_against_closed_form(1.0, 100 + seed);
-            for i in 0..2 {
-                white[i] += got[i] / draws as f64;
-            }
-        }
-        assert!(white.iter().all(|w| (1.0..1.15).contains(w)), "{white:?}");
-    }
-
-    #[test]
-    fn the_frequency_taper_factor_is_that_of_a_hann_window() {
-        let n = 200_000_usize;
-        let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
-        for k in 0..n {
-            let t = k as f64 - 0.5 * (n as f64 - 1.0);
-            let w = (std::f64::consts::PI * k as f64 / n as f64).sin().powi(2);
-            a += w.powi(4) * t * t;
-            b += t * t;
-            c += w * w * t * t;
-        }
-        let brute = a * b / (c * c);
-        assert!((brute - super::TAPER_FREQUENCY_VARIANCE).abs() < 1e-6, "{brute}");
-        let pi2 = std::f64::consts::PI.powi(2);
-        let closed = 35.0 * pi2 * (24.0 * pi2 - 205.0) / (108.0 * (2.0 * pi2 - 15.0).powi(2));
-        assert!(
-            (closed - super::TAPER_FREQUENCY_VARIANCE).abs() < 1e-10,
-            "{closed}"
-        );
-    }
-
-    #[test]
-    fn the_taper_factor_is_that_of_a_hann_window() {
-        // mean(w^4) / mean(w^2)^2 of the periodic Hann window, by brute force.
-        let n = 4096_usize;
-        let w: Vec<f64> = (0..n)
-            .map(|k| (std::f64::consts::PI * k as f64 / n as f64).sin().powi(2))
-            .collect();
-        let m2 = w.iter().map(|v| v * v).sum::<f64>() / n as f64;
-        let m4 = w.iter().map(|v| v.powi(4)).sum::<f64>() / n as f64;
-        assert!(
-            (m4 / (m2 * m2) - TAPER_VARIANCE).abs() < 1e-9,
-            "{}",
-            m4 / (m2 * m2)
-        );
-    }
-
-    #[test]
-    fn each_nonlinear_slot_holds_its_own_parameter() {
-        let structure = Structure {
-            skew: true,
-            lag: true,
-            band_limit: Some(BandLimitShape::Causal2),
-            resonance_axes: vec![1, 2],
-            ..Structure::default()
-        };
-        let theta = Theta {
-            tau_s: 4e-3,
-            skew_s: [0.3e-3, -0.1e-3],
-            lag_s: 2e-3,
-            band_limit_t_s: 3e-3,
-            resonances: vec![(20.0, 0.05), (30.0, 0.2)],
-        };
-        let (x, _) = pack(&structure, &theta);
-        let slot = slots(&structure);
-        assert_eq!(x.len(), 1 + structure.n_nonlinear_extra());
-        assert!((x[slot.skew.expect("skew")] - 0.3).abs() < 1e-12);
-        assert!((x[slot.lag.expect("lag")] - 2.0).abs() < 1e-12);
-        assert!((x[slot.band_limit.expect("band limit")] - 3.0).abs() < 1e-12);
-        assert!((x[slot.resonances] - 20.0).abs() < 1e-12);
-        assert!((x[slot.resonances + 2] - 30.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn the_band_limits_deviations_follow_its_time_constants() {
-        // T = 2 ms with 0.1 ms of deviation (slot 1, ms units, after two linear parameters).
-        let matrix = DMatrix::from_diagonal(&DVector::from_column_slice(&[1.0, 1.0, 0.04, 0.01]));
-        let cov = Covariance { matrix, n_linear: 2 };
-        let (t, sd_t, top) = (2e-3, 0.1e-3, 30.0);
-        let v = band_limit_std(BandLimitShape::ZeroPhase { order: 1 }, t, top, Some(&cov), 1);
-        let read = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-        assert!((read("T_s") - sd_t).abs() < 1e-12, "{v}");
-        // sd(f_c) = sd(T) / (2 pi T^2).
-        let corner = sd_t / (std::f64::consts::TAU * t * t);
-        assert!((read("corner_hz") / corner - 1.0).abs() < 1e-9, "{v}");
-        // d/dT sqrt(1 + (w T)^2) = w^2 T / sqrt(1 + (w T)^2).
-        let w = std::f64::consts::TAU * top;
-        let rise = w * w * t / (1.0 + (w * t).powi(2)).sqrt() * sd_t;
-        assert!((read("gain_rise_at_band_top") / rise - 1.0).abs() < 1e-5, "{v}");
-        // No corner's deviation at T = 0.
-        let v = band_limit_std(BandLimitShape::Causal2, 0.0, top, Some(&cov), 1);
-        assert!(v["corner_hz"].is_null(), "{v}");
-    }
-}
+#[path = "uncertainty_tests.rs"]
+mod tests;

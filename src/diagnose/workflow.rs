@@ -167,6 +167,10 @@ fn summary(c: &Candidate, rule: Rule) -> CandidateSummary {
         delta_chi2: c.delta_chi2,
         added_parameters: c.added_params,
         criterion_gain: rule.gain(c),
+        band_limit: match &c.extension {
+            Extension::Structural(f) if c.effect == Effect::ReferenceBandLimit => f.structure.band_limit,
+            _ => None,
+        },
     }
 }
 
@@ -508,7 +512,12 @@ const SHARED_CORNER_SIGMAS: f64 = 3.0;
 pub(super) fn say_shared_band_limit(findings: &mut [Finding], diagnosed: &[Block]) {
     let corner = |f: &Finding| {
         let p = &f.parameters;
-        let shape = (p.get("order")?.as_i64()?, p.get("causal")?.as_bool()?);
+        let shape = (
+            p.get("shape")?.as_str()?.to_owned(),
+            // No order for the interpolated shape.
+            p.get("order").and_then(serde_json::Value::as_i64),
+            p.get("causal")?.as_bool()?,
+        );
         let c = p.get("corner_hz")?.as_f64()?;
         let sd = f
             .parameter_std

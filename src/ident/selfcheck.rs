@@ -156,10 +156,15 @@ pub fn gain_changes(
             k_bias,
             outputs: output_names.map(str::to_owned),
             k_relative_std,
-            largest_change: ElementChange {
-                output: output_names[i].to_owned(),
-                input: inputs[j].to_owned(),
-                sigmas,
+            // None where no element has a deviation to move against.
+            largest_change: if sigmas > 0.0 {
+                ElementChange {
+                    output: output_names[i].to_owned(),
+                    input: inputs[j].to_owned(),
+                    sigmas,
+                }
+            } else {
+                ElementChange::default()
             },
             band_hz: [to_hz(c.omega_range[0]), to_hz(c.omega_range[1])],
             k_at_low_frequency: false,

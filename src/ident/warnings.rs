@@ -481,25 +481,7 @@ impl fmt::Display for IdentWarning {
                  order takes; the diagnosis searches above the band",
                 band_hz[0], band_hz[1]
             ),
-            IdentWarning::GainChangesAcrossBand {
-                rise,
-                rise_std,
-                k_bias,
-                outputs,
-                k_relative_std,
-                largest_change,
-                band_hz,
-                k_at_low_frequency,
-            } => f.write_str(&gain_change_words(
-                *rise,
-                *rise_std,
-                k_bias,
-                outputs,
-                *k_relative_std,
-                largest_change,
-                *band_hz,
-                *k_at_low_frequency,
-            )),
+            w @ IdentWarning::GainChangesAcrossBand { .. } => f.write_str(&gain_change_words(w)),
             IdentWarning::ImplausibleGain { output, input, value } => write!(
                 f,
                 "K[{output}][{input}] = {value:.4} is implausible for a calibrated block (diagonal \

@@ -4,7 +4,9 @@
 //! response against them. Kept in a block's extended model (`super::ModelEffects`), whose
 //! response is then the response against this stand's angles.
 //!
-//! Units: time constants in s, frequencies in Hz; `T` is `1 / (2 pi f_c)`, `f_c` the corner.
+//! Units: time constants in s, frequencies in Hz; `T` is `1 / (2 pi f_c)`, `f_c` the corner
+//! (where `|H| = 1 / sqrt 2`), except for [`BandLimitShape::Interpolated`], whose `T` is the
+//! reference's sample period `1 / f_r` and whose corner is `0.3189 f_r`.
 
 use std::f64::consts::{PI, SQRT_2};
 
@@ -22,16 +24,31 @@ pub enum BandLimitShape {
     },
     /// `H = 1 / (1 + sqrt(2) s T + (s T)^2)`.
     Causal2,
+    /// `H = sinc^2(f T)`, no phase: a reference sampled every `T` (at `f_r = 1 / T`) and
+    /// interpolated linearly onto the run's samples, on average over where the run's samples
+    /// fall between the reference's (a motion-capture reference resampled onto an IMU's). The
+    /// order-1 zero-phase shape is its second-order approximation (`T_1 = T / sqrt 6`), whose
+    /// rise falls 1 % short at `f = 0.05 f_r`, 13 % at `0.2 f_r` and 27 % at `0.3 f_r`.
+    Interpolated,
 }
+
+/// Where `sinc^2(x)` is `1 / sqrt 2`: the interpolated shape's corner is this over `T`.
+pub const INTERPOLATED_CORNER: f64 = 0.318_916_698_685_223;
+
+/// How far towards the reference's rate (`f T`) the interpolated shape's inverse is followed:
+/// beyond, it is held (it grows without bound towards `f = f_r`, where `sinc^2` vanishes; a
+/// search's trial `T` may reach there, a fitted one does not).
+const INTERPOLATED_REACH: f64 = 0.9;
 
 impl BandLimitShape {
     /// The shapes the candidate tries.
-    pub const SHAPES: [BandLimitShape; 5] = [
+    pub const SHAPES: [BandLimitShape; 6] = [
         BandLimitShape::ZeroPhase { order: 1 },
         BandLimitShape::ZeroPhase { order: 2 },
         BandLimitShape::ZeroPhase { order: 4 },
         BandLimitShape::ZeroPhase { order: 8 },
         BandLimitShape::Causal2,
+        BandLimitShape::Interpolated,
     ];
 
     /// `1 / H` at `f_hz` with time constant `t_s`: what the block's response is multiplied by.
@@ -41,15 +58,73 @@ impl BandLimitShape {
         match self {
             BandLimitShape::ZeroPhase { order } => Complex64::from((1.0 + x.powi(2 * order)).sqrt()),
             BandLimitShape::Causal2 => Complex64::new(1.0 - x * x, SQRT_2 * x),
+            BandLimitShape::Interpolated => {
+                let y = PI * (f_hz * t_s).abs().min(INTERPOLATED_REACH);
+                let sinc = if y < 1e-4 { 1.0 - y * y / 6.0 } else { y.sin() / y };
+                Complex64::from(1.0 / (sinc * sinc))
+            }
         }
     }
 
-    /// The Butterworth order of the shape.
+    /// The Butterworth order of the shape; `None` for the interpolated shape (not a
+    /// Butterworth).
     #[must_use]
-    pub fn order(self) -> i32 {
+    pub fn order(self) -> Option<i32> {
         match self {
-            BandLimitShape::ZeroPhase { order } => order,
-            BandLimitShape::Causal2 => 2,
+            BandLimitShape::ZeroPhase { order } => Some(order),
+            BandLimitShape::Causal2 => Some(2),
+            BandLimitShape::Interpolated => None,
+        }
+    }
+
+    /// The shape's name in the model file and the discrepancy report (`shape`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            BandLimitShape::ZeroPhase { .. } => "zero_phase",
+            BandLimitShape::Causal2 => "causal2",
+            BandLimitShape::Interpolated => "interpolated",
+        }
+    }
+
+    /// The corner (where `|H| = 1 / sqrt 2`) for `T = t_s`, Hz; `None` at `T = 0` (no band
+    /// limit) and where it is not finite (a `T` so small its inverse overflows).
+    #[must_use]
+    pub fn corner_hz(self, t_s: f64) -> Option<f64> {
+        (t_s > 0.0)
+            .then(|| self.corner_times_t() / t_s)
+            .filter(|c| c.is_finite())
+    }
+
+    /// The interpolated shape's reference rate `1 / T`, Hz; `None` for the other shapes and
+    /// where `corner_hz` is.
+    #[must_use]
+    pub fn reference_rate_hz(self, t_s: f64) -> Option<f64> {
+        (self == BandLimitShape::Interpolated && t_s > 0.0)
+            .then(|| 1.0 / t_s)
+            .filter(|r| r.is_finite())
+    }
+
+    /// `corner x T`: `1 / (2 pi)`, or [`INTERPOLATED_CORNER`].
+    #[must_use]
+    pub fn corner_times_t(self) -> f64 {
+        match self {
+            BandLimitShape::Interpolated => INTERPOLATED_CORNER,
+            _ => 1.0 / (2.0 * PI),
+        }
+    }
+
+    /// The `T` at which `|1 / H|` rises by `rise` at `f_hz` (a search's start): exact for the
+    /// Butterworth shapes, the low-frequency approximation `1 + (pi f T)^2 / 3` for the
+    /// interpolated one (within its reach).
+    #[must_use]
+    pub fn t_for_rise(self, rise: f64, f_hz: f64) -> f64 {
+        match self.order() {
+            Some(m) => {
+                let x = ((1.0 + rise).powi(2) - 1.0).powf(1.0 / (2.0 * f64::from(m)));
+                x / (2.0 * PI * f_hz)
+            }
+            None => (3.0 * rise).sqrt().min(0.5) / (PI * f_hz),
         }
     }
 
@@ -100,7 +175,7 @@ impl TryFrom<RawBandLimit> for FittedBandLimit {
     fn try_from(raw: RawBandLimit) -> Result<Self, String> {
         if !BandLimitShape::SHAPES.contains(&raw.shape) {
             return Err(format!(
-                "a band limit's shape must be zero_phase of order 1, 2, 4 or 8, or causal2: {:?}",
+                "a band limit's shape must be zero_phase of order 1, 2, 4 or 8, causal2 or interpolated: {:?}",
                 raw.shape
             ));
         }
@@ -139,6 +214,43 @@ mod tests {
     }
 
     #[test]
+    fn the_interpolated_shape_is_the_inverse_of_sinc_squared() {
+        let f_r = 120.0;
+        let t = 1.0 / f_r;
+        let shape = BandLimitShape::Interpolated;
+        for f in [0.5, 10.0, 30.0, 60.0] {
+            // sinc^2 from its series, independent of the shape's closed form.
+            let y = PI * f / f_r;
+            let series: f64 = (0..30)
+                .map(|k| (-1f64).powi(k) * y.powi(2 * k) / (2..=2 * k + 1).map(f64::from).product::<f64>())
+                .sum();
+            let exact = 1.0 / (series * series);
+            let inverse = shape.inverse_at(t, f);
+            assert!(
+                (inverse.re - exact).abs() < 1e-12 * exact && inverse.im == 0.0,
+                "{f}: {inverse}"
+            );
+        }
+        // Its corner: sinc^2 = 1 / sqrt 2 there.
+        let corner = shape.corner_hz(t).expect("corner");
+        assert!((shape.inverse_at(t, corner).re - SQRT_2).abs() < 1e-6, "{corner}");
+        assert!(shape.corner_hz(0.0).is_none() && shape.order().is_none());
+        assert!(shape.corner_hz(1e-320).is_none() && shape.reference_rate_hz(1e-320).is_none());
+        assert_eq!(shape.reference_rate_hz(t), Some(f_r));
+        assert!(BandLimitShape::Causal2.reference_rate_hz(t).is_none());
+        // Held beyond its reach, finite at the reference's rate.
+        assert!(shape.inverse_at(t, f_r).re.is_finite());
+        assert_eq!(shape.inverse_at(t, f_r), shape.inverse_at(t, 0.95 * f_r));
+        // The start: a rise of 2 % at 30 Hz within 2 % of it.
+        let t0 = shape.t_for_rise(0.02, 30.0);
+        assert!((shape.rise_at(t0, 30.0) / 0.02 - 1.0).abs() < 0.02, "{t0}");
+        for s in BandLimitShape::SHAPES.into_iter().filter(|s| s.order().is_some()) {
+            let t0 = s.t_for_rise(0.05, 30.0);
+            assert!((s.rise_at(t0, 30.0) - 0.05).abs() < 1e-12, "{s:?}");
+        }
+    }
+
+    #[test]
     fn the_causal_shape_inverts_a_second_order_butterworth() {
         let (t, fc) = (2e-3, 1.0 / (2.0 * PI * 2e-3));
         for f in [1.0, 20.0, fc, 150.0] {
@@ -172,12 +284,19 @@ mod tests {
         })
         .expect("written");
         assert_eq!(json, r#"{"shape":"zero_phase","order":4,"T_s":0.001}"#);
+        let json = serde_json::to_string(&FittedBandLimit {
+            shape: BandLimitShape::Interpolated,
+            t_s: 0.01,
+        })
+        .expect("written");
+        assert_eq!(json, r#"{"shape":"interpolated","T_s":0.01}"#);
         for bad in [
             r#"{"shape":"zero_phase","order":0,"T_s":0.001}"#,
             r#"{"shape":"zero_phase","order":2147483647,"T_s":0.001}"#,
             r#"{"shape":"causal2","T_s":-0.001}"#,
             r#"{"shape":"lowpass","T_s":0.001}"#,
             r#"{"shape":"causal2"}"#,
+            r#"{"shape":"interpolated","T_s":"0.01"}"#,
         ] {
             assert!(serde_json::from_str::<FittedBandLimit>(bad).is_err(), "{bad}");
         }

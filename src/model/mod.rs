@@ -364,21 +364,41 @@ impl BlockModel {
         // A structural fit's poles weighed against an even gain (`poles_or_even_gain`), its delay
         // split with its zeros (`zeros_lag`), and its own delay beside the delay-only model's
         // (`delay_outside_usual_range`), are not this model's: the joint fit is order 0 and says
-        // its own. (`zeros_lead` stays: angles that lag are the data's.)
+        // its own. (`zeros_lead` stays, angles that lag being the data's, unless a causal band
+        // limit accepted takes their lag: below.)
         // A gain that depends on the amplitude is no longer the model's problem once the
         // nonlinearity is fitted beside `K`.
         let odd_fitted = effects
             .accepted
             .iter()
             .any(|a| a.effect == crate::effect::Effect::ScaleNonlinearity);
+        // An accepted band limit (one that holds something: `T > 0`) is the stand's low-pass
+        // modelled: the gain's rise across the band is its own (no longer the model's misfit),
+        // and a causal one takes the lag of the angles (their leading zeros) and its group delay,
+        // so the delay is against the motion: said negative only where the extended delay still
+        // is beyond three of its deviations (the identifier's rule), with its figures.
+        let band_limit = effects.reference_band_limit.filter(|b| b.t_s > 0.0);
+        let still_negative = tau_s + 3.0 * tau_std_s.unwrap_or(0.0) < 0.0;
         self.fit.warnings.retain(|w| match w {
             IdentWarning::PolesOrEvenGain { .. } | IdentWarning::ZerosLag { .. } => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
+            IdentWarning::GainChangesAcrossBand { rise, .. } => band_limit.is_none() || *rise < 0.0,
+            IdentWarning::ZerosLead { .. } => !band_limit.is_some_and(|b| b.shape.causal()),
+            IdentWarning::NegativeDelay { .. } => band_limit.is_none() || still_negative,
             _ => true,
         });
         for w in &mut self.fit.warnings {
             if let IdentWarning::DelayOutsideUsualRange { model_tau_s, .. } = w {
                 *model_tau_s = None;
+            }
+            if let IdentWarning::NegativeDelay {
+                tau_s: said,
+                tau_std_s: said_std,
+            } = w
+                && band_limit.is_some()
+            {
+                *said = tau_s;
+                *said_std = tau_std_s.unwrap_or(*said_std);
             }
             if let IdentWarning::GainChangesAcrossBand {
                 k_at_low_frequency, ..
@@ -506,86 +526,5 @@ fn first_null(value: &serde_json::Value, path: &str, null_allowed: bool) -> Opti
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn empty_model() -> Model {
-        Model {
-            schema: MODEL_SCHEMA.to_owned(),
-            source: Source {
-                file: "run.csv".to_owned(),
-                sha256: "0".repeat(64),
-                regime: "cruise".to_owned(),
-                sample_rate_hz: 500.0,
-            },
-            settings: Settings::default(),
-            blocks: BTreeMap::new(),
-            recording_faults: Vec::new(),
-            refused_blocks: BTreeMap::new(),
-        }
-    }
-
-    #[test]
-    fn poles_are_described_by_time_constant_or_frequency_and_damping() {
-        assert_eq!(
-            describe_pole([-100.0, 0.0]),
-            "-100.0000 rad/s (time constant 10.000 ms)"
-        );
-        // -10 +- 100j: |p| = 100.499 rad/s = 15.995 Hz, damping 10 / 100.499 = 0.0995.
-        assert_eq!(
-            describe_pole([-10.0, -100.0]),
-            "-10.0000 ± 100.0000j rad/s (15.995 Hz, damping 0.10)"
-        );
-    }
-
-    /// A model file written before the `estimate` setting reads back as fitted to the causal
-    /// estimate; one that names its estimate keeps it.
-    #[test]
-    fn an_older_model_file_reads_back_as_fitted_to_the_causal_estimate() {
-        let written = serde_json::to_value(empty_model()).expect("serialises");
-        assert_eq!(written["settings"]["estimate"], "h1");
-        let mut older = written.clone();
-        older["settings"]
-            .as_object_mut()
-            .expect("settings object")
-            .remove("estimate");
-        for (value, expected) in [(older, Estimate::CausalWiener), (written.clone(), Estimate::H1)] {
-            let bytes = serde_json::to_vec(&value).expect("bytes");
-            let mut model: Model = serde_json::from_slice(&bytes).expect("reads");
-            model.settle_estimate(&bytes);
-            assert_eq!(model.settings.estimate, expected, "{}", value["settings"]);
-        }
-        let mut causal = written;
-        causal["settings"]["estimate"] = "causal_wiener".into();
-        let bytes = serde_json::to_vec(&causal).expect("bytes");
-        let mut model: Model = serde_json::from_slice(&bytes).expect("reads");
-        model.settle_estimate(&bytes);
-        assert_eq!(model.settings.estimate, Estimate::CausalWiener);
-    }
-
-    #[test]
-    fn non_finite_numbers_never_reach_the_file() {
-        let dir = tempfile::tempdir().expect("temporary folder");
-        let path = dir.path().join("model.json");
-        empty_model()
-            .write_file(&path)
-            .expect("a finite model is written");
-        let written = std::fs::read(&path).expect("written");
-        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            let mut model = empty_model();
-            model.source.sample_rate_hz = bad;
-            let err = model.write_file(&path).expect_err("refused");
-            assert!(err.to_string().contains("source.sample_rate_hz"), "{err}");
-            let mut model = empty_model();
-            model.settings.band_hz = crate::ident::band::BandSetting::Fixed([0.1, bad]);
-            let err = model.write_file(&path).expect_err("refused");
-            assert!(err.to_string().contains("settings.band_hz[1]"), "{err}");
-            assert_eq!(
-                std::fs::read(&path).expect("kept"),
-                written,
-                "the old file is untouched"
-            );
-        }
-        assert_eq!(std::fs::read_dir(dir.path()).expect("listed").count(), 1);
-    }
-}
+#[path = "model_tests.rs"]
+mod tests;

@@ -121,7 +121,7 @@ fn true_smooth_effects_are_confirmed_below_and_named() {
 /// above pi up to 40 Hz, the accelerometer's coherence ends near 36 Hz, and the search found a
 /// lag over the band that rested on the last few hertz (measured 30 Nov: named before, on one of
 /// the 209 campaign runs). It is set aside, in words that do not call the angles noise. (Since
-/// 30 Nov the stand's band limit adds five candidates and their look-elsewhere cost, and the lag
+/// 30 Nov the stand's band limit adds five candidates (six since its interpolated shape) and their look-elsewhere cost, and the lag
 /// falls 0.6 short of the criterion: the band limit is rejected here, as an engineer may, to keep
 /// the search's candidates those this case was measured with.) A true
 /// lever-arm error on the default stand (cruise seed 21), where the accelerometer's coherence

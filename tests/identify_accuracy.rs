@@ -181,7 +181,8 @@ fn an_imprecise_gain_is_said_and_a_precise_one_is_not() {
 /// four seeds the diagonal's normalised errors have an rms of 1.5 with it, 3.1 without it; since
 /// the gain's change across the band is said where it moves one element beyond its own
 /// deviation (30 Nov), these runs' fits over the even gain widen the deviations too: 1.18 with
-/// it, 2.38 without (asserted: below 2 and above 2); the clean runs say nothing. The estimate is
+/// it, 2.38 without (asserted: below 2 with it; without it above 2 and 1.5 times that); the clean
+/// runs say nothing. The estimate is
 /// low by a factor of about 2 here, which the module docs and the warning say.
 #[test]
 fn the_gyro_s_noise_taken_for_angle_noise_is_estimated_and_said() {
@@ -244,7 +245,7 @@ fn the_gyro_s_noise_taken_for_angle_noise_is_estimated_and_said() {
     eprintln!("normalised error rms {z:.2} (without the estimate {raw:.2})");
     assert!(z < 2.0, "rms {z}");
     assert!(
-        raw > 2.0,
-        "the case does not test the estimate: rms {raw} without it"
+        raw > 2.0 && raw > 1.5 * z,
+        "the case does not test the estimate: rms {raw} without it, {z} with it"
     );
 }

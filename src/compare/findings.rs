@@ -190,14 +190,21 @@ fn over_like_bands(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
 
 /// Two band limits' shapes (`shape` and `order`) where they differ, in words: a time constant
 /// `T` is another figure in each shape (an interpolated reference's is its sample period, about
-/// `sqrt 6` times an order-1 shape's of the same rise), so their sizes are not compared.
+/// `sqrt 6` times an order-1 shape's of the same rise; two Butterworth orders fitted to one
+/// stand's limit put their corners elsewhere), so their sizes are not compared. A report written
+/// before findings named their shape has `causal` and `order` only: `causal2` or `zero_phase`.
 fn band_limit_shapes_differ(a: &Finding, b: &Finding) -> Option<String> {
     if a.effect != Effect::ReferenceBandLimit {
         return None;
     }
     let shape = |f: &Finding| {
         let p = &f.parameters;
-        let name = p.get("shape").and_then(Value::as_str).unwrap_or("?").to_owned();
+        let causal = p.get("causal").and_then(Value::as_bool) == Some(true);
+        let name = p
+            .get("shape")
+            .and_then(Value::as_str)
+            .unwrap_or(if causal { "causal2" } else { "zero_phase" })
+            .to_owned();
         match p.get("order").and_then(Value::as_i64) {
             Some(m) => format!("{name} order {m}"),
             None => name,

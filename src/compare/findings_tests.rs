@@ -162,6 +162,10 @@ fn band_limits_of_other_shapes_are_not_compared_by_their_time_constants() {
         "{}",
         out[0].words
     );
+    // A report written before findings named their shape: order 1, zero phase, compared.
+    let unnamed = [band_limit(json!({ "order": 1 }), 1.0 / (6f64.sqrt() * 120.0))];
+    let out = compare_findings(&[&order_one, &unnamed], &names());
+    assert_eq!(out[0].sizes.len(), 1, "{}", out[0].words);
     // The same shape: compared as before.
     let again = [band_limit(json!({ "shape": "interpolated" }), 1.0 / 120.0 + 2e-5)];
     let out = compare_findings(&[&interpolated, &again], &names());

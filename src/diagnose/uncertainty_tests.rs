@@ -165,4 +165,29 @@ fn the_band_limits_deviations_follow_its_time_constants() {
     // No corner's deviation at T = 0.
     let v = band_limit_std(BandLimitShape::Causal2, 0.0, top, Some(&cov), 1);
     assert!(v["corner_hz"].is_null(), "{v}");
+    // No reference rate but for the interpolated shape.
+    assert!(v.get("reference_rate_hz").is_none(), "{v}");
+    // The interpolated shape, T = 1 / (120 Hz) with 0.01 ms: sd(f_r) = sd(T) / T^2, its corner
+    // 0.3189 of that; d/dT (1 / sinc^2(f T)) by the series of sinc to fourth order.
+    let matrix = DMatrix::from_diagonal(&DVector::from_column_slice(&[1.0, 1.0, 0.04, 1e-4]));
+    let cov = Covariance { matrix, n_linear: 2 };
+    let (t, sd_t) = (1.0 / 120.0, 1e-5);
+    let v = band_limit_std(BandLimitShape::Interpolated, t, top, Some(&cov), 1);
+    let read = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        (read("reference_rate_hz") / (sd_t / (t * t)) - 1.0).abs() < 1e-9,
+        "{v}"
+    );
+    let corner = crate::model::band_limit::INTERPOLATED_CORNER * sd_t / (t * t);
+    assert!((read("corner_hz") / corner - 1.0).abs() < 1e-9, "{v}");
+    // 1 / sinc^2(x) = 1 + (pi x)^2 / 3 + (pi x)^4 / 15 + (2/189)(pi x)^6 + ..., x = f T: its
+    // slope by these three terms, 0.36 % short at x = 0.25.
+    let slope = |t: f64| {
+        let y2 = (std::f64::consts::PI * top).powi(2);
+        2.0 * y2 * t / 3.0 + 4.0 * y2 * y2 * t.powi(3) / 15.0 + 12.0 / 189.0 * y2.powi(3) * t.powi(5)
+    };
+    assert!(
+        (read("gain_rise_at_band_top") / (slope(t) * sd_t) - 1.0).abs() < 5e-3,
+        "{v}"
+    );
 }

@@ -378,6 +378,8 @@ impl BlockModel {
         // so the delay is against the motion: said negative only where the extended delay still
         // is beyond three of its deviations (the identifier's rule), with its figures.
         let band_limit = effects.reference_band_limit.filter(|b| b.t_s > 0.0);
+        // (With the extended delay's deviation unknown: negative at all, the identified figures
+        // kept.)
         let still_negative = tau_s + 3.0 * tau_std_s.unwrap_or(0.0) < 0.0;
         self.fit.warnings.retain(|w| match w {
             IdentWarning::PolesOrEvenGain { .. } | IdentWarning::ZerosLag { .. } => false,
@@ -396,9 +398,10 @@ impl BlockModel {
                 tau_std_s: said_std,
             } = w
                 && band_limit.is_some()
+                && let Some(sd) = tau_std_s
             {
                 *said = tau_s;
-                *said_std = tau_std_s.unwrap_or(*said_std);
+                *said_std = sd;
             }
             if let IdentWarning::GainChangesAcrossBand {
                 k_at_low_frequency, ..

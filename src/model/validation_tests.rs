@@ -122,13 +122,29 @@ fn too_short_a_span_or_an_empty_band_gives_nothing() {
     assert!(fit_percent(&[0.0, 0.0], &[1.0, 1.0]).is_nan());
 }
 
+/// Extended-model terms with nothing accepted, over 0.1-20 Hz, from an identified model of
+/// delay `tau_s` and `order`.
+fn no_effects(tau_s: f64, order: usize) -> crate::model::effects::ModelEffects {
+    crate::model::effects::ModelEffects {
+        accepted: Vec::new(),
+        not_added: Vec::new(),
+        lag_s: None,
+        channel_skew_s: None,
+        resonances: Vec::new(),
+        reference_band_limit: None,
+        identified: crate::model::effects::Identified { k: K, tau_s, order },
+        band_hz: [0.1, 20.0],
+        chi2_per_dof: [1.2, 1.1],
+        gap_db: [[-20.0; 3]; 2],
+    }
+}
+
 /// The diagnosis's joint model (`set_effects`: order 0, its own delay) keeps no structural fit's
 /// weighing of poles against an even gain (`poles_or_even_gain`), and `delay_outside_usual_range`
 /// no longer names a chosen model's own delay; other warnings stay as they were.
 #[test]
 fn an_extended_model_drops_the_structural_fit_s_poles_words() {
     use crate::ident::warnings::IdentWarning;
-    use crate::model::effects::{Identified, ModelEffects};
     let mut m = delayed_gain(K, 0.046, [0.1, 20.0]);
     let outside = |model_tau_s| IdentWarning::DelayOutsideUsualRange {
         tau_s: 0.060,
@@ -165,22 +181,7 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
             pole_lag_s: 0.01,
         },
     ];
-    let effects = ModelEffects {
-        accepted: Vec::new(),
-        not_added: Vec::new(),
-        lag_s: None,
-        channel_skew_s: None,
-        resonances: Vec::new(),
-        reference_band_limit: None,
-        identified: Identified {
-            k: K,
-            tau_s: 0.046,
-            order: 3,
-        },
-        band_hz: [0.1, 20.0],
-        chi2_per_dof: [1.2, 1.1],
-        gap_db: [[-20.0; 3]; 2],
-    };
+    let effects = no_effects(0.046, 3);
     m.set_effects(effects, K, [[Some(1e-3); 3]; 3], 0.060, Some(1e-5));
     assert_eq!(m.fit.warnings, vec![outside(None), kept]);
     assert_eq!(m.order, 0);
@@ -231,4 +232,92 @@ fn effects_that_add_nothing_leave_the_identified_response() {
     assert!(!effects.extends());
     let dropped = effects.response(&K, tau_s, f_hz);
     assert!((dropped[(0, 0)] - r[(0, 0)]).norm() > 0.1 * r[(0, 0)].norm());
+}
+
+/// An accepted band limit that holds something (`T > 0`) takes the identified model's gain rise,
+/// a causal one its leading zeros, and the negative delay where the extended delay is not 3
+/// deviations below 0 (kept with the extended figures where it is); one fitted at `T = 0` takes
+/// nothing. `imprecise_gain` is judged on the extended deviations: dropped below 1 %, kept with
+/// the new figures above.
+#[test]
+fn an_accepted_band_limit_takes_the_warnings_it_explains() {
+    use crate::ident::warnings::{ElementChange, IdentWarning};
+    use crate::model::band_limit::{BandLimitShape, FittedBandLimit};
+    use crate::model::effects::ModelEffects;
+    let identified = vec![
+        IdentWarning::GainChangesAcrossBand {
+            rise: 0.1,
+            rise_std: 0.01,
+            k_bias: [0.01; 3],
+            outputs: ["gx", "gy", "gz"].map(str::to_owned),
+            k_relative_std: 0.001,
+            largest_change: ElementChange::default(),
+            band_hz: [0.1, 20.0],
+            k_at_low_frequency: true,
+        },
+        IdentWarning::ZerosLead {
+            order: 1,
+            lead_s: 0.005,
+            lead_std_s: 0.001,
+            tau_s: -0.004,
+            pole_lag_s: 0.0,
+        },
+        IdentWarning::NegativeDelay {
+            tau_s: -0.004,
+            tau_std_s: 1e-4,
+        },
+        IdentWarning::ImpreciseGain {
+            output: "gy".to_owned(),
+            input: "wy".to_owned(),
+            value: 1.005,
+            std: 0.013,
+        },
+    ];
+    let extend = |t_s: f64, tau_s: f64, k_sd: f64| {
+        let mut m = delayed_gain(K, -0.004, [0.1, 20.0]);
+        m.fit.warnings = identified.clone();
+        let effects = ModelEffects {
+            reference_band_limit: Some(FittedBandLimit {
+                shape: BandLimitShape::Causal2,
+                t_s,
+            }),
+            ..no_effects(-0.004, 1)
+        };
+        // K[gy][wy] the least determined.
+        let sd = std::array::from_fn(|i| {
+            std::array::from_fn(|j| Some(if (i, j) == (1, 1) { k_sd } else { k_sd / 2.0 }))
+        });
+        m.set_effects(effects, K, sd, tau_s, Some(1e-4));
+        m.fit.warnings
+    };
+    // A 4 ms causal filter taken: the delay positive, the gain determined.
+    assert_eq!(extend(0.004, 0.002, 5e-4), Vec::new());
+    // Still negative beyond 3 deviations: kept with the extended figures; the gain still
+    // imprecise: kept with the extended element's figures.
+    let kept = extend(0.004, -0.001, 0.02);
+    assert_eq!(
+        kept,
+        vec![
+            IdentWarning::NegativeDelay {
+                tau_s: -0.001,
+                tau_std_s: 1e-4
+            },
+            IdentWarning::ImpreciseGain {
+                output: "gy".to_owned(),
+                input: "wy".to_owned(),
+                value: K[1][1],
+                std: 0.02,
+            },
+        ]
+    );
+    // A band limit at T = 0 takes nothing but the imprecise gain it no longer has (the gain
+    // rise's K is the joint fit's, not the gain at low frequency, as for any extended model).
+    let mut untouched = identified[..3].to_vec();
+    if let IdentWarning::GainChangesAcrossBand {
+        k_at_low_frequency, ..
+    } = &mut untouched[0]
+    {
+        *k_at_low_frequency = false;
+    }
+    assert_eq!(extend(0.0, 0.002, 5e-4), untouched);
 }

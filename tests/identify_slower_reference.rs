@@ -178,6 +178,7 @@ fn an_element_moved_beyond_its_own_deviation_is_said() {
             rise_std,
             k_bias,
             k_relative_std,
+            rows_moved,
             largest_change,
             k_at_low_frequency,
             ..
@@ -185,19 +186,21 @@ fn an_element_moved_beyond_its_own_deviation_is_said() {
             *rise,
             *rise_std,
             *k_bias,
-            *k_relative_std,
+            (*k_relative_std, *rows_moved),
             largest_change.clone(),
             *k_at_low_frequency,
         )),
         _ => None,
     });
-    let (rise, rise_std, k_bias, k_relative_std, largest, low) =
+    let (rise, rise_std, k_bias, (k_relative_std, rows_moved), largest, low) =
         said.unwrap_or_else(|| panic!("not said: {:?}", accel.warnings));
     eprintln!("rise {rise} +- {rise_std}, rows {k_bias:?}, K {k_relative_std}, {largest:?}");
     // `sinc^-2(40 Hz / 500 Hz)` is a 2.1 % rise.
     assert!(rise > 0.01 && rise > 3.0 * rise_std, "rise {rise} +- {rise_std}");
     assert!(low, "K given at low frequency");
-    // Said for the element, not the rows: every row's scale below K's relative deviation.
+    // Said for the element, not the rows: every row's scale below K's relative deviation, as
+    // read (`rows_moved`, which the diagnosis's input limit follows) and as applied (`k_bias`).
+    assert!(!rows_moved);
     assert!(
         k_bias.iter().all(|b| b.abs() < k_relative_std),
         "{k_bias:?} {k_relative_std}"

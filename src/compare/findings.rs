@@ -18,6 +18,7 @@ use super::{Delta, SIGNIFICANCE_SIGMAS};
 use crate::block::Block;
 use crate::diagnose::Finding;
 use crate::effect::Effect;
+use crate::model::band_limit::BandLimitShape;
 
 /// Which of the two runs named the effect.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -197,21 +198,11 @@ fn band_limit_shapes_differ(a: &Finding, b: &Finding) -> Option<String> {
     if a.effect != Effect::ReferenceBandLimit {
         return None;
     }
-    let shape = |f: &Finding| {
-        let p = &f.parameters;
-        let causal = p.get("causal").and_then(Value::as_bool) == Some(true);
-        let name = p
-            .get("shape")
-            .and_then(Value::as_str)
-            .unwrap_or(if causal { "causal2" } else { "zero_phase" })
-            .to_owned();
-        match p.get("order").and_then(Value::as_i64) {
-            Some(m) => format!("{name} order {m}"),
-            None => name,
-        }
-    };
+    let shape = |f: &Finding| BandLimitShape::from_parameters(&f.parameters);
+    let label =
+        |s: Option<BandLimitShape>| s.map_or_else(|| "an unnamed shape".to_owned(), BandLimitShape::label);
     let (sa, sb) = (shape(a), shape(b));
-    (sa != sb).then(|| format!("{sa} against {sb}"))
+    (sa != sb).then(|| format!("{} against {}", label(sa), label(sb)))
 }
 
 /// Every pair of runs `a < b`, every (block, effect) named on either, compared. `names` labels

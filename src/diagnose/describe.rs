@@ -6,6 +6,7 @@ use serde_json::Value;
 use super::report::Finding;
 use crate::effect::Effect;
 use crate::ident::signals::channel_names;
+use crate::model::band_limit::BandLimitShape;
 
 /// Reads a number.
 fn num(v: &Value) -> Option<f64> {
@@ -238,13 +239,13 @@ fn band_limit_size(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>) -> Option<Vec<S
     let rise = p.get("gain_rise_at_band_top").and_then(num);
     let top = p.get("band_top_hz").and_then(num);
     let corner = p.get("corner_hz").and_then(num);
-    let order = p.get("order").and_then(Value::as_i64);
-    let causal = p.get("causal").and_then(Value::as_bool);
+    let shape = BandLimitShape::from_parameters(p)?;
+    let causal = shape.causal();
     let rate = p.get("reference_rate_hz").and_then(num);
-    let (Some(rise), Some(top), Some(corner), Some(causal)) = (rise, top, corner, causal) else {
+    let (Some(rise), Some(top), Some(corner)) = (rise, top, corner) else {
         return None;
     };
-    let through = match (order, rate) {
+    let through = match (shape.order(), rate) {
         (Some(m), _) => format!(
             "through a {} order-{m} low-pass at {corner:.1}{} Hz",
             if causal { "causal" } else { "zero-phase" },
@@ -311,6 +312,14 @@ mod tests {
         );
         // The group delay sqrt(2) / (2 pi 39.79 Hz) = 5.657 ms.
         assert!(lines[1].contains("group delay, 5.657 ms"), "{lines:?}");
+        // A report written before findings named their shape: read from `causal` and `order`.
+        let mut old = causal.clone();
+        old.as_object_mut().expect("object").remove("shape");
+        let lines = describe_size(Block::Gyro, Effect::ReferenceBandLimit, &old, &Value::Null);
+        assert!(
+            lines[0].contains("through a causal order-2 low-pass at 39.8 Hz"),
+            "{lines:?}"
+        );
         // Neither an order nor a rate: no words.
         let neither = json!({"T_s": 0.004, "causal": false, "band_top_hz": 38.0, "gain_rise_at_band_top": 0.1, "corner_hz": 39.8});
         let lines = describe_size(Block::Gyro, Effect::ReferenceBandLimit, &neither, &Value::Null);

@@ -70,23 +70,20 @@ pub struct InputLimit {
 
 /// The gain's fall across the band with no phase of its own that the order-0 fit of `b` found
 /// (`gain_changes_across_band` with a negative rise, a row of `K` moved by more than `K`'s
-/// relative deviation), and its standard deviation; `None` when it found none, or a rise. The
-/// warning is said also where only one element moves beyond its own deviation (a precise row
-/// beside poor cross-couplings); that does not end the diagnosis's band (on a slow, noisy
-/// reference the accelerometer's band then ended at 4 Hz where its noisy range was marked, and
-/// 3 of 209 campaign runs' findings changed). The rows' bias is the warning's, as the fit over
-/// the even gain applied it (its projection on each row at low frequency), where the rule read
-/// the curvature's first-order one before: the 209 runs' findings are the same.
+/// relative deviation: the warning's `rows_moved`), and its standard deviation; `None` when it
+/// found none, or a rise. The warning is said also where only one element moves beyond its own
+/// deviation (a precise row beside poor cross-couplings); that does not end the diagnosis's band
+/// (on a slow, noisy reference the accelerometer's band then ended at 4 Hz where its noisy range
+/// was marked, and 3 of 209 campaign runs' findings changed).
 #[must_use]
 pub fn falling_gain(b: &BlockIdentification) -> Option<(f64, f64)> {
     b.warnings.iter().find_map(|w| match w {
         IdentWarning::GainChangesAcrossBand {
             rise,
             rise_std,
-            k_bias,
-            k_relative_std,
+            rows_moved: true,
             ..
-        } if *rise < 0.0 && k_bias.iter().any(|b| b.abs() > *k_relative_std) => Some((*rise, *rise_std)),
+        } if *rise < 0.0 => Some((*rise, *rise_std)),
         _ => None,
     })
 }

@@ -512,12 +512,7 @@ const SHARED_CORNER_SIGMAS: f64 = 3.0;
 pub(super) fn say_shared_band_limit(findings: &mut [Finding], diagnosed: &[Block]) {
     let corner = |f: &Finding| {
         let p = &f.parameters;
-        let shape = (
-            p.get("shape")?.as_str()?.to_owned(),
-            // No order for the interpolated shape.
-            p.get("order").and_then(serde_json::Value::as_i64),
-            p.get("causal")?.as_bool()?,
-        );
+        let shape = crate::model::band_limit::BandLimitShape::from_parameters(p)?;
         let c = p.get("corner_hz")?.as_f64()?;
         let sd = f
             .parameter_std

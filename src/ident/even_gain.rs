@@ -178,6 +178,7 @@ pub fn over_even_gain(
             rise_std,
             outputs,
             k_relative_std,
+            rows_moved,
             largest_change,
             band_hz,
             ..
@@ -187,6 +188,7 @@ pub fn over_even_gain(
             k_bias: applied,
             outputs,
             k_relative_std,
+            rows_moved,
             largest_change,
             band_hz,
             k_at_low_frequency: true,

@@ -147,7 +147,8 @@ pub fn gain_changes(
         .filter(|&(i, j)| fit.k_std[i][j] > 0.0 && c.row_change[i][j].is_finite())
         .map(|(i, j)| (c.row_change[i][j].abs() / fit.k_std[i][j], (i, j)))
         .fold((0.0, (0, 0)), |best, x| if x.0 > best.0 { x } else { best });
-    let said = c.rise().abs() > CURVATURE_SIGMAS * c.rise_std() && (largest > k_relative_std || sigmas > 1.0);
+    let rows_moved = largest > k_relative_std;
+    let said = c.rise().abs() > CURVATURE_SIGMAS * c.rise_std() && (rows_moved || sigmas > 1.0);
     let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
     said.then(|| {
         let warning = IdentWarning::GainChangesAcrossBand {
@@ -156,6 +157,7 @@ pub fn gain_changes(
             k_bias,
             outputs: output_names.map(str::to_owned),
             k_relative_std,
+            rows_moved,
             // None where no element has a deviation to move against.
             largest_change: if sigmas > 0.0 {
                 ElementChange {
@@ -173,15 +175,36 @@ pub fn gain_changes(
     })
 }
 
+/// The least determined element of `K` (the largest deviation in `k_std`; an unknown one, NaN of
+/// either sign, counts as the least determined), and whether the imprecise-gain check says it:
+/// its deviation unknown or beyond [`IMPRECISE_GAIN`]. The rule of [`imprecise_gain`] and of an
+/// extended model's own figures (`crate::model::BlockModel`).
+#[must_use]
+pub fn least_determined_gain(k_std: &[[f64; 3]; 3]) -> ((usize, usize), bool) {
+    let key = |v: f64| if v.is_nan() { f64::INFINITY } else { v };
+    let (i, j) = (0..9)
+        .map(|e| (e / 3, e % 3))
+        .max_by(|&(a, b), &(c, d)| key(k_std[a][b]).total_cmp(&key(k_std[c][d])))
+        .unwrap_or((0, 0));
+    let std = k_std[i][j];
+    ((i, j), std.is_nan() || std > IMPRECISE_GAIN)
+}
+
+/// The delay-sign check (module docs): a delay `tau_s` more than three of its deviations
+/// `tau_std_s` below zero, of any model (an extended one's on its own figures,
+/// `crate::model::BlockModel`).
+#[must_use]
+pub fn negative_delay(tau_s: f64, tau_std_s: f64) -> Option<IdentWarning> {
+    (tau_s + 3.0 * tau_std_s < 0.0).then_some(IdentWarning::NegativeDelay { tau_s, tau_std_s })
+}
+
 /// The imprecise-gain check of a calibrated block (module docs): the least determined element of
-/// `K`, once (the others say the same; a NaN counts as the least determined).
+/// `K`, once (the others say the same), by [`least_determined_gain`].
 #[must_use]
 pub fn imprecise_gain(block: Block, fit: &StructuralFit) -> Option<IdentWarning> {
     let (inputs, outputs) = channel_names(block);
-    let (i, j) = (0..9)
-        .map(|e| (e / 3, e % 3))
-        .max_by(|&(a, b), &(c, d)| fit.k_std[a][b].total_cmp(&fit.k_std[c][d]))?;
-    (fit.k_std[i][j].is_nan() || fit.k_std[i][j] > IMPRECISE_GAIN).then(|| IdentWarning::ImpreciseGain {
+    let ((i, j), imprecise) = least_determined_gain(&fit.k_std);
+    imprecise.then(|| IdentWarning::ImpreciseGain {
         output: outputs[i].to_owned(),
         input: inputs[j].to_owned(),
         value: fit.k[i][j],
@@ -259,12 +282,7 @@ pub fn self_check(
         }
         out.extend(imprecise_gain(block, fit));
     }
-    if fit.tau_s + 3.0 * fit.tau_std_s < 0.0 {
-        out.push(IdentWarning::NegativeDelay {
-            tau_s: fit.tau_s,
-            tau_std_s: fit.tau_std_s,
-        });
-    }
+    out.extend(negative_delay(fit.tau_s, fit.tau_std_s));
     out.extend(delay_outside_usual_range(spectra, fit, settings));
     let delay_only = fit.candidates.iter().find(|c| c.order == 0).map(|c| c.tau_s);
     if let Some(delay_only_tau_s) = delay_only
@@ -379,4 +397,27 @@ fn admissible_zeros_lag(fit: &StructuralFit) -> Option<[f64; 2]> {
         .iter()
         .any(|c| c.order == fit.order && c.rejected.is_none());
     fit.zeros_lag_s.filter(|_| admissible)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{IMPRECISE_GAIN, least_determined_gain};
+
+    #[test]
+    fn the_least_determined_element_is_the_one_judged() {
+        let mut k_std = [[1e-4; 3]; 3];
+        k_std[1][2] = 0.5 * IMPRECISE_GAIN;
+        assert_eq!(least_determined_gain(&k_std), ((1, 2), false));
+        k_std[2][0] = 2.0 * IMPRECISE_GAIN;
+        assert_eq!(least_determined_gain(&k_std), ((2, 0), true));
+        // An unknown deviation counts as the least determined, whichever sign its NaN has
+        // (`total_cmp` alone would put a negative NaN below every figure).
+        for nan in [f64::NAN, -f64::NAN] {
+            let mut k = k_std;
+            k[0][1] = nan;
+            assert_eq!(least_determined_gain(&k), ((0, 1), true), "{nan}");
+        }
+        // Exactly at the limit: not beyond it.
+        assert!(!least_determined_gain(&[[IMPRECISE_GAIN; 3]; 3]).1);
+    }
 }

@@ -125,6 +125,11 @@ pub enum IdentWarning {
         outputs: [String; 3],
         /// `K`'s own relative deviation, `||K_std||_F / ||K||_F`.
         k_relative_std: f64,
+        /// Whether a row of `K` moved by more than `k_relative_std` as the change was read (the
+        /// curvature's first-order row bias, before a fit over the even gain applied its own,
+        /// `k_bias`); `false` where only one element moved beyond its own deviation.
+        #[serde(default)]
+        rows_moved: bool,
         /// The element of `K` the change moves furthest against its own deviation (absent in
         /// model files written before it was said).
         #[serde(default)]

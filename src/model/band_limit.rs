@@ -128,6 +128,41 @@ impl BandLimitShape {
         }
     }
 
+    /// The shape a band-limit finding's parameters name (`shape`, and `order` for the zero-phase
+    /// Butterworths), as the discrepancy report writes them; a report written before findings
+    /// named their shape has `causal` and `order` only: `causal2`, or `zero_phase` of that order.
+    /// `None` where they name none of [`Self::SHAPES`].
+    #[must_use]
+    pub fn from_parameters(p: &serde_json::Value) -> Option<Self> {
+        let order = p
+            .get("order")
+            .and_then(serde_json::Value::as_i64)
+            .and_then(|m| i32::try_from(m).ok());
+        let causal = p.get("causal").and_then(serde_json::Value::as_bool);
+        let name = match p.get("shape") {
+            Some(v) => v.as_str()?,
+            None if causal? => "causal2",
+            None => "zero_phase",
+        };
+        let shape = match name {
+            "zero_phase" => Self::ZeroPhase { order: order? },
+            "causal2" => Self::Causal2,
+            "interpolated" => Self::Interpolated,
+            _ => return None,
+        };
+        Self::SHAPES.contains(&shape).then_some(shape)
+    }
+
+    /// The shape in a few words: its name, and a Butterworth's order (`zero_phase order 4`,
+    /// `causal2 order 2`, `interpolated`).
+    #[must_use]
+    pub fn label(self) -> String {
+        match self.order() {
+            Some(m) => format!("{} order {m}", self.name()),
+            None => self.name().to_owned(),
+        }
+    }
+
     /// Whether the shape has phase (a causal filter).
     #[must_use]
     pub fn causal(self) -> bool {
@@ -248,6 +283,44 @@ mod tests {
             let t0 = s.t_for_rise(0.05, 30.0);
             assert!((s.rise_at(t0, 30.0) - 0.05).abs() < 1e-12, "{s:?}");
         }
+    }
+
+    #[test]
+    fn a_findings_parameters_name_its_shape() {
+        // As the discrepancy report writes them (diagnose::report): each shape read back.
+        for s in BandLimitShape::SHAPES {
+            let mut p = serde_json::json!({ "shape": s.name(), "causal": s.causal(), "T_s": 0.002 });
+            if let Some(m) = s.order() {
+                p["order"] = serde_json::json!(m);
+            }
+            assert_eq!(BandLimitShape::from_parameters(&p), Some(s), "{p}");
+        }
+        // A report written before shapes were named.
+        let old = |causal: bool, order: i64| serde_json::json!({ "causal": causal, "order": order });
+        assert_eq!(
+            BandLimitShape::from_parameters(&old(true, 2)),
+            Some(BandLimitShape::Causal2)
+        );
+        assert_eq!(
+            BandLimitShape::from_parameters(&old(false, 4)),
+            Some(BandLimitShape::ZeroPhase { order: 4 })
+        );
+        // Names none of the shapes tried.
+        for bad in [
+            serde_json::json!({ "shape": "zero_phase", "order": 3 }),
+            serde_json::json!({ "shape": "zero_phase" }),
+            serde_json::json!({ "shape": "bessel", "order": 2 }),
+            serde_json::json!({ "shape": 2 }),
+            serde_json::json!({ "order": 1 }),
+            serde_json::json!({ "causal": false, "order": 3 }),
+        ] {
+            assert_eq!(BandLimitShape::from_parameters(&bad), None, "{bad}");
+        }
+        assert_eq!(
+            BandLimitShape::ZeroPhase { order: 8 }.label(),
+            "zero_phase order 8"
+        );
+        assert_eq!(BandLimitShape::Interpolated.label(), "interpolated");
     }
 
     #[test]

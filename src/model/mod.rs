@@ -374,34 +374,19 @@ impl BlockModel {
             .any(|a| a.effect == crate::effect::Effect::ScaleNonlinearity);
         // An accepted band limit (one that holds something: `T > 0`) is the stand's low-pass
         // modelled: the gain's rise across the band is its own (no longer the model's misfit),
-        // and a causal one takes the lag of the angles (their leading zeros) and its group delay,
-        // so the delay is against the motion: said negative only where the extended delay still
-        // is beyond three of its deviations (the identifier's rule), with its figures.
+        // and a causal one takes the lag of the angles (their leading zeros) and its group delay.
         let band_limit = effects.reference_band_limit.filter(|b| b.t_s > 0.0);
-        // (With the extended delay's deviation unknown: negative at all, the identified figures
-        // kept.)
-        let still_negative = tau_s + 3.0 * tau_std_s.unwrap_or(0.0) < 0.0;
         self.fit.warnings.retain(|w| match w {
             IdentWarning::PolesOrEvenGain { .. } | IdentWarning::ZerosLag { .. } => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
             IdentWarning::GainChangesAcrossBand { rise, .. } => band_limit.is_none() || *rise < 0.0,
             IdentWarning::ZerosLead { .. } => !band_limit.is_some_and(|b| b.shape.causal()),
-            IdentWarning::NegativeDelay { .. } => band_limit.is_none() || still_negative,
             _ => true,
         });
+        self.redo_negative_delay(tau_s, tau_std_s);
         for w in &mut self.fit.warnings {
             if let IdentWarning::DelayOutsideUsualRange { model_tau_s, .. } = w {
                 *model_tau_s = None;
-            }
-            if let IdentWarning::NegativeDelay {
-                tau_s: said,
-                tau_std_s: said_std,
-            } = w
-                && band_limit.is_some()
-                && let Some(sd) = tau_std_s
-            {
-                *said = tau_s;
-                *said_std = sd;
             }
             if let IdentWarning::GainChangesAcrossBand {
                 k_at_low_frequency, ..
@@ -436,6 +421,35 @@ impl BlockModel {
         self.redo_imprecise_gain();
     }
 
+    /// The delay-sign check ([`crate::ident::selfcheck::negative_delay`]) on the extended model's
+    /// own delay `tau_s` and its deviation: said where that delay is three deviations below 0,
+    /// whether or not the identified one was (the check holds for any model), with its figures,
+    /// and dropped where it is not (a causal band limit accepted takes the angles' group delay:
+    /// the delay is then against the motion; before, an extended model whose delay was 60 ms
+    /// kept the identified model's "negative delay"). Where the deviation is unknown the
+    /// identified warning stays, with its figures, only while the extended delay is negative.
+    fn redo_negative_delay(&mut self, tau_s: f64, tau_std_s: Option<f64>) {
+        let identified = self
+            .fit
+            .warnings
+            .iter()
+            .position(|w| matches!(w, IdentWarning::NegativeDelay { .. }));
+        let judged = match tau_std_s {
+            Some(sd) => crate::ident::selfcheck::negative_delay(tau_s, sd),
+            None => identified
+                .filter(|_| tau_s < 0.0)
+                .map(|at| self.fit.warnings[at].clone()),
+        };
+        match (identified, judged) {
+            (Some(at), Some(w)) => self.fit.warnings[at] = w,
+            (Some(at), None) => {
+                self.fit.warnings.remove(at);
+            }
+            (None, Some(w)) => self.fit.warnings.push(w),
+            (None, None) => {}
+        }
+    }
+
     /// The identified model's imprecise-gain warning on the extended model's own `K` and
     /// deviations: kept with their figures where the least determined element is still beyond
     /// [`crate::ident::selfcheck::IMPRECISE_GAIN`], dropped where it is not (an accepted band
@@ -452,13 +466,10 @@ impl BlockModel {
         else {
             return;
         };
-        let worst = |x: Option<f64>| x.unwrap_or(f64::INFINITY);
-        let (i, j) = (0..9)
-            .map(|e| (e / 3, e % 3))
-            .max_by(|&(a, b), &(c, d)| worst(self.fit.k_std[a][b]).total_cmp(&worst(self.fit.k_std[c][d])))
-            .unwrap_or((0, 0));
+        let known = self.fit.k_std.map(|row| row.map(|v| v.unwrap_or(f64::NAN)));
+        let ((i, j), imprecise) = crate::ident::selfcheck::least_determined_gain(&known);
         match self.fit.k_std[i][j] {
-            Some(std) if std <= crate::ident::selfcheck::IMPRECISE_GAIN => {
+            Some(_) if !imprecise => {
                 self.fit.warnings.remove(at);
             }
             Some(std) => {

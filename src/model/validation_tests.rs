@@ -140,8 +140,10 @@ fn no_effects(tau_s: f64, order: usize) -> crate::model::effects::ModelEffects {
 }
 
 /// The diagnosis's joint model (`set_effects`: order 0, its own delay) keeps no structural fit's
-/// weighing of poles against an even gain (`poles_or_even_gain`), and `delay_outside_usual_range`
-/// no longer names a chosen model's own delay; other warnings stay as they were.
+/// weighing of poles against an even gain (`poles_or_even_gain`), `delay_outside_usual_range`
+/// no longer names a chosen model's own delay, and the delay's sign is judged on the extended
+/// delay (a 60 ms one is not negative: before, the identified warning stayed); other warnings
+/// stay as they were.
 #[test]
 fn an_extended_model_drops_the_structural_fit_s_poles_words() {
     use crate::ident::warnings::IdentWarning;
@@ -155,11 +157,18 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
         aligned_s: 0.0,
         model_tau_s,
     };
-    let kept = IdentWarning::NegativeDelay {
+    let negative = IdentWarning::NegativeDelay {
         tau_s: -0.001,
         tau_std_s: 1e-4,
     };
+    let kept = IdentWarning::ImpreciseGain {
+        output: "gy".to_owned(),
+        input: "wy".to_owned(),
+        value: 1.005,
+        std: 0.013,
+    };
     m.fit.warnings = vec![
+        negative.clone(),
         IdentWarning::PolesOrEvenGain {
             order: 3,
             tau_s: 0.046,
@@ -181,10 +190,50 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
             pole_lag_s: 0.01,
         },
     ];
+    let before = m.clone();
     let effects = no_effects(0.046, 3);
-    m.set_effects(effects, K, [[Some(1e-3); 3]; 3], 0.060, Some(1e-5));
-    assert_eq!(m.fit.warnings, vec![outside(None), kept]);
+    // (`K[gy][wy]` beyond 1 %: the imprecise gain kept with the extended figures.)
+    let mut k_std = [[Some(1e-3); 3]; 3];
+    k_std[1][1] = Some(0.013);
+    m.set_effects(effects.clone(), K, k_std, 0.060, Some(1e-5));
+    let kept_now = IdentWarning::ImpreciseGain {
+        output: "gy".to_owned(),
+        input: "wy".to_owned(),
+        value: K[1][1],
+        std: 0.013,
+    };
+    assert_eq!(m.fit.warnings, vec![outside(None), kept_now.clone()]);
     assert_eq!(m.order, 0);
+    // An extended delay three deviations below 0: said with its figures, whether or not the
+    // identified model's was; within three of 0: not said.
+    let mut again = before.clone();
+    again
+        .fit
+        .warnings
+        .retain(|w| !matches!(w, IdentWarning::NegativeDelay { .. }));
+    again.set_effects(effects.clone(), K, k_std, -0.002, Some(5e-4));
+    assert!(again.fit.warnings.contains(&IdentWarning::NegativeDelay {
+        tau_s: -0.002,
+        tau_std_s: 5e-4
+    }));
+    let mut within = before.clone();
+    within.set_effects(effects.clone(), K, k_std, -0.002, Some(1e-3));
+    assert!(
+        !within
+            .fit
+            .warnings
+            .iter()
+            .any(|w| matches!(w, IdentWarning::NegativeDelay { .. })),
+        "{:?}",
+        within.fit.warnings
+    );
+    // Its deviation unknown: the identified warning stays while the extended delay is negative.
+    let mut unknown = before.clone();
+    unknown.set_effects(effects.clone(), K, k_std, -0.0005, None);
+    assert!(unknown.fit.warnings.contains(&negative));
+    let mut unknown = before;
+    unknown.set_effects(effects, K, k_std, 0.001, None);
+    assert!(!unknown.fit.warnings.contains(&negative));
 }
 
 /// Accepted effects none of which could be added leave the model's own response: an order-1
@@ -235,10 +284,10 @@ fn effects_that_add_nothing_leave_the_identified_response() {
 }
 
 /// An accepted band limit that holds something (`T > 0`) takes the identified model's gain rise,
-/// a causal one its leading zeros, and the negative delay where the extended delay is not 3
-/// deviations below 0 (kept with the extended figures where it is); one fitted at `T = 0` takes
-/// nothing. `imprecise_gain` is judged on the extended deviations: dropped below 1 %, kept with
-/// the new figures above.
+/// a causal one its leading zeros; one fitted at `T = 0` takes neither. The negative delay and
+/// `imprecise_gain` are judged on the extended figures (as for any extended model): the delay
+/// kept with them where still 3 deviations below 0, the gain dropped below 1 %, kept with the
+/// new figures above.
 #[test]
 fn an_accepted_band_limit_takes_the_warnings_it_explains() {
     use crate::ident::warnings::{ElementChange, IdentWarning};
@@ -251,6 +300,7 @@ fn an_accepted_band_limit_takes_the_warnings_it_explains() {
             k_bias: [0.01; 3],
             outputs: ["gx", "gy", "gz"].map(str::to_owned),
             k_relative_std: 0.001,
+            rows_moved: true,
             largest_change: ElementChange::default(),
             band_hz: [0.1, 20.0],
             k_at_low_frequency: true,
@@ -310,9 +360,10 @@ fn an_accepted_band_limit_takes_the_warnings_it_explains() {
             },
         ]
     );
-    // A band limit at T = 0 takes nothing but the imprecise gain it no longer has (the gain
-    // rise's K is the joint fit's, not the gain at low frequency, as for any extended model).
-    let mut untouched = identified[..3].to_vec();
+    // A band limit at T = 0 takes nothing but the imprecise gain it no longer has and the
+    // negative delay the extended model does not have (the gain rise's K is the joint fit's, not
+    // the gain at low frequency, as for any extended model).
+    let mut untouched = identified[..2].to_vec();
     if let IdentWarning::GainChangesAcrossBand {
         k_at_low_frequency, ..
     } = &mut untouched[0]

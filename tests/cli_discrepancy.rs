@@ -103,6 +103,19 @@ fn report_names_the_hidden_effect_with_the_contract_fields() {
         let said = format!("imu-attest: note: {block} block: the tone search's limit");
         assert!(String::from_utf8_lossy(&o.stderr).contains(&said), "{said}");
     }
+    // And of the effects linear in the model it did not name: the gyro's g-sensitivity.
+    let limits = v["blocks"]["gyro"]["size_limits"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    let g = limits
+        .iter()
+        .find(|l| l["effect"] == "g_sensitivity")
+        .unwrap_or_else(|| panic!("{limits:?}"));
+    assert_eq!(g["component"].as_array().map(Vec::len), Some(9), "{g}");
+    assert!(g["any_direction"].as_f64().is_some_and(|a| a > 0.0), "{g}");
+    let said = "imu-attest: note: gyro block: no gyro g-sensitivity named; its evidence would have reached";
+    assert!(String::from_utf8_lossy(&o.stderr).contains(said), "{said}");
 }
 
 #[test]

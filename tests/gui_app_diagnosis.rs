@@ -112,6 +112,8 @@ fn the_clean_sample_run_has_no_missing_effect() {
     // What the search could have seen, for each block.
     harness.get_by_label_contains("gyro block: the tone search's limit");
     harness.get_by_label_contains("accel block: the tone search's limit");
+    harness.get_by_label_contains("gyro block: no gyro g-sensitivity named");
+    harness.get_by_label_contains("accel block: no accelerometer lever-arm error named");
     let run = harness.state().selected().unwrap();
     assert!(run.diagnosis.as_ref().unwrap().report.findings.is_empty());
     assert!(!run.diagnosis.running());

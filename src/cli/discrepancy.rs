@@ -125,13 +125,18 @@ pub(super) fn run(args: &Args) -> Result<(), CliError> {
 /// candidates not named and why ([`crate::diagnose::not_named`]); after `run: ` when the lines of several runs are printed
 /// together.
 pub(super) fn input_limit_lines(report: &crate::diagnose::Report, run: Option<&str>) -> Vec<String> {
-    limit_lines(report, run, |kind| kind != LimitKind::ToneLimit)
+    limit_lines(report, run, |kind| {
+        !matches!(kind, LimitKind::ToneLimit | LimitKind::SizeLimit)
+    })
 }
 
-/// Each block's tone search limit ([`crate::diagnose::tone_limit`]), a note: what a search that
-/// named no tone could have seen.
+/// Each block's tone search limit ([`crate::diagnose::tone_limit`]) and size limits
+/// ([`crate::diagnose::size_limit`]), notes: what a search that named no tone, or no effect
+/// linear in the model, could have seen.
 fn tone_limit_lines(report: &crate::diagnose::Report) -> Vec<String> {
-    limit_lines(report, None, |kind| kind == LimitKind::ToneLimit)
+    limit_lines(report, None, |kind| {
+        matches!(kind, LimitKind::ToneLimit | LimitKind::SizeLimit)
+    })
 }
 
 /// The limits of every block's search ([`crate::diagnose::Report::limits`]) of the kinds

@@ -5,7 +5,7 @@
 //! inputs may not be the motion and a smooth finding is confirmed below (the angles mostly their
 //! noise, or the block's coherence ended: [`super::noisy_angles`]), the significant candidates not named
 //! ([`super::not_named`]), and what a search that named no tone could have seen
-//! ([`super::tone_limit`]).
+//! ([`super::tone_limit`]), or no effect linear in the model ([`super::size_limit`]).
 
 use super::report::Report;
 use crate::block::Block;
@@ -24,6 +24,8 @@ pub enum LimitKind {
     NotNamed,
     /// The smallest tone the search could have seen.
     ToneLimit,
+    /// The smallest size of an effect linear in the model the search could have seen.
+    SizeLimit,
 }
 
 /// One limit of a block's search, in words (one sentence naming the block, no final stop), and
@@ -68,6 +70,11 @@ impl Report {
         }
         if let (Some(block), Some(tone)) = (Block::from_name(name), &b.tone_limit) {
             out.push(limit(LimitKind::ToneLimit, tone.words(block), false));
+        }
+        if let Some(block) = Block::from_name(name) {
+            for size in &b.size_limits {
+                out.push(limit(LimitKind::SizeLimit, size.words(block), false));
+            }
         }
         out
     }

@@ -37,6 +37,7 @@ pub mod profile;
 pub mod report;
 mod rules;
 pub mod simplex;
+pub mod size_limit;
 pub mod state;
 pub mod step_caveat;
 pub mod structure;

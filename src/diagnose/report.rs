@@ -289,6 +289,10 @@ pub struct BlockReport {
     /// tone needs to be named ([`super::tone_limit`]; absent where no tone was searched).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tone_limit: Option<super::tone_limit::ToneLimit>,
+    /// What the search could have seen of the effects with linear sizes it did not name: the
+    /// size each needs to be named ([`super::size_limit`]; absent where none is stated).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub size_limits: Vec<super::size_limit::SizeLimit>,
 }
 
 /// The static gain `K` of a state.

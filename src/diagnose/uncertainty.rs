@@ -103,6 +103,46 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
     let (x0, steps) = pack(structure, &f.theta);
     let beta = DVector::from_column_slice(&f.profile.beta);
     let (p, q) = (layout.n_params, x0.len());
+    let hs: Vec<f64> = steps.iter().map(|s| 0.02 * s).collect();
+    let (h, keep) = determined(hessian(design, grams, f, band_hz)?, p)?;
+    let reduced = reduced_covariance(
+        &h,
+        chi2_per_dof,
+        |x: &[f64]| {
+            let theta = unpack(structure, x, band_hz)?;
+            let shares = group_shares(design, grams, structure, layout, &theta, &beta);
+            (!shares.is_empty()).then_some(shares)
+        },
+        &x0,
+        &hs,
+        &keep,
+        p,
+    )?;
+    // Back to every parameter's place, NaN where held.
+    let mut matrix = DMatrix::from_element(p + q, p + q, f64::NAN);
+    for (i, &a) in keep.iter().enumerate() {
+        for (j, &b) in keep.iter().enumerate() {
+            matrix[(a, b)] = reduced[(i, j)];
+        }
+    }
+    Some(Covariance { matrix, n_linear: p })
+}
+
+/// The Hessian of the fit's cost at `fitted` over the linear parameters (`2 N`) and the
+/// nonlinear ones (`fit::pack`'s scaled units; the mixed and nonlinear blocks by central
+/// differences at a fiftieth of the search's first steps), and which nonlinear parameters a
+/// step leaves the range of (held: their rows and columns left 0, [`determined`]). `None` where the cost cannot be evaluated at the fit or a cross term's step
+/// leaves the range.
+pub(super) fn hessian(
+    design: &super::design::Design,
+    grams: &[DMatrix<num_complex::Complex64>],
+    fitted: &super::fit::Fitted,
+    band_hz: [f64; 2],
+) -> Option<(DMatrix<f64>, Vec<bool>)> {
+    let (structure, layout) = (&fitted.structure, &fitted.layout);
+    let (x0, steps) = pack(structure, &fitted.theta);
+    let beta = DVector::from_column_slice(&fitted.profile.beta);
+    let (p, q) = (layout.n_params, x0.len());
     let equations = |x: &[f64]| {
         let theta = unpack(structure, x, band_hz)?;
         normal_equations(design, grams, structure, layout, &theta)
@@ -112,7 +152,6 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
     let (n0, _, _) = equations(&x0)?;
     let mut h = DMatrix::<f64>::zeros(p + q, q + p);
     h.view_mut((0, 0), (p, p)).copy_from(&(2.0 * n0));
-    // Central differences at a fiftieth of the search's first steps.
     let hs: Vec<f64> = steps.iter().map(|s| 0.02 * s).collect();
     let shifted = |moves: &[(usize, f64)]| {
         let mut x = x0.clone();
@@ -147,41 +186,28 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
             h[(p + b, p + a)] = v;
         }
     }
-    // A nonlinear parameter at a bound (a band limit fitted at `T = 0`, whose gain moves as
-    // `T^(2n)` there, no curvature, and a step below leaves the range) is held at its value: the
-    // others' covariance is the one given it (conditional), its own undetermined (`None`).
-    // Before, one such parameter left every deviation of the model undetermined, `K`'s and the
-    // delay's too. Any other parameter with no curvature leaves the model undetermined.
-    let d: Vec<f64> = (0..p + q).map(|k| h[(k, k)]).collect();
+    Some((h, held))
+}
+
+/// The Hessian of the parameters the data determine, and their indices: a nonlinear parameter
+/// at a bound (a band limit fitted at `T = 0`, whose gain moves as `T^(2n)` there, no curvature,
+/// and a step below leaves the range; `held`) is held at its value: the others' covariance is the
+/// one given it (conditional), its own undetermined. Before, one such parameter left every
+/// deviation of the model undetermined, `K`'s and the delay's too. Any other parameter with no
+/// curvature leaves the model undetermined: `None`. `p` linear parameters come first.
+pub(super) fn determined(
+    (h, held): (DMatrix<f64>, Vec<bool>),
+    p: usize,
+) -> Option<(DMatrix<f64>, Vec<usize>)> {
+    let all = h.nrows();
     let held_at = |k: usize| k >= p && held[k - p];
-    let curved = |k: usize| d[k].is_finite() && d[k] > 0.0;
-    if (0..p + q).any(|k| !(held_at(k) || curved(k))) {
+    let curved = |k: usize| h[(k, k)].is_finite() && h[(k, k)] > 0.0;
+    if (0..all).any(|k| !(held_at(k) || curved(k))) {
         return None;
     }
-    let keep: Vec<usize> = (0..p + q).filter(|&k| !held_at(k)).collect();
+    let keep: Vec<usize> = (0..all).filter(|&k| !held_at(k)).collect();
     let n = keep.len();
-    let h = DMatrix::from_fn(n, n, |i, j| h[(keep[i], keep[j])]);
-    let reduced = reduced_covariance(
-        &h,
-        chi2_per_dof,
-        |x: &[f64]| {
-            let theta = unpack(structure, x, band_hz)?;
-            let shares = group_shares(design, grams, structure, layout, &theta, &beta);
-            (!shares.is_empty()).then_some(shares)
-        },
-        &x0,
-        &hs,
-        &keep,
-        p,
-    )?;
-    // Back to every parameter's place, NaN where held.
-    let mut matrix = DMatrix::from_element(p + q, p + q, f64::NAN);
-    for (i, &a) in keep.iter().enumerate() {
-        for (j, &b) in keep.iter().enumerate() {
-            matrix[(a, b)] = reduced[(i, j)];
-        }
-    }
-    Some(Covariance { matrix, n_linear: p })
+    Some((DMatrix::from_fn(n, n, |i, j| h[(keep[i], keep[j])]), keep))
 }
 
 /// The covariance of the parameters `keep` (all linear ones first, then the curved nonlinear

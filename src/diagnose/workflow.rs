@@ -188,6 +188,8 @@ fn diagnose_block(
     let mut accepted: Vec<(Effect, usize, Finding)> = Vec::new();
     let mut first_round = Vec::new();
     let mut last_rule = None;
+    // The last round's candidates, fitted on the final model (`super::size_limit`).
+    let mut last_round = Vec::new();
     // The same model below where the angles are mostly their noise (or the block's outputs stop
     // being coherent with its inputs, if lower): a smooth effect is named only if it is
     // significant there too (`super::noisy_angles`).
@@ -263,6 +265,7 @@ fn diagnose_block(
             confirmed.map(|s| (c, next, Some(s)))
         });
         let Some((best, next, next_below)) = chosen else {
+            last_round = cands;
             break;
         };
         match next_below {
@@ -380,6 +383,13 @@ fn diagnose_block(
     report.tone_limit = last_rule
         .filter(|_| rounds_left && !rejected.contains(&Effect::VibrationTone))
         .and_then(|rule| tone_limit(&state, rule.threshold(TONE_PARAMETERS), pb.full_level_hz));
+    // Likewise; and none for an effect significant but not named (said among those refused or
+    // set aside, `not_named` and `noisy_angles`).
+    if let Some(rule) = last_rule.filter(|_| rounds_left) {
+        last_round.retain(|c| rule.gain(c) <= 0.0);
+        report.size_limits =
+            super::size_limit::size_limits(&state, (&last_round, band), |added| rule.threshold(added));
+    }
     (report, findings, state)
 }
 
@@ -580,5 +590,6 @@ fn block_report(base: &State, last: &State, candidates: Vec<CandidateSummary>, d
         delay_step: None,
         given_model_gap_db: None,
         tone_limit: None,
+        size_limits: Vec::new(),
     }
 }

@@ -100,10 +100,9 @@ impl Covariance {
 pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option<Covariance> {
     let f = &state.fitted;
     let (design, grams, structure, layout) = (&state.design, &state.grams, &f.structure, &f.layout);
-    let (x0, steps) = pack(structure, &f.theta);
+    let (x0, hs) = packed_with_steps(f);
     let beta = DVector::from_column_slice(&f.profile.beta);
     let (p, q) = (layout.n_params, x0.len());
-    let hs: Vec<f64> = steps.iter().map(|s| 0.02 * s).collect();
     let (h, keep) = determined(hessian(design, grams, f, band_hz)?, p)?;
     let reduced = reduced_covariance(
         &h,
@@ -128,10 +127,19 @@ pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option
     Some(Covariance { matrix, n_linear: p })
 }
 
+/// The fit's nonlinear parameters packed (`fit::pack`'s scaled units) and the central
+/// differences' steps: a fiftieth of the search's first steps (the Hessian's and the sandwich's
+/// scores' alike).
+fn packed_with_steps(fitted: &super::fit::Fitted) -> (Vec<f64>, Vec<f64>) {
+    let (x0, steps) = pack(&fitted.structure, &fitted.theta);
+    (x0, steps.iter().map(|s| 0.02 * s).collect())
+}
+
 /// The Hessian of the fit's cost at `fitted` over the linear parameters (`2 N`) and the
 /// nonlinear ones (`fit::pack`'s scaled units; the mixed and nonlinear blocks by central
 /// differences at a fiftieth of the search's first steps), and which nonlinear parameters a
-/// step leaves the range of (held: their rows and columns left 0, [`determined`]). `None` where the cost cannot be evaluated at the fit or a cross term's step
+/// step leaves the range of (held: their rows and columns left 0, [`determined`]). `None` where
+/// the cost cannot be evaluated at the fit or a cross term's step
 /// leaves the range.
 pub(super) fn hessian(
     design: &super::design::Design,
@@ -140,7 +148,7 @@ pub(super) fn hessian(
     band_hz: [f64; 2],
 ) -> Option<(DMatrix<f64>, Vec<bool>)> {
     let (structure, layout) = (&fitted.structure, &fitted.layout);
-    let (x0, steps) = pack(structure, &fitted.theta);
+    let (x0, hs) = packed_with_steps(fitted);
     let beta = DVector::from_column_slice(&fitted.profile.beta);
     let (p, q) = (layout.n_params, x0.len());
     let equations = |x: &[f64]| {
@@ -152,7 +160,6 @@ pub(super) fn hessian(
     let (n0, _, _) = equations(&x0)?;
     let mut h = DMatrix::<f64>::zeros(p + q, q + p);
     h.view_mut((0, 0), (p, p)).copy_from(&(2.0 * n0));
-    let hs: Vec<f64> = steps.iter().map(|s| 0.02 * s).collect();
     let shifted = |moves: &[(usize, f64)]| {
         let mut x = x0.clone();
         for &(k, d) in moves {

@@ -266,6 +266,7 @@ fn diagnose_block(
         });
         let Some((best, next, next_below)) = chosen else {
             last_round = cands;
+            last_round.retain(|c| super::size_limit::LIMITED.contains(&c.effect));
             break;
         };
         match next_below {
@@ -383,10 +384,15 @@ fn diagnose_block(
     report.tone_limit = last_rule
         .filter(|_| rounds_left && !rejected.contains(&Effect::VibrationTone))
         .and_then(|rule| tone_limit(&state, rule.threshold(TONE_PARAMETERS), pb.full_level_hz));
-    // Likewise; and none for an effect significant but not named (said among those refused or
-    // set aside, `not_named` and `noisy_angles`).
+    // Likewise; and none for an effect significant but not named, in this round or an earlier
+    // one (said among those refused or set aside, `not_named` and `noisy_angles`).
     if let Some(rule) = last_rule.filter(|_| rounds_left) {
-        last_round.retain(|c| rule.gain(c) <= 0.0);
+        let set_aside = report.noisy_angles.as_ref().map_or(&[][..], |n| &n.set_aside[..]);
+        last_round.retain(|c| {
+            rule.gain(c) <= 0.0
+                && !report.not_named.iter().any(|r| r.effect == c.effect)
+                && !set_aside.contains(&c.effect)
+        });
         report.size_limits =
             super::size_limit::size_limits(&state, (&last_round, band), |added| rule.threshold(added));
     }

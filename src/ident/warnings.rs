@@ -127,7 +127,9 @@ pub enum IdentWarning {
         k_relative_std: f64,
         /// Whether a row of `K` moved by more than `k_relative_std` as the change was read (the
         /// curvature's first-order row bias, before a fit over the even gain applied its own,
-        /// `k_bias`); `false` where only one element moved beyond its own deviation.
+        /// `k_bias`); `false` where only one element moved beyond its own deviation, and in
+        /// model files written before it was carried (read from fresh identifications only:
+        /// `crate::diagnose::input_limit::falling_gain`).
         #[serde(default)]
         rows_moved: bool,
         /// The element of `K` the change moves furthest against its own deviation (absent in

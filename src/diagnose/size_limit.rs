@@ -38,9 +38,9 @@
 //!
 //! Nothing is stated where the rounds ended on their count (no effect could have been named),
 //! for an effect named, rejected, refused by a rule or set aside (said apart), or where the
-//! effect's candidate could not be fitted. Units:
-//! as the effect's parameters in the report. NaN cannot arise from finite input: a Hessian
-//! that is not positive definite (the run does not determine the effect) gives no limit.
+//! effect's candidate could not be fitted. Units: as the effect's parameters in the report. NaN
+//! cannot arise from finite input: a Hessian that is not positive definite (the run does not
+//! determine the effect) gives no limit.
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::{Deserialize, Serialize};
@@ -59,7 +59,7 @@ pub const LIMITED: [Effect; 3] = [
     Effect::ScaleNonlinearity,
 ];
 
-/// The size one effect needs for the search to name it.
+/// The size one effect needs for its evidence to reach the search's criterion.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SizeLimit {
     /// The effect (its catalogue id in JSON).

@@ -75,10 +75,11 @@ pub struct SizeLimit {
 }
 
 /// The limits of the effects of [`LIMITED`] among `candidates` (the last round's, fitted on
-/// `state`), each needing `chi2_needed(added parameters)`.
+/// `state` over `band_hz`), each needing `chi2_needed(added parameters)`.
 pub(super) fn size_limits(
     state: &State,
-    (candidates, band_hz): (&[Candidate], [f64; 2]),
+    candidates: &[Candidate],
+    band_hz: [f64; 2],
     chi2_needed: impl Fn(usize) -> f64,
 ) -> Vec<SizeLimit> {
     LIMITED
@@ -144,17 +145,12 @@ impl SizeLimit {
     /// The limit in words (one sentence naming the block, no final stop).
     #[must_use]
     pub fn words(&self, block: Block) -> String {
+        // A block's inputs are in its outputs' units (rad/s, m/s^2): `k2` is per input squared.
+        let out = block.output_unit();
         let unit = match self.effect {
-            Effect::GSensitivity => format!("{} per m/s^2", block.output_unit()),
+            Effect::GSensitivity => format!("{out} per m/s^2"),
             Effect::LeverArmError => "m".to_owned(),
-            _ => format!(
-                "{} per ({})^2",
-                block.output_unit(),
-                match block {
-                    Block::Gyro => "rad/s",
-                    Block::Accel => "m/s^2",
-                }
-            ),
+            _ => format!("{out} per ({out})^2"),
         };
         let (what, norm) = match self.effect {
             Effect::GSensitivity => ("one entry of G", "its Frobenius norm"),

@@ -139,8 +139,7 @@ fn packed_with_steps(fitted: &super::fit::Fitted) -> (Vec<f64>, Vec<f64>) {
 /// nonlinear ones (`fit::pack`'s scaled units; the mixed and nonlinear blocks by central
 /// differences at a fiftieth of the search's first steps), and which nonlinear parameters a
 /// step leaves the range of (held: their rows and columns left 0, [`determined`]). `None` where
-/// the cost cannot be evaluated at the fit or a cross term's step
-/// leaves the range.
+/// the cost cannot be evaluated at the fit or a cross term's step leaves the range.
 pub(super) fn hessian(
     design: &super::design::Design,
     grams: &[DMatrix<num_complex::Complex64>],

@@ -394,7 +394,7 @@ fn diagnose_block(
                 && !set_aside.contains(&c.effect)
         });
         report.size_limits =
-            super::size_limit::size_limits(&state, (&last_round, band), |added| rule.threshold(added));
+            super::size_limit::size_limits(&state, &last_round, band, |added| rule.threshold(added));
     }
     (report, findings, state)
 }

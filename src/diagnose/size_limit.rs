@@ -11,8 +11,8 @@
 //! is the fall of `chi2 = 2 C / ENBW` it brings, `C` the fit's cost (`super::profile`), every
 //! other parameter refitted: `2 b' S b / ENBW`, `2 S` the cost's curvature along the effect with
 //! the others profiled out (the Schur complement in the cost's Hessian, linear and nonlinear
-//! parameters alike, `super::uncertainty::hessian`; holding the nonlinear ones moved the limits
-//! by under 1 % on the runs tried, the delay and a band limit's `T` barely correlated with these
+//! parameters alike, `super::uncertainty::hessian`; holding the nonlinear ones made the limits
+//! 0.4-6 % lower on the runs tried: the delay and a band limit's `T` correlate a little with these
 //! terms). So:
 //! - one component `k` alone reaches the criterion at `sqrt(chi2_needed ENBW / (2 S_kk))`
 //!   ([`SizeLimit::component`]);

@@ -20,9 +20,11 @@
 //! a window where it is seen to turn within one (a gyro's sharp resonance:
 //! [`super::colour_window`]), and corrected by `M / (M - p)` for the `p` regressors fitted in a
 //! window of `M` equivalent samples (the window's bins times `(2n/3) / L_fft`; short of the bins'
-//! correlation's count by 3-6 % of the level, said there). The witness's
-//! own misalignment and dynamics are linear filters, so they do not enter; its bulk delay is
-//! taken out (a delay turns the phase across a window); the kinematic coupling does not enter
+//! correlation's count by 3-6 % of the level, said there). The witness's own misalignment and
+//! dynamics are linear filters, so they do not enter as far as the attitude is steady (a gyro's
+//! dynamics act per body axis, and a moving attitude modulates them on their way into the Euler
+//! rates: there the witness is also split by gyro axis, [`super::colour_split`]); its bulk delay
+//! is taken out (a delay turns the phase across a window); the kinematic coupling does not enter
 //! either, because the witness is converted to Euler rates sample by sample with the exact
 //! kinematics, at the angles one delay earlier (in a fast rotation the attitude turns within the
 //! delay).
@@ -56,10 +58,11 @@
 use num_complex::Complex64;
 use rayon::prelude::*;
 
+use super::colour_split::split_euler_rates;
 use super::colour_window::{Dof, Windows, slide};
 use super::mount::{in_platform_axes, turned_mounting};
 use super::witness_delay::{
-    align, angle_spectra, drift, first_delay, hann_windowed, witness_angles, witness_euler_rates,
+    advance, align, angle_spectra, drift, first_delay, hann_windowed, witness_angles, witness_euler_rates,
 };
 use crate::fourier::{RecordFft, fast_len};
 
@@ -344,15 +347,19 @@ fn stretch_cells(
     // (the level's correction counts the `2n/3` samples: `colour_window`).
     let independent_bins_per_bin = (n as f64 / fft.len() as f64).min(1.0) / HANN_BIN_CORRELATION;
     let late = angles.map(|a| delayed(a, |i| late_s(i) * rate));
-    let euler = witness_euler_rates(late.each_ref().map(Vec::as_slice), body_rates);
+    let late = late.each_ref().map(Vec::as_slice);
     let len = fft.len();
-    let mut w = euler.map(|r| {
+    let mut spectra = |r: Vec<f64>| {
         fft.forward(&hann_windowed(
             &delayed(&witness_angles(&r, rate), |i| -late_s(i) * rate),
             len,
         ))
-    });
-    align(&mut w, y, fft, equivalent_per_bin);
+    };
+    let mut w = witness_euler_rates(late, body_rates).map(&mut spectra);
+    // The witness split by gyro axis (`colour_split`), moved as the witness is.
+    let mut v = split_euler_rates(late, body_rates).map(&mut spectra);
+    let (delay_s, _) = align(&mut w, y, fft, equivalent_per_bin);
+    advance(&mut v, delay_s, fft);
     let min_half = (MIN_EQUIVALENT / equivalent_per_bin / 2.0).ceil() as usize;
     let windows = Windows {
         bins_per_hz: fft.len() as f64 / rate,
@@ -368,7 +375,7 @@ fn stretch_cells(
         },
         power_norm,
     };
-    let out = slide(y, &w, &windows)
+    let out = slide(y, &w, &v, &windows)
         .into_iter()
         .map(|(total, left)| cell_of(total, left, white))
         .collect();

@@ -26,7 +26,12 @@
 //! accelerometer band was no longer ended and a true lag was set aside: kept as it was until
 //! those rules are measured again with it).
 //!
-//! The unexplained part is `N_c = S_yy - S_yz S_zz^-1 S_zy`, with `z = [w; d w]` or `z = w`,
+//! On top of the constant or the line, each angle may also take its split regressors (the
+//! witness's parts each gyro axis makes, [`super::colour_split`]) where they explain
+//! significantly more; the sums carry them (`v`).
+//!
+//! The unexplained part is `N_c = S_yy - S_yz S_zz^-1 S_zy`, with `z = [w; d w]` or `z = w` (and
+//! the axis's split regressors `v` where they are kept),
 //! `d = (k - k_c) / h` (bins from the centre over the half-width). What is explained does not
 //! depend on where `d` is counted from or in what unit (`[w; (d + c) s w]` spans what `[w; d w]`
 //! does), so sums are accumulated about any origin and moved ([`Sums::about`]) only to keep `d`
@@ -34,16 +39,18 @@
 //! window slides over cells of bins summed once, its sums moved to a new origin whenever its
 //! centre has gone a half-width from the last (which also bounds the sliding sums' rounding).
 //! The slope's part is fitted by blocks (the Schur complement of `S_zz`: two 3x3 inverses, not
-//! one 6x6), the Hermitian blocks inverted by Cholesky with a relative pivot floor.
+//! one 6x6), the Hermitian blocks inverted by Cholesky with a relative pivot floor; with the split
+//! regressors, the whole system (at most 8x8) by Cholesky ([`super::colour_split`]).
 //!
 //! Units: the sums are of the Hann-windowed spectra as they come; [`unexplained`] scales them to
 //! periodogram levels (rad^2 per sample). NaN cannot arise from finite input; a window with too
 //! few bins or a singular `S_ww` says nothing (`None`); a slope block that is singular (the slope
 //! adds nothing) leaves the constant's fit.
 
-use nalgebra::{Cholesky, Matrix3, Vector3};
+use nalgebra::{Cholesky, Matrix3, Matrix3x4, Matrix4, Vector3, Vector4};
 use num_complex::Complex64;
 
+use super::colour_split::{SPLIT_F, SplitSums, split_residual};
 use super::observer::daniell_half_width;
 
 /// Regressors per angle with the slope: the witness's three channels and the same times the
@@ -51,12 +58,17 @@ use super::observer::daniell_half_width;
 pub(super) const REGRESSORS: f64 = 6.0;
 
 /// Sums over bins of `y y^H`, and of `y w^H` and `w w^H` weighted by the powers 0..=1 and 0..=2 of
-/// `u`, the bin's distance from the sums' origin (in bins, over a scale fixed by the caller).
+/// `u`, the bin's distance from the sums' origin (in bins, over a scale fixed by the caller); and
+/// with the split regressors `v` ([`super::colour_split`]), `y v^H`, `w v^H` (powers 0..=1) and
+/// `v v^H`.
 #[derive(Clone, Copy)]
 pub(super) struct Sums {
     yy: Matrix3<Complex64>,
     yw: [Matrix3<Complex64>; 2],
     ww: [Matrix3<Complex64>; 3],
+    yv: Matrix3x4<Complex64>,
+    wv: [Matrix3x4<Complex64>; 2],
+    vv: Matrix4<Complex64>,
 }
 
 impl Sums {
@@ -65,19 +77,33 @@ impl Sums {
             yy: Matrix3::zeros(),
             yw: [Matrix3::zeros(); 2],
             ww: [Matrix3::zeros(); 3],
+            yv: Matrix3x4::zeros(),
+            wv: [Matrix3x4::zeros(); 2],
+            vv: Matrix4::zeros(),
         }
     }
 
     /// Adds one bin at distance `u` from the origin.
-    pub(super) fn add(&mut self, y: &Vector3<Complex64>, w: &Vector3<Complex64>, u: f64) {
+    pub(super) fn add(
+        &mut self,
+        y: &Vector3<Complex64>,
+        w: &Vector3<Complex64>,
+        v: &Vector4<Complex64>,
+        u: f64,
+    ) {
         let yw = y * w.adjoint();
         let ww = w * w.adjoint();
+        let wv = w * v.adjoint();
         self.yy += y * y.adjoint();
         self.yw[0] += yw;
         self.yw[1] += yw * Complex64::from(u);
         self.ww[0] += ww;
         self.ww[1] += ww * Complex64::from(u);
         self.ww[2] += ww * Complex64::from(u * u);
+        self.yv += y * v.adjoint();
+        self.wv[0] += wv;
+        self.wv[1] += wv * Complex64::from(u);
+        self.vv += v * v.adjoint();
     }
 
     /// The same sums with distances counted from an origin `shift` before this one and in units
@@ -93,6 +119,9 @@ impl Sums {
                 (self.ww[1] + self.ww[0] * d) * s,
                 (self.ww[2] + self.ww[1] * (d * 2.0) + self.ww[0] * (d * d)) * (s * s),
             ],
+            yv: self.yv,
+            wv: [self.wv[0], (self.wv[1] + self.wv[0] * d) * s],
+            vv: self.vv,
         }
     }
 
@@ -106,6 +135,11 @@ impl Sums {
         for (a, b) in self.ww.iter_mut().zip(&other.ww) {
             *a += b * s;
         }
+        self.yv += other.yv * s;
+        for (a, b) in self.wv.iter_mut().zip(&other.wv) {
+            *a += b * s;
+        }
+        self.vv += other.vv * s;
     }
 }
 
@@ -113,7 +147,8 @@ impl Sums {
 /// part the witness leaves unexplained, corrected for the regressors fitted (`None` where the
 /// window says nothing: too few bins, or `S_ww` singular). Per axis the witness's transfer is a
 /// straight line across the window where its slope explains significantly more than a constant
-/// would ([`SLOPE_F`]), else a constant (module docs).
+/// would ([`SLOPE_F`]), else a constant (module docs); on top of either, the axis's split
+/// regressors where they explain significantly more ([`SPLIT_F`], [`super::colour_split`]).
 ///
 /// `sums` with distances of order 1 across the window (any origin and unit: module docs);
 /// `count` bins; `dof`: the window's equivalent samples, which the level's correction counts,
@@ -142,27 +177,55 @@ pub(super) fn unexplained(
     };
     let constant = b0 * a0_inv * b0.adjoint();
     let half = REGRESSORS / 2.0;
-    let left_constant =
-        [0, 1, 2].map(|a| (total[a] - constant[(a, a)].re) * equivalent / (equivalent - half));
     // The slope's part by blocks: what it explains beyond the witness (the Schur complement of
     // `S_zz`: two 3x3 inverses, not one 6x6); none where it adds nothing (`S` singular).
     let g = a0_inv * a1;
     let beyond = b1 - b0 * g;
-    let Some(s_inv) = hermitian_inverse(&(a2 - a1.adjoint() * g)) else {
-        return (total, Some(left_constant));
+    let slope = hermitian_inverse(&(a2 - a1.adjoint() * g)).map(|s_inv| beyond * s_inv * beyond.adjoint());
+    let (yv, vv) = (sums.yv * scale, sums.vv * scale);
+    let [wv0, wv1] = sums.wv.map(|m| m * scale);
+    let split = SplitSums {
+        a: [&a0, &a1, &a2],
+        b: [&b0, &b1],
+        yv: &yv,
+        wv: [&wv0, &wv1],
+        vv: &vv,
     };
-    let slope = beyond * s_inv * beyond.adjoint();
     let left = [0, 1, 2].map(|a| {
+        let after_constant = total[a] - constant[(a, a)].re;
         // Rounding can take a residual the slope explains wholly below 0: it is 0.
-        let residual = (total[a] - constant[(a, a)].re - slope[(a, a)].re).max(0.0);
-        // The slope's power against what three regressors of noise would take, `3 / M` of the
-        // noise's level, itself `residual M / (M - 6)`: the F ratio above `SLOPE_F`, without a
-        // division (a NaN keeps the constant).
-        if slope[(a, a)].re * (independent - REGRESSORS) > SLOPE_F * half * residual {
-            residual * equivalent / (equivalent - REGRESSORS)
-        } else {
-            left_constant[a]
+        let after_line = slope.map(|sl| (sl[(a, a)].re, (after_constant - sl[(a, a)].re).max(0.0)));
+        // The window's own fit. The slope's power against what three regressors of noise would
+        // take, `3 / M` of the noise's level, itself `residual M / (M - 6)`: the F ratio above
+        // `SLOPE_F`, without a division (a NaN keeps the constant).
+        let (residual, fitted) = match after_line {
+            Some((sl, r)) if sl * (independent - REGRESSORS) > SLOPE_F * half * r => (r, REGRESSORS),
+            _ => (after_constant, half),
+        };
+        // The witness split by gyro axis where it explains significantly more (`colour_split`),
+        // tested beside the fullest fit (the line, where its block is not singular): a part of
+        // the split left in would also hide the line's slope from its own test.
+        let (fullest, full_fitted) = after_line.map_or((after_constant, half), |(_, r)| (r, REGRESSORS));
+        let significant = |(left, q): &(f64, usize), base: f64, fitted: f64, f_ratio: f64, per: f64| {
+            let n = fitted + *q as f64;
+            equivalent > n + 1.0
+                && independent > n + 1.0
+                && (base - left) * (independent - n) > f_ratio * per * left
+        };
+        let split_full = split_residual(&split, a, after_line.is_some(), total[a], PIVOT_FLOOR)
+            .filter(|s| significant(s, fullest, full_fitted, SPLIT_F, s.1 as f64));
+        let Some((left_full, q)) = split_full else {
+            return residual * equivalent / (equivalent - fitted);
+        };
+        let q_f = q as f64;
+        // With the split kept, the line only where its slope explains significantly more beside it.
+        if after_line.is_some()
+            && let Some((left_constant, _)) = split_residual(&split, a, false, total[a], PIVOT_FLOOR)
+            && !significant(&(left_full, q), left_constant, REGRESSORS, SLOPE_F, half)
+        {
+            return left_constant * equivalent / (equivalent - half - q_f);
         }
+        left_full * equivalent / (equivalent - full_fitted - q_f)
     });
     (total, Some(left))
 }
@@ -174,7 +237,7 @@ pub(super) struct Dof {
     /// level's correction for the regressors counts (module docs).
     pub equivalent: f64,
     /// The window's independent bins by the Hann bins' correlation (35/18): what the slope's
-    /// test counts.
+    /// and the split's tests count.
     pub independent: f64,
 }
 
@@ -220,12 +283,18 @@ fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
     Vector3::new(spectra[0][k], spectra[1][k], spectra[2][k])
 }
 
-/// Per cell of `windows.cell` bins of the spectra `y` and `w`, what the window centred on it says
-/// ([`unexplained`]). The window covers the cells within its half-width of the cell (widened to
-/// `min_half` bins), cut at the spectrum's ends.
+fn split_bin(spectra: &[Vec<Complex64>; 4], k: usize) -> Vector4<Complex64> {
+    Vector4::new(spectra[0][k], spectra[1][k], spectra[2][k], spectra[3][k])
+}
+
+/// Per cell of `windows.cell` bins of the spectra `y` and `w` (and the split regressors `v`,
+/// [`super::colour_split::SPLIT`]), what the window centred on it says ([`unexplained`]). The
+/// window covers the cells within its half-width of the cell (widened to `min_half` bins), cut
+/// at the spectrum's ends.
 pub(super) fn slide(
     y: &[Vec<Complex64>; 3],
     w: &[Vec<Complex64>; 3],
+    v: &[Vec<Complex64>; 4],
     windows: &Windows,
 ) -> Vec<([f64; 3], Option<[f64; 3]>)> {
     let Windows {
@@ -236,7 +305,7 @@ pub(super) fn slide(
         per_bin,
         power_norm,
     } = *windows;
-    let bins = y[0].len().min(w[0].len());
+    let bins = y[0].len().min(w[0].len()).min(v[0].len());
     // Distances from the sums' origin in units of `min_half` bins.
     let unit = min_half as f64;
     let cells: Vec<(Sums, usize, f64)> = (0..bins.div_ceil(cell))
@@ -245,7 +314,12 @@ pub(super) fn slide(
             let range = c * cell..((c + 1) * cell).min(bins);
             let centre = (range.start + range.end - 1) as f64 / 2.0;
             for k in range.clone() {
-                sums.add(&bin(y, k), &bin(w, k), (k as f64 - centre) / unit);
+                sums.add(
+                    &bin(y, k),
+                    &bin(w, k),
+                    &split_bin(v, k),
+                    (k as f64 - centre) / unit,
+                );
             }
             (sums, range.len(), centre)
         })
@@ -291,196 +365,5 @@ fn cells_about(cells: &[(Sums, usize, f64)], origin: f64, unit: f64) -> (Sums, u
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rng::Rng;
-
-    fn random_bins(rng: &mut Rng, n: usize) -> Vec<(Vector3<Complex64>, Vector3<Complex64>)> {
-        let mut c = || Complex64::new(rng.normal(), rng.normal());
-        (0..n)
-            .map(|_| (Vector3::new(c(), c(), c()), Vector3::new(c(), c(), c())))
-            .collect()
-    }
-
-    /// Moving the origin after summing equals summing about the new origin (brute force).
-    #[test]
-    fn moving_the_origin_is_exact() {
-        let mut rng = Rng::new(7);
-        let bins = random_bins(&mut rng, 40);
-        let (mut far, mut near) = (Sums::zero(), Sums::zero());
-        for (k, (y, w)) in bins.iter().enumerate() {
-            far.add(y, w, k as f64 - 3.0);
-            near.add(y, w, (k as f64 - 25.0) / 8.0);
-        }
-        let moved = far.about(3.0 - 25.0, 1.0 / 8.0);
-        let pairs = moved.yw.iter().zip(&near.yw).chain(moved.ww.iter().zip(&near.ww));
-        for (a, b) in pairs {
-            assert!((a - b).norm() <= 1e-12 * b.norm().max(1.0), "{a} vs {b}");
-        }
-    }
-
-    /// A witness whose transfer turns across the window is explained but for the turn's
-    /// curvature (a constant transfer would leave much more); with a transfer exactly a line and
-    /// independent noise added to the angles, what is left is that noise's power (the
-    /// `M / (M - 6)` correction makes it unbiased: the mean over many windows within 3 %, where
-    /// the three regressors' `M / (M - 3)` would be 7 % low).
-    #[test]
-    fn a_transfer_turning_across_the_window_is_explained_and_the_noise_is_measured() {
-        let mut rng = Rng::new(11);
-        let n = 48;
-        let half = 24.0;
-        let mut exact_left = Vec::new();
-        let mut noisy_left = Vec::new();
-        for _ in 0..200 {
-            let bins = random_bins(&mut rng, n);
-            let (mut exact, mut noisy) = (Sums::zero(), Sums::zero());
-            for (k, (noise, w)) in bins.iter().enumerate() {
-                let u = (k as f64 - 23.5) / half;
-                // Phase turning by 1 rad across the window, gain 2, cross-coupled.
-                let turn = Complex64::from_polar(2.0, 0.5 * u);
-                let y = Vector3::new(turn * w[0], turn * w[1] + w[0] * 0.3, turn * w[2]);
-                exact.add(&y, w, u);
-                // A transfer exactly a line in frequency, and noise of known power.
-                let line = Complex64::new(1.5, 0.4 * u);
-                noisy.add(&(w * line + noise * Complex64::from(0.1)), w, u);
-            }
-            let all = Dof {
-                equivalent: n as f64,
-                independent: n as f64,
-            };
-            let (total, left) = unexplained(&exact, n as f64, all, 1.0);
-            let left = left.expect("the window says something");
-            exact_left.push(left[0].max(left[1]).max(left[2]) / total[0]);
-            noisy_left.push(unexplained(&noisy, n as f64, all, 1.0).1.expect("says")[1]);
-        }
-        let worst = exact_left.iter().copied().fold(0.0_f64, f64::max);
-        // A line leaves the turn's curvature, the variance of (0.5 u)^2 / 2 over the window,
-        // 1.4e-3 of the power on average; a constant would leave the variance of 0.5 u, 8e-2.
-        assert!(worst < 5e-3, "a line leaves {worst} of the power unexplained");
-        let mean = noisy_left.iter().sum::<f64>() / noisy_left.len() as f64;
-        // Each complex noise component has variance 2 x 0.01.
-        assert!(
-            (mean / 0.02 - 1.0).abs() < 0.03,
-            "mean unexplained {mean}, noise 0.02"
-        );
-    }
-
-    /// The sliding sums equal each window's sums taken afresh from its bins (brute force):
-    /// cells added and removed, origins moved and the window cut at the spectrum's ends.
-    #[test]
-    fn sliding_windows_equal_each_window_summed_afresh() {
-        let mut rng = Rng::new(5);
-        let bins: usize = 3001;
-        let mut c = || Complex64::new(rng.normal(), rng.normal());
-        let mut spectra = || [(); 3].map(|()| (0..bins).map(|_| c()).collect::<Vec<_>>());
-        let (y, w) = (spectra(), spectra());
-        let windows = Windows {
-            bins_per_hz: 24.0,
-            smoothing: (0.25, 0.05),
-            min_half: 18,
-            cell: 4,
-            per_bin: Dof {
-                equivalent: 0.6,
-                independent: 0.5,
-            },
-            power_norm: 1.0,
-        };
-        let slid = slide(&y, &w, &windows);
-        let cells = bins.div_ceil(4);
-        assert_eq!(slid.len(), cells);
-        for (c, (total, left)) in slid.iter().enumerate() {
-            let centre = (c * 4 + 2) as f64;
-            let half_bins = daniell_half_width((0.25, 0.05), centre / 24.0, 24.0).max(18);
-            let half = half_bins.div_ceil(4);
-            let range = c.saturating_sub(half) * 4..((c + half + 1).min(cells) * 4).min(bins);
-            let mut sums = Sums::zero();
-            for k in range.clone() {
-                sums.add(&bin(&y, k), &bin(&w, k), (k as f64 - centre) / half_bins as f64);
-            }
-            let count = range.len() as f64;
-            let dof = Dof {
-                equivalent: 0.6 * count,
-                independent: 0.5 * count,
-            };
-            let (want_total, want_left) = unexplained(&sums, count, dof, 1.0);
-            let left = left.expect("says");
-            let want_left = want_left.expect("says");
-            for a in 0..3 {
-                assert!((total[a] / want_total[a] - 1.0).abs() < 1e-9, "cell {c}");
-                assert!(
-                    (left[a] / want_left[a] - 1.0).abs() < 1e-7,
-                    "cell {c}: {left:?} {want_left:?}"
-                );
-            }
-        }
-    }
-
-    /// Through the real windows on a Hann-windowed record, angles of white noise that the
-    /// (independent) witness cannot explain: counting the Hann bins' correlation, the level reads
-    /// the noise's per-sample variance (within 3 %); counting the window's `2n/3` equivalent
-    /// samples, as the model does (module docs), 3-6 % low. Either way noise alone seldom buys a
-    /// slope (which would take the level a further `3 / M` down).
-    #[test]
-    fn a_hann_windowed_white_noise_reads_its_variance() {
-        let mut rng = Rng::new(9);
-        let (n, rate) = (12_000, 500.0);
-        let mut fft = crate::fourier::RecordFft::new(n, rate);
-        let mut record = |sigma: f64| {
-            [(); 3].map(|()| {
-                let x: Vec<f64> = (0..n).map(|_| sigma * rng.normal()).collect();
-                fft.forward(&super::super::witness_delay::hann_windowed(&x, n))
-            })
-        };
-        let (y, w) = (record(2.0), record(1.0));
-        let independent = 1.0 / (35.0 / 18.0);
-        let mean_left = |equivalent: f64| {
-            let windows = Windows {
-                bins_per_hz: n as f64 / rate,
-                smoothing: (0.25, 0.05),
-                min_half: 18,
-                cell: 4,
-                per_bin: Dof {
-                    equivalent,
-                    independent,
-                },
-                power_norm: 3.0 * n as f64 / 8.0,
-            };
-            let said = slide(&y, &w, &windows);
-            // Away from DC and Nyquist, where a bin is real.
-            let inner = &said[10..said.len() - 10];
-            inner
-                .iter()
-                .map(|(_, l)| l.expect("says").iter().sum::<f64>() / 3.0)
-                .sum::<f64>()
-                / inner.len() as f64
-                / 4.0
-        };
-        let right = mean_left(independent);
-        let as_samples = mean_left(2.0 / 3.0);
-        assert!((right - 1.0).abs() < 0.03, "{right}");
-        assert!((0.94..0.975).contains(&as_samples), "{as_samples}");
-    }
-
-    /// Too few bins for six regressors: nothing is said.
-    #[test]
-    fn too_few_bins_say_nothing() {
-        let mut rng = Rng::new(3);
-        let mut sums = Sums::zero();
-        for (k, (y, w)) in random_bins(&mut rng, 7).iter().enumerate() {
-            sums.add(y, w, k as f64 / 7.0);
-        }
-        assert!(
-            unexplained(
-                &sums,
-                7.0,
-                Dof {
-                    equivalent: 7.0,
-                    independent: 7.0
-                },
-                1.0
-            )
-            .1
-            .is_none()
-        );
-    }
-}
+#[path = "colour_window_tests.rs"]
+mod tests;

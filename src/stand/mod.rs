@@ -7,6 +7,7 @@
 //! Units: rad, rad/s, rad/s^2, m, m/s^2.
 
 pub mod colour;
+mod colour_split;
 mod colour_window;
 pub mod inputs;
 pub mod kinematics;

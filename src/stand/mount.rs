@@ -3,7 +3,8 @@
 //! The witness turns the gyro's outputs into Euler rates with the exact kinematics at the
 //! measured angles, which takes the outputs for body rates in platform axes. A misalignment of
 //! milliradians, a scale error or the gyro's dynamics are linear filters the witness's
-//! per-window regression absorbs. A triad mounted **turned** (90 degrees about an axis, an axis
+//! per-window regression absorbs (the dynamics with the witness split by axis where the attitude
+//! moves, [`super::colour_split`]). A triad mounted **turned** (90 degrees about an axis, an axis
 //! reversed) is not: the conversion's angle-dependent terms then mix the wrong axes, a part of
 //! the motion that no linear filter of the witness explains, which the noise model takes for
 //! angle noise. The observer then shrinks every block's inputs (found by a helper's independent

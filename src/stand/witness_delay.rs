@@ -173,13 +173,18 @@ pub(super) fn align(
         0.0
     };
     let delay_s = -(lag_of(peak) + refine) / rate;
-    for s in w.iter_mut() {
+    advance(w, delay_s, fft);
+    (delay_s, information.sqrt().recip())
+}
+
+/// Advances spectra on `fft`'s grid by `delay_s` seconds (a phase turn per bin).
+pub(super) fn advance(spectra: &mut [Vec<Complex64>], delay_s: f64, fft: &RecordFft) {
+    for s in spectra {
         for (k, v) in s.iter_mut().enumerate() {
             let omega = 2.0 * std::f64::consts::PI * fft.frequency_hz(k);
             *v *= Complex64::from_polar(1.0, omega * delay_s);
         }
     }
-    (delay_s, information.sqrt().recip())
 }
 
 /// The largest squared coherency [`align`]'s information counts (`g / (1 - g)` grows without

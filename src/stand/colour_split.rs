@@ -37,7 +37,7 @@
 use nalgebra::{Cholesky, SMatrix};
 use num_complex::Complex64;
 
-use super::kinematics::euler_rate;
+use super::witness_delay::euler_rates_of_axes;
 
 /// The split regressors: `(Euler axis i, body axis j)` of each `z_ij = E_ij g_j` added. With the
 /// kinematics' `E` (roll from all three body rates, yaw and pitch from y and z), these and the
@@ -56,17 +56,15 @@ pub(super) const SPLIT_F: f64 = 12.0;
 /// alone, at the angles given, sample by sample (0 where the conversion is not finite, as for
 /// the witness itself).
 pub(super) fn split_euler_rates(angles: [&[f64]; 3], body: [&[f64]; 3]) -> [Vec<f64>; 4] {
-    let n = angles[0].len().min(body[0].len());
-    SPLIT.map(|(i, j)| {
-        (0..n)
-            .map(|k| {
-                let mut w = [0.0; 3];
-                w[j] = body[j][k];
-                let r = euler_rate([angles[0][k], angles[1][k], angles[2][k]], w)[i];
-                if r.is_finite() { r } else { 0.0 }
-            })
-            .collect()
-    })
+    // Each body axis the split uses turned once, all three Euler axes of it.
+    let of_axis = [0, 1, 2].map(|j| {
+        SPLIT.iter().any(|&(_, b)| b == j).then(|| {
+            let mut axes = [false; 3];
+            axes[j] = true;
+            euler_rates_of_axes(angles, body, axes)
+        })
+    });
+    SPLIT.map(|(i, j)| of_axis[j].as_ref().map_or_else(Vec::new, |r| r[i].clone()))
 }
 
 /// Most regressors of one fit: the three `w`, their slopes, two split regressors.

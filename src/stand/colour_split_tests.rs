@@ -2,6 +2,7 @@ use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, Matrix4, Vector3, Vector4};
 
 use super::*;
 use crate::rng::Rng;
+use crate::stand::kinematics::euler_rate;
 
 /// Random bins: the angles `y`, the witness `w`, the split regressors `v`, and distances `u`.
 struct Bins {

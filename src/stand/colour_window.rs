@@ -199,35 +199,50 @@ pub(super) fn unexplained(
         // take, `3 / M` of the noise's level, itself `residual M / (M - 6)`: the F ratio above
         // `SLOPE_F`, without a division (a NaN keeps the constant).
         let (residual, fitted) = match after_line {
-            Some((sl, r)) if sl * (independent - REGRESSORS) > SLOPE_F * half * r => (r, REGRESSORS),
+            Some((sl, r)) if explains_more(sl, r, half, REGRESSORS, SLOPE_F, dof) => (r, REGRESSORS),
             _ => (after_constant, half),
         };
         // The witness split by gyro axis where it explains significantly more (`colour_split`),
         // tested beside the fullest fit (the line, where its block is not singular): a part of
         // the split left in would also hide the line's slope from its own test.
         let (fullest, full_fitted) = after_line.map_or((after_constant, half), |(_, r)| (r, REGRESSORS));
-        let significant = |(left, q): &(f64, usize), base: f64, fitted: f64, f_ratio: f64, per: f64| {
-            let n = fitted + *q as f64;
-            equivalent > n + 1.0
-                && independent > n + 1.0
-                && (base - left) * (independent - n) > f_ratio * per * left
-        };
-        let split_full = split_residual(&split, a, after_line.is_some(), total[a], PIVOT_FLOOR)
-            .filter(|s| significant(s, fullest, full_fitted, SPLIT_F, s.1 as f64));
+        let split_full =
+            split_residual(&split, a, after_line.is_some(), total[a], PIVOT_FLOOR).filter(|&(left, q)| {
+                let q = q as f64;
+                explains_more(fullest - left, left, q, full_fitted + q, SPLIT_F, dof)
+            });
         let Some((left_full, q)) = split_full else {
             return residual * equivalent / (equivalent - fitted);
         };
-        let q_f = q as f64;
+        let q = q as f64;
         // With the split kept, the line only where its slope explains significantly more beside it.
         if after_line.is_some()
             && let Some((left_constant, _)) = split_residual(&split, a, false, total[a], PIVOT_FLOOR)
-            && !significant(&(left_full, q), left_constant, REGRESSORS, SLOPE_F, half)
+            && !explains_more(
+                left_constant - left_full,
+                left_full,
+                half,
+                REGRESSORS + q,
+                SLOPE_F,
+                dof,
+            )
         {
-            return left_constant * equivalent / (equivalent - half - q_f);
+            return left_constant * equivalent / (equivalent - half - q);
         }
-        left_full * equivalent / (equivalent - full_fitted - q_f)
+        left_full * equivalent / (equivalent - full_fitted - q)
     });
     (total, Some(left))
+}
+
+/// The F test of two nested fits in one window: whether `more`, the power that `added` complex
+/// regressors explain beyond the smaller fit, exceeds `f_ratio` times what noise alone would give
+/// them, `added / (M - fitted)` of the residual `left` (`M` the independent bins, `fitted` the
+/// regressors of the larger fit). False where the window has no more samples or bins than
+/// `fitted + 1`, and where any figure is NaN.
+fn explains_more(more: f64, left: f64, added: f64, fitted: f64, f_ratio: f64, dof: Dof) -> bool {
+    dof.equivalent > fitted + 1.0
+        && dof.independent > fitted + 1.0
+        && more * (dof.independent - fitted) > f_ratio * added * left
 }
 
 /// A window's degrees of freedom.

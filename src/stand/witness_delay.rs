@@ -18,13 +18,18 @@ use crate::spectral::Window;
 /// The witness: the gyro's body rates `body` turned into Euler rates at the measured `angles`
 /// (rad/s, axis order `[roll, yaw, pitch]`). Samples at gimbal lock (non-finite) become 0.
 pub(super) fn witness_euler_rates(angles: [&[f64]; 3], body: [&[f64]; 3]) -> [Vec<f64>; 3] {
+    euler_rates_of_axes(angles, body, [true; 3])
+}
+
+/// The Euler rates the body rates about the axes in `axes` make, the others taken as 0: the
+/// witness ([`witness_euler_rates`]) with every axis, one body axis's part of it
+/// ([`super::colour_split`]) with one. Samples at gimbal lock (non-finite) become 0.
+pub(super) fn euler_rates_of_axes(angles: [&[f64]; 3], body: [&[f64]; 3], axes: [bool; 3]) -> [Vec<f64>; 3] {
     let n = angles[0].len().min(body[0].len());
     let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
     for i in 0..n {
-        let r = euler_rate(
-            [angles[0][i], angles[1][i], angles[2][i]],
-            [body[0][i], body[1][i], body[2][i]],
-        );
+        let rates = [0, 1, 2].map(|j| if axes[j] { body[j][i] } else { 0.0 });
+        let r = euler_rate([angles[0][i], angles[1][i], angles[2][i]], rates);
         for a in 0..3 {
             out[a][i] = if r[a].is_finite() { r[a] } else { 0.0 };
         }

@@ -333,6 +333,13 @@ fn a_model_with_accepted_effects_lists_them_in_the_certificate() {
         "gyro's list"
     );
     assert!(html.contains("<b>gyro first-order lag</b>: first-order lag, time constant T = "));
+    // The extended gyro's fit is the joint fit's, the accelerometer's as identified.
+    assert_eq!(
+        html.matches("(whole-record fit with the accepted effects; ")
+            .count(),
+        1,
+        "the gyro's chi2/dof is the joint fit's"
+    );
     // The accelerometer's accepted mode is not in this clean run: its fit parks at the band's
     // top, so it is not added, the model stays as identified and the certificate says why.
     assert_eq!(

@@ -79,6 +79,7 @@ pub fn prepare_for_effects(
 /// [`prepare_for_effects`] on the same run, settings and model). Blocks without any are left as
 /// identified.
 pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, Effect)]) {
+    let calibrated = model.settings.calibrated;
     for pb in preps.iter().flat_map(|p| &p.blocks) {
         let effects: Vec<Effect> = accepted
             .iter()
@@ -88,7 +89,7 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
         if let Some(entry) = model.blocks.get_mut(pb.block.name())
             && !effects.is_empty()
         {
-            extend_block(entry, pb, &effects);
+            extend_block(entry, pb, &effects, calibrated);
         }
     }
 }
@@ -96,7 +97,7 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
 /// Adds `effects` (in order, each once) to the block's whole-record model and writes the result
 /// into `entry`; when none can be added, `entry` keeps its identified model and only lists them
 /// with the reasons.
-fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) {
+fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect], calibrated: bool) {
     let band = pb.band_hz;
     let mut state = pb.base.clone();
     let mut added: Vec<(Effect, usize)> = Vec::new();
@@ -198,7 +199,7 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect]) 
     }
     let k_std = [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov.as_ref().and_then(|c| c.linear_std(3 * i + j))));
     let tau_sd = cov.as_ref().and_then(tau_std);
-    entry.set_effects(effects, gain(&state), k_std, f.theta.tau_s, tau_sd);
+    entry.set_effects(effects, gain(&state), k_std, f.theta.tau_s, tau_sd, calibrated);
 }
 
 /// Why an accepted effect's fit `next` (from `state`, over `band`) is not added, if it is not: a

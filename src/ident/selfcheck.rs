@@ -190,6 +190,27 @@ pub fn least_determined_gain(k_std: &[[f64; 3]; 3]) -> ((usize, usize), bool) {
     ((i, j), std.is_nan() || std > IMPRECISE_GAIN)
 }
 
+/// The gain-plausibility check of a calibrated block (module docs): every element of `k` off a
+/// calibrated block's by more than [`GAIN_TOLERANCE`] (a diagonal element from 1, a
+/// cross-coupling from 0), or NaN; `inputs` and `outputs` name `k`'s columns and rows. Of any
+/// model (an extended one's on its own `K`, `crate::model::BlockModel`).
+pub fn implausible_gains<'a>(
+    k: &'a [[f64; 3]; 3],
+    inputs: [&'a str; 3],
+    outputs: [&'a str; 3],
+) -> impl Iterator<Item = IdentWarning> + 'a {
+    (0..9).filter_map(move |e| {
+        let (i, j) = (e / 3, e % 3);
+        let v = k[i][j];
+        let off = if i == j { (v - 1.0).abs() } else { v.abs() };
+        (off.is_nan() || off > GAIN_TOLERANCE).then(|| IdentWarning::ImplausibleGain {
+            output: outputs[i].to_owned(),
+            input: inputs[j].to_owned(),
+            value: v,
+        })
+    })
+}
+
 /// The delay-sign check (module docs): a delay `tau_s` more than three of its deviations
 /// `tau_std_s` below zero, of any model (an extended one's on its own figures,
 /// `crate::model::BlockModel`).
@@ -267,19 +288,7 @@ pub fn self_check(
     }
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);
-        for i in 0..3 {
-            for j in 0..3 {
-                let v = fit.k[i][j];
-                let off = if i == j { (v - 1.0).abs() } else { v.abs() };
-                if off.is_nan() || off > GAIN_TOLERANCE {
-                    out.push(IdentWarning::ImplausibleGain {
-                        output: outputs[i].to_owned(),
-                        input: inputs[j].to_owned(),
-                        value: v,
-                    });
-                }
-            }
-        }
+        out.extend(implausible_gains(&fit.k, inputs, outputs));
         out.extend(imprecise_gain(block, fit));
     }
     out.extend(negative_delay(fit.tau_s, fit.tau_std_s));

@@ -152,6 +152,15 @@ pub enum IdentWarning {
         /// chi2 per degree of freedom there.
         worst_chi2_per_dof: f64,
     },
+    /// The model extended with accepted effects (`identify --effects`, Accept in the app) still
+    /// does not explain the data to the stated noise (the rule of [`Self::PoorFit`] on the joint
+    /// fit's own chi2/dof, which replaces the identified model's poor fit): uncertainties widened.
+    PoorFitWithEffects {
+        /// chi2 per degree of freedom of the joint fit with the effects.
+        chi2_per_dof: f64,
+        /// The same fit's without them, over the same band and record.
+        without_effects: f64,
+    },
     /// A gain element far from a calibrated block's (diagonal near 1, cross-couplings small).
     ImplausibleGain {
         /// Output channel name.
@@ -489,6 +498,17 @@ impl fmt::Display for IdentWarning {
                 band_hz[0], band_hz[1]
             ),
             w @ IdentWarning::GainChangesAcrossBand { .. } => f.write_str(&gain_change_words(w)),
+            IdentWarning::PoorFitWithEffects {
+                chi2_per_dof,
+                without_effects,
+            } => write!(
+                f,
+                "with the accepted effects the model still does not explain the data: chi2/dof \
+                 {chi2_per_dof:.2} ({without_effects:.2} without them); uncertainties widened by \
+                 {:.2}x, and most of the disagreement is none of the accepted effects (the \
+                 diagnosis says what is left)",
+                chi2_per_dof.max(1.0).sqrt()
+            ),
             IdentWarning::ImplausibleGain { output, input, value } => write!(
                 f,
                 "K[{output}][{input}] = {value:.4} is implausible for a calibrated block (diagonal \

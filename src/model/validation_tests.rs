@@ -195,7 +195,7 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
     // (`K[gy][wy]` beyond 1 %: the imprecise gain kept with the extended figures.)
     let mut k_std = [[Some(1e-3); 3]; 3];
     k_std[1][1] = Some(0.013);
-    m.set_effects(effects.clone(), K, k_std, 0.060, Some(1e-5));
+    m.set_effects(effects.clone(), K, k_std, 0.060, Some(1e-5), true);
     let kept_now = IdentWarning::ImpreciseGain {
         output: "gy".to_owned(),
         input: "wy".to_owned(),
@@ -211,13 +211,13 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
         .fit
         .warnings
         .retain(|w| !matches!(w, IdentWarning::NegativeDelay { .. }));
-    again.set_effects(effects.clone(), K, k_std, -0.002, Some(5e-4));
+    again.set_effects(effects.clone(), K, k_std, -0.002, Some(5e-4), true);
     assert!(again.fit.warnings.contains(&IdentWarning::NegativeDelay {
         tau_s: -0.002,
         tau_std_s: 5e-4
     }));
     let mut within = before.clone();
-    within.set_effects(effects.clone(), K, k_std, -0.002, Some(1e-3));
+    within.set_effects(effects.clone(), K, k_std, -0.002, Some(1e-3), true);
     assert!(
         !within
             .fit
@@ -229,10 +229,10 @@ fn an_extended_model_drops_the_structural_fit_s_poles_words() {
     );
     // Its deviation unknown: the identified warning stays while the extended delay is negative.
     let mut unknown = before.clone();
-    unknown.set_effects(effects.clone(), K, k_std, -0.0005, None);
+    unknown.set_effects(effects.clone(), K, k_std, -0.0005, None, true);
     assert!(unknown.fit.warnings.contains(&negative));
     let mut unknown = before;
-    unknown.set_effects(effects, K, k_std, 0.001, None);
+    unknown.set_effects(effects, K, k_std, 0.001, None, true);
     assert!(!unknown.fit.warnings.contains(&negative));
 }
 
@@ -283,6 +283,22 @@ fn effects_that_add_nothing_leave_the_identified_response() {
     assert!((dropped[(0, 0)] - r[(0, 0)]).norm() > 0.1 * r[(0, 0)].norm());
 }
 
+/// An identified gain change across the band `[0.1, 20]` Hz of `rise` (relative), `K` read at
+/// low frequency or not.
+fn gain_change(rise: f64, k_at_low_frequency: bool) -> crate::ident::warnings::IdentWarning {
+    crate::ident::warnings::IdentWarning::GainChangesAcrossBand {
+        rise,
+        rise_std: 0.01,
+        k_bias: [0.01; 3],
+        outputs: ["gx", "gy", "gz"].map(str::to_owned),
+        k_relative_std: 0.001,
+        rows_moved: true,
+        largest_change: crate::ident::warnings::ElementChange::default(),
+        band_hz: [0.1, 20.0],
+        k_at_low_frequency,
+    }
+}
+
 /// An accepted band limit that holds something (`T > 0`) takes the identified model's gain rise,
 /// a causal one its leading zeros; one fitted at `T = 0` takes neither. The negative delay and
 /// `imprecise_gain` are judged on the extended figures (as for any extended model): the delay
@@ -290,21 +306,11 @@ fn effects_that_add_nothing_leave_the_identified_response() {
 /// new figures above.
 #[test]
 fn an_accepted_band_limit_takes_the_warnings_it_explains() {
-    use crate::ident::warnings::{ElementChange, IdentWarning};
+    use crate::ident::warnings::IdentWarning;
     use crate::model::band_limit::{BandLimitShape, FittedBandLimit};
     use crate::model::effects::ModelEffects;
     let identified = vec![
-        IdentWarning::GainChangesAcrossBand {
-            rise: 0.1,
-            rise_std: 0.01,
-            k_bias: [0.01; 3],
-            outputs: ["gx", "gy", "gz"].map(str::to_owned),
-            k_relative_std: 0.001,
-            rows_moved: true,
-            largest_change: ElementChange::default(),
-            band_hz: [0.1, 20.0],
-            k_at_low_frequency: true,
-        },
+        gain_change(0.1, true),
         IdentWarning::ZerosLead {
             order: 1,
             lead_s: 0.005,
@@ -337,7 +343,7 @@ fn an_accepted_band_limit_takes_the_warnings_it_explains() {
         let sd = std::array::from_fn(|i| {
             std::array::from_fn(|j| Some(if (i, j) == (1, 1) { k_sd } else { k_sd / 2.0 }))
         });
-        m.set_effects(effects, K, sd, tau_s, Some(1e-4));
+        m.set_effects(effects, K, sd, tau_s, Some(1e-4), true);
         m.fit.warnings
     };
     // A 4 ms causal filter taken: the delay positive, the gain determined.
@@ -371,4 +377,115 @@ fn an_accepted_band_limit_takes_the_warnings_it_explains() {
         *k_at_low_frequency = false;
     }
     assert_eq!(extend(0.0, 0.002, 5e-4), untouched);
+}
+
+/// An extended model is judged on its own fit and gain (`set_effects`): the identified model's
+/// poor fit and implausible elements go where the joint fit explains the data and its `K` is a
+/// calibrated block's (a gyro on a resonant mount, the mode accepted: `K` within 0.05 %, the joint
+/// fit's chi2/dof 0.65, before with "chi2/dof 3922, widened by 62.62x" and three elements the
+/// file no longer held), and are said with its own figures where they do not; the identified fit's
+/// fixed order and its delay beside its poles go with the order; a gain change across the band
+/// goes with an accepted mode (any sign) or lag (a fall).
+#[test]
+fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
+    use crate::ident::structural::admissible::Rejection;
+    use crate::ident::warnings::IdentWarning;
+    use crate::model::effects::{ModelEffects, Resonance};
+    let implausible = |output: &str, input: &str, value: f64| IdentWarning::ImplausibleGain {
+        output: output.to_owned(),
+        input: input.to_owned(),
+        value,
+    };
+    let poor = |chi2_per_dof, without_effects| IdentWarning::PoorFitWithEffects {
+        chi2_per_dof,
+        without_effects,
+    };
+    let identified = vec![
+        IdentWarning::PoorFit {
+            chi2_per_dof: 3922.0,
+            worst_band_hz: [0.49, 0.73],
+            worst_chi2_per_dof: 7667.0,
+        },
+        implausible("gz", "wx", -0.10),
+        implausible("gz", "wy", 0.19),
+        IdentWarning::InadmissibleOrder {
+            order: 2,
+            reason: Rejection::Unstable,
+        },
+        IdentWarning::DelayAbsorbedByPoles {
+            order: 3,
+            tau_s: -0.001,
+            tau_std_s: 1e-4,
+            delay_only_tau_s: 0.004,
+        },
+        implausible("gz", "wz", 1.10),
+    ];
+    let extend = |warnings: &[IdentWarning], chi2_per_dof: [f64; 2], k: [[f64; 3]; 3], calibrated: bool| {
+        let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+        m.fit.warnings = warnings.to_vec();
+        let effects = ModelEffects {
+            chi2_per_dof,
+            ..no_effects(0.004, 0)
+        };
+        m.set_effects(effects, k, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), calibrated);
+        m.fit.warnings
+    };
+    // The mode accepted, the data explained, `K` a calibrated block's: nothing of it left.
+    assert_eq!(extend(&identified, [85.4, 0.65], K, true), Vec::new());
+    // The joint fit still poor: said with its own figures, in the identified one's place.
+    assert_eq!(extend(&identified, [85.4, 3.5], K, true), vec![poor(3.5, 85.4)]);
+    // The extended `K`'s own implausible element, in the identified ones' place; none where the
+    // block is not calibrated (the identifier's setting).
+    let mut off = K;
+    off[0][1] = 0.15;
+    off[2][2] = 0.85;
+    let judged = vec![
+        poor(2.5, 85.4),
+        implausible("gx", "wy", 0.15),
+        implausible("gz", "wz", 0.85),
+    ];
+    assert_eq!(extend(&identified, [85.4, 2.5], off, true), judged);
+    assert_eq!(
+        extend(&identified, [85.4, 2.5], off, false),
+        vec![poor(2.5, 85.4)]
+    );
+    // Whether or not the identified model was judged so: a poor joint fit (or NaN) and an
+    // implausible extended gain are said; a NaN element is implausible.
+    let nan = extend(&[], [1.1, f64::NAN], K, true);
+    assert!(
+        matches!(nan[..], [IdentWarning::PoorFitWithEffects { chi2_per_dof, .. }] if chi2_per_dof.is_nan()),
+        "{nan:?}"
+    );
+    assert_eq!(extend(&[], [1.2, 1.1], off, true), judged[1..].to_vec());
+    let mut gap = K;
+    gap[1][0] = f64::NAN;
+    assert!(matches!(
+        &extend(&[], [1.2, 1.1], gap, true)[..],
+        [IdentWarning::ImplausibleGain { output, input, value }] if output == "gy" && input == "wx" && value.is_nan()
+    ));
+    // The gain change across the band: an accepted mode takes it whatever its sign, a lag a fall.
+    let change = |rise: f64| gain_change(rise, false);
+    let with = |effects: ModelEffects, rise: f64| {
+        let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+        m.fit.warnings = vec![change(rise)];
+        m.set_effects(effects, K, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
+        m.fit.warnings
+    };
+    let mode = || ModelEffects {
+        resonances: vec![Resonance {
+            axis: 2,
+            frequency_hz: 21.7,
+            damping: 0.05,
+        }],
+        ..no_effects(0.004, 0)
+    };
+    let lag = || ModelEffects {
+        lag_s: Some(0.004),
+        ..no_effects(0.004, 0)
+    };
+    assert_eq!(with(mode(), 0.1), Vec::new());
+    assert_eq!(with(mode(), -0.1), Vec::new());
+    assert_eq!(with(lag(), -0.1), Vec::new());
+    assert_eq!(with(lag(), 0.1), vec![change(0.1)]);
+    assert_eq!(with(no_effects(0.004, 0), -0.1), vec![change(-0.1)]);
 }

@@ -43,18 +43,16 @@ pub fn model_block_noise(
         sample_rate_hz,
         reference,
     )?;
-    let misfit = model
-        .fit
-        .warnings
-        .iter()
-        .any(|w| matches!(w, IdentWarning::PoorFit { .. }));
-    if misfit {
-        noise.warnings.insert(
-            0,
-            NoiseWarning::ModelMisfit {
-                chi2_per_dof: model.fit.chi2_per_dof,
-            },
-        );
+    // The model's own misfit: the identified fit's, or with accepted effects the joint fit's.
+    let misfit = model.fit.warnings.iter().find_map(|w| match w {
+        IdentWarning::PoorFit { .. } => Some(model.fit.chi2_per_dof),
+        IdentWarning::PoorFitWithEffects { chi2_per_dof, .. } => Some(*chi2_per_dof),
+        _ => None,
+    });
+    if let Some(chi2_per_dof) = misfit {
+        noise
+            .warnings
+            .insert(0, NoiseWarning::ModelMisfit { chi2_per_dof });
     }
     Some(noise)
 }

@@ -196,12 +196,21 @@ fn equation(h: &mut String, b: &BlockModel) {
             b.order
         )
     };
+    // With accepted effects the model is the joint fit: its own chi2/dof (not the
+    // identification's, `fit.chi2_per_dof`), and the same fit's without them.
+    let chi2 = match &b.effects {
+        Some(e) if e.extends() => format!(
+            "{} (whole-record fit with the accepted effects; {} without them)",
+            sig(e.chi2_per_dof[1], 3),
+            sig(e.chi2_per_dof[0], 3)
+        ),
+        _ => sig(b.fit.chi2_per_dof, 3),
+    };
     let _ = write!(
         h,
-        "<p class=\"equation\">Model: {chosen}; delay &tau; = {tau} ms; band used {}&ndash;{} Hz; fit &chi;<sup>2</sup>/dof = {}.</p>",
+        "<p class=\"equation\">Model: {chosen}; delay &tau; = {tau} ms; band used {}&ndash;{} Hz; fit &chi;<sup>2</sup>/dof = {chi2}.</p>",
         sig(b.band_hz[0], 3),
         sig(b.band_hz[1], 3),
-        sig(b.fit.chi2_per_dof, 3)
     );
     if !b.poles.is_empty() {
         h.push_str("<p>Poles: ");

@@ -324,8 +324,15 @@ fn candidate_table(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
 fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
     let f = &m.fit;
     let lambda_auto = settings.lambda == LambdaSetting::Auto;
+    // With accepted effects the model is the joint fit (its chi2/dof in the effect lines above);
+    // these figures are the identification's, without them.
+    let whose = if m.effects.as_ref().is_some_and(ModelEffects::extends) {
+        "identified without the accepted effects: "
+    } else {
+        ""
+    };
     ui.label(format!(
-        "χ² = {:.1} on {} degrees of freedom (χ²/dof {:.2}); σ widened by the bins' correlation ×{:.2}",
+        "{whose}χ² = {:.1} on {} degrees of freedom (χ²/dof {:.2}); σ widened by the bins' correlation ×{:.2}",
         f.chi2,
         f.dof,
         f.chi2_per_dof,

@@ -47,7 +47,9 @@ pub fn extended_model(
 /// with `band_hz: "auto"`, ended where the model stops explaining the data at its top). Not the diagnosis's band: the diagnosis looks for misfit where the
 /// inputs may not be trustworthy, but a model is fitted only where they are (on the real
 /// recordings, over 0.1-40 Hz a gyro's K came out 0.4-1.4 % off; over its usable band, within
-/// 0.6 %).
+/// 0.6 %). Where that top was cut because the identified model missed the data above it
+/// (`band_top_misfit`) and a mount resonance is accepted, a second start through the band that
+/// was cut ([`uncut_band`]): the mode may be what the identified model missed.
 ///
 /// # Errors
 /// As [`prepare`].
@@ -62,36 +64,92 @@ pub fn prepare_for_effects(
         let Some(entry) = model.blocks.get(block.name()) else {
             continue;
         };
-        if !accepted.iter().any(|(b, _)| *b == block) {
+        let effects: Vec<Effect> = accepted
+            .iter()
+            .filter(|(b, _)| *b == block)
+            .map(|&(_, e)| e)
+            .collect();
+        if effects.is_empty() {
             continue;
         }
-        let own = Settings {
-            band_hz: crate::ident::band::BandSetting::Fixed(entry.band_hz),
-            blocks: vec![block],
-            ..settings.clone()
-        };
-        preps.push(prepare(session, &own)?);
+        for band in std::iter::once(entry.band_hz).chain(uncut_band(entry, &effects)) {
+            let own = Settings {
+                band_hz: crate::ident::band::BandSetting::Fixed(band),
+                blocks: vec![block],
+                ..settings.clone()
+            };
+            preps.push(prepare(session, &own)?);
+        }
     }
     Ok(preps)
 }
 
+/// The band `entry` was identified over with its top where it was before the identified model's
+/// misfit cut it (`band_top_misfit`), where `effects` hold a mount resonance, a filter of the
+/// block's own that can be what the model missed there (a gyro with a 21.7 Hz mode: the band
+/// cut at 24.9 Hz of a usable 39.8, the model's chi2 per bin above it 24535 times its
+/// expectation). `None` otherwise.
+fn uncut_band(entry: &BlockModel, effects: &[Effect]) -> Option<[f64; 2]> {
+    if !effects.contains(&Effect::PlatformResonance) {
+        return None;
+    }
+    entry.fit.warnings.iter().find_map(|w| match w {
+        crate::ident::warnings::IdentWarning::BandTopMisfit { band_hz, .. }
+            if band_hz[1] > entry.band_hz[1] =>
+        {
+            Some([entry.band_hz[0], band_hz[1]])
+        }
+        _ => None,
+    })
+}
+
 /// Extends every block of `model` that has accepted effects (`preps` from
 /// [`prepare_for_effects`] on the same run, settings and model). Blocks without any are left as
-/// identified.
+/// identified. Where a block has a second start through the band its identified model's misfit
+/// cut ([`uncut_band`]), the model fitted through it is kept where it adds every effect the
+/// identified band's adds and explains the data there ([`crate::ident::selfcheck::POOR_FIT`] on
+/// its chi2/dof): the band is then the wider one, and the misfit's warning goes with it.
 pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, Effect)]) {
     let calibrated = model.settings.calibrated;
-    for pb in preps.iter().flat_map(|p| &p.blocks) {
+    for block in Block::BOTH {
         let effects: Vec<Effect> = accepted
             .iter()
-            .filter(|(b, _)| *b == pb.block)
+            .filter(|(b, _)| *b == block)
             .map(|&(_, e)| e)
             .collect();
-        if let Some(entry) = model.blocks.get_mut(pb.block.name())
-            && !effects.is_empty()
-        {
-            extend_block(entry, pb, &effects, calibrated);
+        let mut starts = preps
+            .iter()
+            .flat_map(|p| &p.blocks)
+            .filter(|pb| pb.block == block);
+        let (Some(entry), Some(own)) = (model.blocks.get_mut(block.name()), starts.next()) else {
+            continue;
+        };
+        if effects.is_empty() {
+            continue;
+        }
+        let identified = entry.clone();
+        extend_block(entry, own, &effects, calibrated);
+        for wider in starts {
+            let mut through = identified.clone();
+            extend_block(&mut through, wider, &effects, calibrated);
+            if explains_through(&through, entry) {
+                *entry = through;
+            }
         }
     }
+}
+
+/// Whether `through`, extended over a wider band, adds every effect `narrow` adds and explains
+/// the data there.
+fn explains_through(through: &BlockModel, narrow: &BlockModel) -> bool {
+    let (Some(t), Some(n)) = (&through.effects, &narrow.effects) else {
+        return false;
+    };
+    t.extends()
+        && t.chi2_per_dof[1] <= crate::ident::selfcheck::POOR_FIT
+        && n.accepted
+            .iter()
+            .all(|a| t.accepted.iter().any(|b| b.effect == a.effect))
 }
 
 /// Adds `effects` (in order, each once) to the block's whole-record model and writes the result

@@ -385,6 +385,13 @@ impl BlockModel {
         // A mount resonance accepted holds the gain's change across the band (its skirt rises
         // towards the mode, falls beyond it), a lag its fall.
         let (resonance, lag) = (!effects.resonances.is_empty(), effects.lag_s.is_some());
+        // The joint fit's band: the identified one, or wider where it was fitted through the band
+        // the identified model's misfit cut (`crate::diagnose::extend::apply_effects`); that misfit
+        // is then the joint fit's to explain, and its own poor fit says where it does not.
+        let covered = effects.band_hz[1] >= self.band_hz[1] * (1.0 + 1e-9);
+        if covered {
+            self.band_hz = [self.band_hz[0], effects.band_hz[1]];
+        }
         self.fit.warnings.retain(|w| match w {
             // The identified fit's own: its poles, its fixed order, its delay beside its poles.
             IdentWarning::PolesOrEvenGain { .. }
@@ -392,6 +399,7 @@ impl BlockModel {
             | IdentWarning::DelayAbsorbedByPoles { .. }
             | IdentWarning::InadmissibleOrder { .. } => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
+            IdentWarning::BandTopMisfit { .. } => !covered,
             IdentWarning::GainChangesAcrossBand { rise, .. } => {
                 !(resonance || (band_limit.is_some() && *rise >= 0.0) || (lag && *rise < 0.0))
             }

@@ -489,3 +489,29 @@ fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
     assert_eq!(with(lag(), 0.1), vec![change(0.1)]);
     assert_eq!(with(no_effects(0.004, 0), -0.1), vec![change(-0.1)]);
 }
+
+/// A joint fit through a wider band than the identified one (`crate::diagnose::extend`: the band
+/// the identified model's misfit cut, an accepted mode explaining it) gives the model its band and
+/// takes the misfit's warning; over the identified band both stay.
+#[test]
+fn a_joint_fit_through_the_cut_band_takes_the_band_top_misfit() {
+    use crate::ident::warnings::IdentWarning;
+    use crate::model::effects::ModelEffects;
+    let misfit = IdentWarning::BandTopMisfit {
+        band_hz: [20.0, 39.9],
+        level_ratio: 3.0,
+        chi2_per_bin_above: 2e4,
+    };
+    let extend = |band_hz: [f64; 2]| {
+        let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+        m.fit.warnings = vec![misfit.clone()];
+        let effects = ModelEffects {
+            band_hz,
+            ..no_effects(0.004, 0)
+        };
+        m.set_effects(effects, K, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
+        (m.band_hz, m.fit.warnings)
+    };
+    assert_eq!(extend([0.1, 39.9]), ([0.1, 39.9], Vec::new()));
+    assert_eq!(extend([0.1, 20.0]), ([0.1, 20.0], vec![misfit.clone()]));
+}

@@ -233,6 +233,8 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
     harness.get_by_label_contains("gyro model: K e^(-tau s) with 1 accepted effect");
     // The identification's chi2 is said to be the identification's (the joint fit's is above).
     harness.get_by_label_contains("identified without the accepted effects: χ² = ");
+    // So are the stretches (the gyro's only: the accelerometer has no accepted effect).
+    harness.get_by_label_contains("(fitted without the accepted effects)");
     // The Bode overlay is the extended model's response: the lag's droop at the band top.
     let bode = extended.bode.iter().find(|b| b.block == Block::Gyro).unwrap();
     let last = bode.elements[0].model_magnitude_db.last().unwrap();

@@ -501,6 +501,7 @@ fn an_accepted_mode_takes_back_the_band_the_identified_model_s_misfit_cut() {
         panic!("the identified band is cut: {:?}", gyro.fit.warnings)
     };
     assert!(gyro.band_hz[1] < cut[1], "{:?} {cut:?}", gyro.band_hz);
+    let identified_band = gyro.band_hz;
     let model = extend(run, &[(Block::Gyro, Effect::PlatformResonance)]);
     let gyro = &model.blocks["gyro"];
     let effects = gyro.effects.as_ref().expect("extended");
@@ -513,6 +514,14 @@ fn an_accepted_mode_takes_back_the_band_the_identified_model_s_misfit_cut() {
         effects.band_hz
     );
     assert!(effects.chi2_per_dof[1] < 1.5, "{:?}", effects.chi2_per_dof);
+    // The identified band is kept beside it, and said.
+    assert_eq!(effects.identified.band_hz, Some(identified_band));
+    assert!(
+        effects
+            .identified
+            .band_words(gyro.band_hz)
+            .starts_with(", band 0.12-23.")
+    );
     assert!(
         !gyro
             .fit

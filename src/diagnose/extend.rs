@@ -43,16 +43,18 @@ pub fn extended_model(
 }
 
 /// The whole-record starting points the `accepted` effects of `model`'s blocks are fitted
-/// from: one per block that has any, over that block's own band as identified (the usable band
-/// with `band_hz: "auto"`, ended where the model stops explaining the data at its top). Not the diagnosis's band: the diagnosis looks for misfit where the
-/// inputs may not be trustworthy, but a model is fitted only where they are (on the real
-/// recordings, over 0.1-40 Hz a gyro's K came out 0.4-1.4 % off; over its usable band, within
-/// 0.6 %). Where that top was cut because the identified model missed the data above it
-/// (`band_top_misfit`) and a mount resonance is accepted, a second start through the band that
-/// was cut ([`uncut_band`]): the mode may be what the identified model missed.
+/// from, for each block that has any: one over that block's own band as identified (the usable
+/// band with `band_hz: "auto"`, ended where the model stops explaining the data at its top). Not
+/// the diagnosis's band: the diagnosis looks for misfit where the inputs may not be trustworthy,
+/// but a model is fitted only where they are (on the real recordings, over 0.1-40 Hz a gyro's K
+/// came out 0.4-1.4 % off; over its usable band, within 0.6 %). Where that top was cut because
+/// the identified model missed the data above it (`band_top_misfit`) and a mount resonance is
+/// accepted, a second one through the band that was cut ([`uncut_band`]; left out where it
+/// cannot be prepared): the mode may be what the identified model missed. [`apply_effects`]
+/// tells them apart by their bands.
 ///
 /// # Errors
-/// As [`prepare`].
+/// As [`prepare`], for a block's own band.
 pub fn prepare_for_effects(
     session: &mut Session,
     settings: &Settings,
@@ -64,24 +66,32 @@ pub fn prepare_for_effects(
         let Some(entry) = model.blocks.get(block.name()) else {
             continue;
         };
-        let effects: Vec<Effect> = accepted
-            .iter()
-            .filter(|(b, _)| *b == block)
-            .map(|&(_, e)| e)
-            .collect();
+        let effects = of_block(accepted, block);
         if effects.is_empty() {
             continue;
         }
-        for band in std::iter::once(entry.band_hz).chain(uncut_band(entry, &effects)) {
-            let own = Settings {
-                band_hz: crate::ident::band::BandSetting::Fixed(band),
-                blocks: vec![block],
-                ..settings.clone()
-            };
-            preps.push(prepare(session, &own)?);
+        let over = |band: [f64; 2]| Settings {
+            band_hz: crate::ident::band::BandSetting::Fixed(band),
+            blocks: vec![block],
+            ..settings.clone()
+        };
+        preps.push(prepare(session, &over(entry.band_hz))?);
+        if let Some(band) = uncut_band(entry, &effects)
+            && let Ok(p) = prepare(session, &over(band))
+        {
+            preps.push(p);
         }
     }
     Ok(preps)
+}
+
+/// The effects of `accepted` on `block`, in order.
+fn of_block(accepted: &[(Block, Effect)], block: Block) -> Vec<Effect> {
+    accepted
+        .iter()
+        .filter(|(b, _)| *b == block)
+        .map(|&(_, e)| e)
+        .collect()
 }
 
 /// The band `entry` was identified over with its top where it was before the identified model's
@@ -104,52 +114,77 @@ fn uncut_band(entry: &BlockModel, effects: &[Effect]) -> Option<[f64; 2]> {
 }
 
 /// Extends every block of `model` that has accepted effects (`preps` from
-/// [`prepare_for_effects`] on the same run, settings and model). Blocks without any are left as
-/// identified. Where a block has a second start through the band its identified model's misfit
-/// cut ([`uncut_band`]), the model fitted through it is kept where it adds every effect the
-/// identified band's adds and explains the data there ([`crate::ident::selfcheck::POOR_FIT`] on
-/// its chi2/dof): the band is then the wider one, and the misfit's warning goes with it.
+/// [`prepare_for_effects`] on the same run, settings and model), from its start over the band
+/// it was identified over (by band; the first of the block's where none matches). Blocks without
+/// any are left as identified. Where a block also has a start through a wider band (the one its
+/// identified model's misfit cut, [`uncut_band`]), the model fitted through it replaces that
+/// one where it explains the data there ([`explains_through`]): the model's band is then the
+/// wider one, and the misfit's warning goes
+/// ([`BlockModel::take_back_the_cut_band`]).
 pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, Effect)]) {
     let calibrated = model.settings.calibrated;
     for block in Block::BOTH {
-        let effects: Vec<Effect> = accepted
-            .iter()
-            .filter(|(b, _)| *b == block)
-            .map(|&(_, e)| e)
-            .collect();
-        let mut starts = preps
+        let effects = of_block(accepted, block);
+        let Some(entry) = model.blocks.get_mut(block.name()) else {
+            continue;
+        };
+        let starts: Vec<&PreparedBlock> = preps
             .iter()
             .flat_map(|p| &p.blocks)
-            .filter(|pb| pb.block == block);
-        let (Some(entry), Some(own)) = (model.blocks.get_mut(block.name()), starts.next()) else {
+            .filter(|pb| pb.block == block)
+            .collect();
+        let top = entry.band_hz[1];
+        let same = |pb: &&&PreparedBlock| (pb.band_hz[1] - top).abs() <= 1e-9 * top;
+        let Some(&own) = starts.iter().find(same).or(starts.first()) else {
             continue;
         };
         if effects.is_empty() {
             continue;
         }
+        let wider = starts.iter().find(|pb| pb.band_hz[1] > top * (1.0 + 1e-9));
         let identified = entry.clone();
         extend_block(entry, own, &effects, calibrated);
-        for wider in starts {
-            let mut through = identified.clone();
-            extend_block(&mut through, wider, &effects, calibrated);
-            if explains_through(&through, entry) {
-                *entry = through;
-            }
+        let Some(&wider) = wider else {
+            continue;
+        };
+        let mut through = identified;
+        extend_block(&mut through, wider, &effects, calibrated);
+        if let (Some(t), Some(n)) = (&through.effects, &entry.effects)
+            && explains_through(t, n, [own.dof, wider.dof])
+        {
+            through.take_back_the_cut_band(wider.band_hz);
+            *entry = through;
         }
     }
 }
 
-/// Whether `through`, extended over a wider band, adds every effect `narrow` adds and explains
-/// the data there.
-fn explains_through(through: &BlockModel, narrow: &BlockModel) -> bool {
-    let (Some(t), Some(n)) = (&through.effects, &narrow.effects) else {
-        return false;
-    };
-    t.extends()
-        && t.chi2_per_dof[1] <= crate::ident::selfcheck::POOR_FIT
-        && n.accepted
+/// Whether `through`, the effects fitted through a wider band than `narrow`'s (`dof`: the two
+/// fits' degrees of freedom, narrow first), holds the mount resonance the wider band was tried
+/// for and every effect `narrow` adds, and explains the data there: its chi2/dof at most
+/// [`crate::ident::selfcheck::POOR_FIT`], and so is what the stretch added takes, the chi2 it adds
+/// per degree of freedom it adds (the rule that cut the band asks the stretch above it to stay
+/// within that of the model's; the whole band's alone can hide a stretch at 3 beside a band at
+/// 0.8).
+fn explains_through(
+    through: &ModelEffects,
+    narrow: &ModelEffects,
+    [narrow_dof, through_dof]: [f64; 2],
+) -> bool {
+    let poor = crate::ident::selfcheck::POOR_FIT;
+    let added = (through.chi2_per_dof[1] * through_dof - narrow.chi2_per_dof[1] * narrow_dof)
+        / (through_dof - narrow_dof);
+    through.extends()
+        && through
+            .accepted
             .iter()
-            .all(|a| t.accepted.iter().any(|b| b.effect == a.effect))
+            .any(|a| a.effect == Effect::PlatformResonance)
+        && narrow
+            .accepted
+            .iter()
+            .all(|a| through.accepted.iter().any(|b| b.effect == a.effect))
+        && through.chi2_per_dof[1] <= poor
+        && through_dof > narrow_dof
+        && added <= poor
 }
 
 /// Adds `effects` (in order, each once) to the block's whole-record model and writes the result
@@ -243,6 +278,7 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect], 
             k: entry.k,
             tau_s: entry.tau_s,
             order: entry.order,
+            band_hz: Some(entry.band_hz),
         },
         band_hz: band,
         chi2_per_dof,
@@ -308,9 +344,12 @@ fn index_of(state: &State, effect: Effect) -> usize {
 
 #[cfg(test)]
 mod tests {
+    use super::explains_through;
+    use crate::block::Block;
     use crate::diagnose::structure::{Filters, Structure, Theta};
+    use crate::effect::Effect;
     use crate::model::band_limit::{BandLimitShape, FittedBandLimit};
-    use crate::model::effects::{Identified, ModelEffects, Resonance};
+    use crate::model::effects::{AcceptedEffect, Identified, ModelEffects, Resonance};
 
     #[test]
     fn the_model_files_response_is_the_fitted_structures() {
@@ -359,6 +398,7 @@ mod tests {
                 k,
                 tau_s: 0.004,
                 order: 0,
+                band_hz: None,
             },
             band_hz: [0.1, 40.0],
             chi2_per_dof: [1.0, 1.0],
@@ -383,5 +423,98 @@ mod tests {
         assert!((poles[0][0] + 1.0 / 0.0015).abs() < 1e-9);
         let w = std::f64::consts::TAU * 23.0;
         assert!((poles[1][0] + 0.05 * w).abs() < 1e-9 && (poles[1][0].hypot(poles[1][1]) - w).abs() < 1e-9);
+    }
+
+    /// The mode's gain is the resonant low-pass's: 1 at DC, `1 / 2 zeta` at the mode, and each
+    /// element of the model's response (`Filters`) has it in its column.
+    #[test]
+    fn a_mode_s_gain_is_its_low_pass_s() {
+        let r = Resonance {
+            axis: 1,
+            frequency_hz: 23.0,
+            damping: 0.05,
+        };
+        assert!((r.gain(0.0) - 1.0).abs() < 1e-15);
+        assert!((r.gain(23.0) - 10.0).abs() < 1e-12);
+        // Far above: (f_n / f)^2.
+        assert!((r.gain(2300.0) / 1e-4 - 1.0).abs() < 1e-3);
+        let structure = Structure {
+            resonance_axes: vec![1],
+            ..Structure::default()
+        };
+        let theta = Theta {
+            resonances: vec![(23.0, 0.05)],
+            ..Theta::delay_only(0.0)
+        };
+        for f in [1.0, 20.0, 31.0] {
+            let m = Filters::at(&structure, &theta, f).resonant[1].norm();
+            assert!((m - r.gain(f)).abs() < 1e-12 * m, "{f}: {m} {}", r.gain(f));
+        }
+    }
+
+    fn accepted(effects: &[Effect]) -> ModelEffects {
+        ModelEffects {
+            accepted: effects
+                .iter()
+                .map(|&effect| AcceptedEffect {
+                    effect,
+                    name: effect.name_on(Block::Gyro),
+                    parameters: serde_json::Value::Null,
+                    parameter_std: serde_json::Value::Null,
+                })
+                .collect(),
+            not_added: Vec::new(),
+            lag_s: None,
+            channel_skew_s: None,
+            resonances: Vec::new(),
+            reference_band_limit: None,
+            identified: Identified {
+                k: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                tau_s: 0.004,
+                order: 0,
+                band_hz: None,
+            },
+            band_hz: [0.1, 40.0],
+            chi2_per_dof: [100.0, 1.0],
+            gap_db: [[0.0; 3]; 2],
+        }
+    }
+
+    /// A fit through the band the identified model's misfit cut replaces the cut band's where
+    /// it holds the mode and every effect the cut band's holds, explains the data, and so does
+    /// the stretch it adds (its chi2 added per degree of freedom added at most 2).
+    #[test]
+    fn a_fit_through_the_cut_band_is_kept_where_it_explains_it() {
+        let mode = Effect::PlatformResonance;
+        let with = |effects: &[Effect], chi2: f64| ModelEffects {
+            chi2_per_dof: [100.0, chi2],
+            ..accepted(effects)
+        };
+        let narrow = with(&[mode], 0.7);
+        // 600 degrees of freedom below, 400 added.
+        let dof = [600.0, 1000.0];
+        assert!(explains_through(&with(&[mode], 0.8), &narrow, dof));
+        // Whole band at 1.6 (under 2), but the stretch added at 2.9: the cut stays.
+        assert!(!explains_through(&with(&[mode], 1.58), &narrow, dof));
+        assert!(!explains_through(&with(&[mode], 2.5), &narrow, dof));
+        assert!(!explains_through(&with(&[mode], f64::NAN), &narrow, dof));
+        // Without the mode it was tried for, or without an effect the cut band's fit holds.
+        assert!(!explains_through(
+            &with(&[Effect::SensorLag], 0.8),
+            &with(&[], 0.7),
+            dof
+        ));
+        assert!(!explains_through(
+            &with(&[mode], 0.8),
+            &with(&[mode, Effect::SensorLag], 0.7),
+            dof
+        ));
+        assert!(explains_through(
+            &with(&[mode, Effect::SensorLag], 0.8),
+            &narrow,
+            dof
+        ));
+        // No band added.
+        assert!(!explains_through(&with(&[mode], 0.8), &narrow, [600.0, 600.0]));
     }
 }

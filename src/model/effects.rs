@@ -47,6 +47,49 @@ pub struct Resonance {
     pub damping: f64,
 }
 
+impl Resonance {
+    /// The mode's gain at `f_hz`, `|M(j 2 pi f)|` of the resonant low-pass
+    /// `w_n^2 / (s^2 + 2 zeta w_n s + w_n^2)`.
+    #[must_use]
+    pub fn gain(&self, f_hz: f64) -> f64 {
+        let r = f_hz / self.frequency_hz;
+        1.0 / ((1.0 - r * r).powi(2) + (2.0 * self.damping * r).powi(2)).sqrt()
+    }
+
+    /// Whether the mode can hold an identified `gain_changes_across_band` warning `w`: it lies
+    /// inside the warning's band, where its gain rises to the peak and falls beyond (the
+    /// warning's one figure for the change, from a delay-only fit that misses the peak, can then
+    /// have either sign: a fall of 27 % across 0.29-39.8 Hz beside a 31.8 Hz mode whose gain at
+    /// the top is 1.7), or outside it its gain moves across the band the way the measured gain
+    /// did (a rise towards the mode below it, a fall above). Not by column either: beside a
+    /// missed mode the element the change moved most against its own deviation need not be in
+    /// the mode's (a mode on `wz`, the largest change at `K[gy][wy]`, 4.5-6.8 deviations).
+    /// Whether the extended model explains the data is its own poor fit's to say. False for any
+    /// other warning.
+    #[must_use]
+    pub fn explains(&self, w: &crate::ident::warnings::IdentWarning) -> bool {
+        let crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, band_hz, .. } = w else {
+            return false;
+        };
+        let [low, high] = *band_hz;
+        (low..=high).contains(&self.frequency_hz) || (self.gain(high) - self.gain(low)) * rise > 0.0
+    }
+}
+
+impl Identified {
+    /// ", band a-b Hz" where the identified band is known and not `model_band_hz` (the model
+    /// fitted through the band its misfit cut), else nothing: for the words beside the model.
+    #[must_use]
+    pub fn band_words(&self, model_band_hz: [f64; 2]) -> String {
+        match self.band_hz {
+            Some(b) if (b[1] - model_band_hz[1]).abs() > 1e-9 * model_band_hz[1] => {
+                format!(", band {:.2}-{:.2} Hz", b[0], b[1])
+            }
+            _ => String::new(),
+        }
+    }
+}
+
 /// The model before the effects were added: what the identifier gave.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Identified {
@@ -57,6 +100,10 @@ pub struct Identified {
     pub tau_s: f64,
     /// Its structural order.
     pub order: usize,
+    /// Its band, Hz (absent in model files written before 30 Nov; the model's own band may be
+    /// wider, [`crate::model::BlockModel::take_back_the_cut_band`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band_hz: Option<[f64; 2]>,
 }
 
 /// The block's accepted effects and the fit that sized them.

@@ -382,16 +382,7 @@ impl BlockModel {
         // modelled: the gain's rise across the band is its own (no longer the model's misfit),
         // and a causal one takes the lag of the angles (their leading zeros) and its group delay.
         let band_limit = effects.reference_band_limit.filter(|b| b.t_s > 0.0);
-        // A mount resonance accepted holds the gain's change across the band (its skirt rises
-        // towards the mode, falls beyond it), a lag its fall.
-        let (resonance, lag) = (!effects.resonances.is_empty(), effects.lag_s.is_some());
-        // The joint fit's band: the identified one, or wider where it was fitted through the band
-        // the identified model's misfit cut (`crate::diagnose::extend::apply_effects`); that misfit
-        // is then the joint fit's to explain, and its own poor fit says where it does not.
-        let covered = effects.band_hz[1] >= self.band_hz[1] * (1.0 + 1e-9);
-        if covered {
-            self.band_hz = [self.band_hz[0], effects.band_hz[1]];
-        }
+        let lag = effects.lag_s.is_some();
         self.fit.warnings.retain(|w| match w {
             // The identified fit's own: its poles, its fixed order, its delay beside its poles.
             IdentWarning::PolesOrEvenGain { .. }
@@ -399,9 +390,10 @@ impl BlockModel {
             | IdentWarning::DelayAbsorbedByPoles { .. }
             | IdentWarning::InadmissibleOrder { .. } => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
-            IdentWarning::BandTopMisfit { .. } => !covered,
-            IdentWarning::GainChangesAcrossBand { rise, .. } => {
-                !(resonance || (band_limit.is_some() && *rise >= 0.0) || (lag && *rise < 0.0))
+            w @ IdentWarning::GainChangesAcrossBand { rise, .. } => {
+                !((band_limit.is_some() && *rise >= 0.0)
+                    || (lag && *rise < 0.0)
+                    || effects.resonances.iter().any(|r| r.explains(w)))
             }
             IdentWarning::ZerosLead { .. } => !band_limit.is_some_and(|b| b.shape.causal()),
             _ => true,
@@ -442,7 +434,7 @@ impl BlockModel {
         }
         self.redo_poor_fit(effects.chi2_per_dof);
         self.effects = Some(effects);
-        self.redo_imprecise_gain();
+        self.redo_imprecise_gain(calibrated);
         self.redo_implausible_gain(calibrated);
     }
 
@@ -526,38 +518,46 @@ impl BlockModel {
         }
     }
 
-    /// The identified model's imprecise-gain warning on the extended model's own `K` and
-    /// deviations: kept with their figures where the least determined element is still beyond
+    /// The imprecise-gain check on the extended model's own `K` and deviations where the block is
+    /// `calibrated` (the identifier's setting): the identified warning kept with the new figures
+    /// where the least determined element is still beyond
     /// [`crate::ident::selfcheck::IMPRECISE_GAIN`], dropped where it is not (an accepted band
     /// limit can determine the gain far better than the delay-only fit it was said of: a 100 Hz
     /// reference's gyro, `K[gy][wy]` 1.0052 +- 0.0130 identified, 1.0006 +- 0.0005 extended, the
-    /// warning's old figures still shown), left as it was where that deviation is unknown. Never
-    /// added: whether the check applies (a calibrated block) is the identifier's.
-    fn redo_imprecise_gain(&mut self) {
-        let Some(at) = self
+    /// warning's old figures still shown), said where the identified model's was not (the joint
+    /// fit's deviations widened by its chi2 or the witness's noise), and left as it was where that
+    /// deviation is unknown.
+    fn redo_imprecise_gain(&mut self, calibrated: bool) {
+        let at = self
             .fit
             .warnings
             .iter()
-            .position(|w| matches!(w, IdentWarning::ImpreciseGain { .. }))
-        else {
-            return;
-        };
+            .position(|w| matches!(w, IdentWarning::ImpreciseGain { .. }));
         let known = self.fit.k_std.map(|row| row.map(|v| v.unwrap_or(f64::NAN)));
         let ((i, j), imprecise) = crate::ident::selfcheck::least_determined_gain(&known);
-        match self.fit.k_std[i][j] {
-            Some(_) if !imprecise => {
-                self.fit.warnings.remove(at);
-            }
-            Some(std) => {
-                self.fit.warnings[at] = IdentWarning::ImpreciseGain {
-                    output: self.outputs[i].clone(),
-                    input: self.inputs[j].clone(),
-                    value: self.k[i][j],
-                    std,
-                };
-            }
-            None => {}
-        }
+        let judged = match self.fit.k_std[i][j] {
+            Some(std) if imprecise && calibrated => Some(IdentWarning::ImpreciseGain {
+                output: self.outputs[i].clone(),
+                input: self.inputs[j].clone(),
+                value: self.k[i][j],
+                std,
+            }),
+            Some(_) => None,
+            // Unknown: as it was.
+            None => at.map(|at| self.fit.warnings[at].clone()),
+        };
+        self.replace_warning(at, judged);
+    }
+
+    /// The model fitted, with its accepted effects, through `band_hz`, wider than the band the
+    /// identified model's misfit at its top cut (`crate::diagnose::extend::apply_effects`, where
+    /// the joint fit explains that stretch): the model's band is the wider one, and the
+    /// identified model's `band_top_misfit` goes with the cut.
+    pub fn take_back_the_cut_band(&mut self, band_hz: [f64; 2]) {
+        self.band_hz = band_hz;
+        self.fit
+            .warnings
+            .retain(|w| !matches!(w, IdentWarning::BandTopMisfit { .. }));
     }
 }
 

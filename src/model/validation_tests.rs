@@ -132,7 +132,12 @@ fn no_effects(tau_s: f64, order: usize) -> crate::model::effects::ModelEffects {
         channel_skew_s: None,
         resonances: Vec::new(),
         reference_band_limit: None,
-        identified: crate::model::effects::Identified { k: K, tau_s, order },
+        identified: crate::model::effects::Identified {
+            k: K,
+            tau_s,
+            order,
+            band_hz: None,
+        },
         band_hz: [0.1, 20.0],
         chi2_per_dof: [1.2, 1.1],
         gap_db: [[-20.0; 3]; 2],
@@ -259,6 +264,7 @@ fn effects_that_add_nothing_leave_the_identified_response() {
             k: K,
             tau_s,
             order: 1,
+            band_hz: None,
         },
         band_hz: [0.1, 20.0],
         chi2_per_dof: [1.1, 1.1],
@@ -385,7 +391,7 @@ fn an_accepted_band_limit_takes_the_warnings_it_explains() {
 /// fit's chi2/dof 0.65, before with "chi2/dof 3922, widened by 62.62x" and three elements the
 /// file no longer held), and are said with its own figures where they do not; the identified fit's
 /// fixed order and its delay beside its poles go with the order; a gain change across the band
-/// goes with an accepted mode (any sign) or lag (a fall).
+/// goes with an accepted mode whose gain moves the same way or a lag (a fall).
 #[test]
 fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
     use crate::ident::structural::admissible::Rejection;
@@ -463,7 +469,28 @@ fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
         &extend(&[], [1.2, 1.1], gap, true)[..],
         [IdentWarning::ImplausibleGain { output, input, value }] if output == "gy" && input == "wx" && value.is_nan()
     ));
-    // The gain change across the band: an accepted mode takes it whatever its sign, a lag a fall.
+    // An extended `K` beyond 1 % (its deviations the joint fit's): said where the block is
+    // calibrated, though the identified model's was not.
+    let imprecise = |calibrated: bool| {
+        let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+        m.fit.warnings = Vec::new();
+        let mut sd = [[Some(1e-4); 3]; 3];
+        sd[2][1] = Some(0.02);
+        m.set_effects(no_effects(0.004, 0), K, sd, 0.004, Some(1e-5), calibrated);
+        m.fit.warnings
+    };
+    assert_eq!(
+        imprecise(true),
+        vec![IdentWarning::ImpreciseGain {
+            output: "gz".to_owned(),
+            input: "wy".to_owned(),
+            value: K[2][1],
+            std: 0.02,
+        }]
+    );
+    assert_eq!(imprecise(false), Vec::new());
+    // The gain change across the band: an accepted mode takes the change its gain makes, a lag a
+    // fall.
     let change = |rise: f64| gain_change(rise, false);
     let with = |effects: ModelEffects, rise: f64| {
         let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
@@ -483,18 +510,41 @@ fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
         lag_s: Some(0.004),
         ..no_effects(0.004, 0)
     };
+    // Below it, the 21.7 Hz mode's skirt rises across 0.1-20 Hz: it takes a rise, not a fall.
     assert_eq!(with(mode(), 0.1), Vec::new());
-    assert_eq!(with(mode(), -0.1), Vec::new());
+    assert_eq!(with(mode(), -0.1), vec![change(-0.1)]);
+    // Inside the band, either.
+    let across = |rise: f64| {
+        let mut w = change(rise);
+        if let IdentWarning::GainChangesAcrossBand { band_hz, .. } = &mut w {
+            *band_hz = [0.1, 39.9];
+        }
+        let mut m = delayed_gain(K, 0.004, [0.1, 39.9]);
+        m.fit.warnings = vec![w];
+        m.set_effects(mode(), K, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
+        m.fit.warnings
+    };
+    assert_eq!(across(0.1), Vec::new());
+    assert_eq!(across(-0.27), Vec::new());
+    // Across a band above the mode (30-40 Hz beside 21.7 Hz) its gain falls: it takes a fall.
+    let mut beyond = change(-0.1);
+    if let IdentWarning::GainChangesAcrossBand { band_hz, .. } = &mut beyond {
+        *band_hz = [30.0, 40.0];
+    }
+    let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+    m.fit.warnings = vec![beyond];
+    m.set_effects(mode(), K, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
+    assert_eq!(m.fit.warnings, Vec::new());
     assert_eq!(with(lag(), -0.1), Vec::new());
     assert_eq!(with(lag(), 0.1), vec![change(0.1)]);
     assert_eq!(with(no_effects(0.004, 0), -0.1), vec![change(-0.1)]);
 }
 
-/// A joint fit through a wider band than the identified one (`crate::diagnose::extend`: the band
-/// the identified model's misfit cut, an accepted mode explaining it) gives the model its band and
-/// takes the misfit's warning; over the identified band both stay.
+/// The band an identified model's misfit cut, taken back (`crate::diagnose::extend`: a joint fit
+/// through it explains it): the model's band is the wider one and the misfit's warning goes, the
+/// others stay; `set_effects` alone changes neither, whatever band its effects were fitted over.
 #[test]
-fn a_joint_fit_through_the_cut_band_takes_the_band_top_misfit() {
+fn the_cut_band_taken_back_takes_the_band_top_misfit() {
     use crate::ident::warnings::IdentWarning;
     use crate::model::effects::ModelEffects;
     let misfit = IdentWarning::BandTopMisfit {
@@ -502,16 +552,22 @@ fn a_joint_fit_through_the_cut_band_takes_the_band_top_misfit() {
         level_ratio: 3.0,
         chi2_per_bin_above: 2e4,
     };
-    let extend = |band_hz: [f64; 2]| {
-        let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
-        m.fit.warnings = vec![misfit.clone()];
-        let effects = ModelEffects {
-            band_hz,
-            ..no_effects(0.004, 0)
-        };
-        m.set_effects(effects, K, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
-        (m.band_hz, m.fit.warnings)
+    let negative = IdentWarning::NegativeDelay {
+        tau_s: -0.004,
+        tau_std_s: 1e-4,
     };
-    assert_eq!(extend([0.1, 39.9]), ([0.1, 39.9], Vec::new()));
-    assert_eq!(extend([0.1, 20.0]), ([0.1, 20.0], vec![misfit.clone()]));
+    let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+    m.fit.warnings = vec![misfit.clone()];
+    let effects = ModelEffects {
+        band_hz: [0.1, 39.9],
+        ..no_effects(0.004, 0)
+    };
+    m.set_effects(effects, K, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
+    assert_eq!(
+        (m.band_hz, m.fit.warnings.clone()),
+        ([0.1, 20.0], vec![misfit.clone()])
+    );
+    m.fit.warnings.push(negative.clone());
+    m.take_back_the_cut_band([0.1, 39.9]);
+    assert_eq!((m.band_hz, m.fit.warnings), ([0.1, 39.9], vec![negative]));
 }

@@ -263,9 +263,10 @@ fn accepted_effects(h: &mut String, b: &BlockModel) {
         let _ = write!(
             h,
             "<p>Accepted effects (the model above is the paper's model extended by them, fitted on the whole \
-             record; identified without them: order {}, delay {} ms):</p><ul class=\"effects\">",
+             record; identified without them: order {}, delay {} ms{}):</p><ul class=\"effects\">",
             e.identified.order,
-            sig(e.identified.tau_s * 1e3, 4)
+            sig(e.identified.tau_s * 1e3, 4),
+            esc(&e.identified.band_words(b.band_hz))
         );
     } else {
         h.push_str(

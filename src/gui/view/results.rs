@@ -193,11 +193,12 @@ pub fn effect_lines(block: &str, m: &BlockModel) -> Vec<String> {
         return out;
     }
     let mut out = vec![format!(
-        "{block} model: K e^(-tau s) with {} accepted effect{} (identified without them: order {}, tau {:.3} ms)",
+        "{block} model: K e^(-tau s) with {} accepted effect{} (identified without them: order {}, tau {:.3} ms{})",
         e.accepted.len(),
         if e.accepted.len() == 1 { "" } else { "s" },
         e.identified.order,
-        e.identified.tau_s * 1e3
+        e.identified.tau_s * 1e3,
+        e.identified.band_words(m.band_hz)
     )];
     for a in &e.accepted {
         out.push(format!("accepted: {}", a.name));

@@ -11,7 +11,7 @@ mod sim_common;
 use std::sync::Arc;
 
 use imu_attest::block::Block;
-use imu_attest::diagnose::extend::extended_model;
+use imu_attest::diagnose::extend::{extended_model, prepare_for_effects, starts_match};
 use imu_attest::effect::Effect;
 use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
@@ -502,7 +502,27 @@ fn an_accepted_mode_takes_back_the_band_the_identified_model_s_misfit_cut() {
     };
     assert!(gyro.band_hz[1] < cut[1], "{:?} {cut:?}", gyro.band_hz);
     let identified_band = gyro.band_hz;
-    let model = extend(run, &[(Block::Gyro, Effect::PlatformResonance)]);
+    // Two starts, over the identified band and through the cut one; a model of another band
+    // (a cache of them made for it) does not match them.
+    let accepted = [(Block::Gyro, Effect::PlatformResonance)];
+    let preps = prepare_for_effects(
+        &mut Session::new(Arc::new(run.clone())),
+        &Settings::default(),
+        &identified,
+        &accepted,
+    )
+    .expect("prepared");
+    let tops: Vec<f64> = preps
+        .iter()
+        .flat_map(|p| &p.blocks)
+        .map(|b| b.band_hz[1])
+        .collect();
+    assert_eq!(tops, vec![identified_band[1], cut[1]]);
+    assert!(starts_match(&preps, &identified, &accepted));
+    let mut other = identified.clone();
+    other.blocks.get_mut("gyro").expect("gyro").band_hz[1] *= 0.9;
+    assert!(!starts_match(&preps, &other, &accepted));
+    let model = extend(run, &accepted);
     let gyro = &model.blocks["gyro"];
     let effects = gyro.effects.as_ref().expect("extended");
     assert_eq!(effects.resonances.len(), 1, "{effects:?}");

@@ -8,6 +8,9 @@
 
 use super::DiagnoseError;
 use super::candidates::candidates_among;
+use super::design::WINDOW_ENBW;
+use super::fit::Fitted;
+use super::profile;
 use super::report::{gain, parameters};
 use super::rules::within_reach;
 use super::state::State;
@@ -85,6 +88,29 @@ pub fn prepare_for_effects(
     Ok(preps)
 }
 
+/// Whether `preps` hold, for every block of `model` with `accepted` effects, a start over the
+/// band that block is identified over ([`apply_effects`] tells the starts apart by band): a
+/// cache of them made for another model under the same settings (a refined fit's band top, then
+/// the cold refit's) is not this model's.
+#[must_use]
+pub fn starts_match(preps: &[Prepared], model: &Model, accepted: &[(Block, Effect)]) -> bool {
+    Block::BOTH.iter().all(|&block| {
+        let Some(entry) = model.blocks.get(block.name()) else {
+            return true;
+        };
+        of_block(accepted, block).is_empty()
+            || preps
+                .iter()
+                .flat_map(|p| &p.blocks)
+                .any(|pb| pb.block == block && same_top(pb.band_hz, entry.band_hz))
+    })
+}
+
+/// Whether two bands end at the same frequency (a fixed band is prepared as given).
+fn same_top(a: [f64; 2], b: [f64; 2]) -> bool {
+    (a[1] - b[1]).abs() <= 1e-9 * b[1]
+}
+
 /// The effects of `accepted` on `block`, in order.
 fn of_block(accepted: &[(Block, Effect)], block: Block) -> Vec<Effect> {
     accepted
@@ -134,8 +160,11 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
             .filter(|pb| pb.block == block)
             .collect();
         let top = entry.band_hz[1];
-        let same = |pb: &&&PreparedBlock| (pb.band_hz[1] - top).abs() <= 1e-9 * top;
-        let Some(&own) = starts.iter().find(same).or(starts.first()) else {
+        let Some(&own) = starts
+            .iter()
+            .find(|pb| same_top(pb.band_hz, entry.band_hz))
+            .or(starts.first())
+        else {
             continue;
         };
         if effects.is_empty() {
@@ -148,9 +177,23 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
             continue;
         };
         let mut through = identified;
-        extend_block(&mut through, wider, &effects, calibrated);
-        if let (Some(t), Some(n)) = (&through.effects, &entry.effects)
-            && explains_through(t, n, [own.dof, wider.dof])
+        let Some(fitted) = extend_block(&mut through, wider, &effects, calibrated) else {
+            continue;
+        };
+        // The wider fit's own chi2 over the cut band: its structure and nonlinear parameters on
+        // that band's design, the linear ones solved again (at most its own there: the strict
+        // side for what the stretch adds).
+        let base = &own.base;
+        let below = profile::project(
+            &base.design,
+            &base.grams,
+            &fitted.structure,
+            &fitted.layout,
+            &fitted.theta,
+        )
+        .map(|p| 2.0 * p.cost / WINDOW_ENBW);
+        if let (Some(t), Some(n), Some(below)) = (&through.effects, &entry.effects, below)
+            && explains_through(t, n, below, [own.dof, wider.dof])
         {
             through.take_back_the_cut_band(wider.band_hz);
             *entry = through;
@@ -161,23 +204,25 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
 /// Whether `through`, the effects fitted through a wider band than `narrow`'s (`dof`: the two
 /// fits' degrees of freedom, narrow first), holds the mount resonance the wider band was tried
 /// for and every effect `narrow` adds, and explains the data there: its chi2/dof at most
-/// [`crate::ident::selfcheck::POOR_FIT`], and so is what the stretch added takes, the chi2 it adds
-/// per degree of freedom it adds (the rule that cut the band asks the stretch above it to stay
-/// within that of the model's; the whole band's alone can hide a stretch at 3 beside a band at
-/// 0.8).
+/// [`crate::ident::selfcheck::POOR_FIT`], and so is the chi2 the stretch added takes per degree
+/// of freedom it adds, `(chi2 - chi2_below) / (dof - narrow_dof)` with `chi2_below` its own chi2
+/// over the narrow band (the absolute arm of the rule that cut the band, which asks the stretch
+/// above it not to exceed that; the whole band's figure alone could hide a stretch at 3.5 beside
+/// a band at 0.8). Not the narrow fit's chi2: where the mode lies above the cut, the narrow fit
+/// cannot hold it, and its chi2 (the delay-only fit's, in the hundreds) would take the stretch
+/// for explained whatever it holds.
 fn explains_through(
     through: &ModelEffects,
     narrow: &ModelEffects,
+    chi2_below: f64,
     [narrow_dof, through_dof]: [f64; 2],
 ) -> bool {
     let poor = crate::ident::selfcheck::POOR_FIT;
-    let added = (through.chi2_per_dof[1] * through_dof - narrow.chi2_per_dof[1] * narrow_dof)
-        / (through_dof - narrow_dof);
-    through.extends()
-        && through
-            .accepted
-            .iter()
-            .any(|a| a.effect == Effect::PlatformResonance)
+    let added = (through.chi2_per_dof[1] * through_dof - chi2_below) / (through_dof - narrow_dof);
+    through
+        .accepted
+        .iter()
+        .any(|a| a.effect == Effect::PlatformResonance)
         && narrow
             .accepted
             .iter()
@@ -190,7 +235,12 @@ fn explains_through(
 /// Adds `effects` (in order, each once) to the block's whole-record model and writes the result
 /// into `entry`; when none can be added, `entry` keeps its identified model and only lists them
 /// with the reasons.
-fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect], calibrated: bool) {
+fn extend_block(
+    entry: &mut BlockModel,
+    pb: &PreparedBlock,
+    effects: &[Effect],
+    calibrated: bool,
+) -> Option<Fitted> {
     let band = pb.band_hz;
     let mut state = pb.base.clone();
     let mut added: Vec<(Effect, usize)> = Vec::new();
@@ -289,11 +339,12 @@ fn extend_block(entry: &mut BlockModel, pb: &PreparedBlock, effects: &[Effect], 
         // with its order, poles and even gain), not the whole-record fit without effects, whose
         // K and delay differ within their deviations; the effects only list what was asked.
         entry.effects = Some(effects);
-        return;
+        return None;
     }
     let k_std = [0, 1, 2].map(|i| [0, 1, 2].map(|j| cov.as_ref().and_then(|c| c.linear_std(3 * i + j))));
     let tau_sd = cov.as_ref().and_then(tau_std);
     entry.set_effects(effects, gain(&state), k_std, f.theta.tau_s, tau_sd, calibrated);
+    Some(state.fitted)
 }
 
 /// Why an accepted effect's fit `next` (from `state`, over `band`) is not added, if it is not: a
@@ -482,7 +533,8 @@ mod tests {
 
     /// A fit through the band the identified model's misfit cut replaces the cut band's where
     /// it holds the mode and every effect the cut band's holds, explains the data, and so does
-    /// the stretch it adds (its chi2 added per degree of freedom added at most 2).
+    /// the stretch it adds (the chi2 it adds over its own below the cut, per degree of freedom
+    /// added, at most 2), each condition alone deciding.
     #[test]
     fn a_fit_through_the_cut_band_is_kept_where_it_explains_it() {
         let mode = Effect::PlatformResonance;
@@ -491,30 +543,61 @@ mod tests {
             ..accepted(effects)
         };
         let narrow = with(&[mode], 0.7);
-        // 600 degrees of freedom below, 400 added.
-        let dof = [600.0, 1000.0];
-        assert!(explains_through(&with(&[mode], 0.8), &narrow, dof));
-        // Whole band at 1.6 (under 2), but the stretch added at 2.9: the cut stays.
-        assert!(!explains_through(&with(&[mode], 1.58), &narrow, dof));
-        assert!(!explains_through(&with(&[mode], 2.5), &narrow, dof));
-        assert!(!explains_through(&with(&[mode], f64::NAN), &narrow, dof));
+        // 600 degrees of freedom below the cut (its own chi2 there 0.7 per), 400 added.
+        let (dof, below) = ([600.0, 1000.0], 420.0);
+        assert!(explains_through(&with(&[mode], 0.8), &narrow, below, dof));
+        // Whole band at 1.58 (under 2), but the stretch added at 2.9: the cut stays.
+        assert!(!explains_through(&with(&[mode], 1.58), &narrow, below, dof));
+        assert!(!explains_through(&with(&[mode], f64::NAN), &narrow, below, dof));
+        assert!(!explains_through(&with(&[mode], 0.8), &narrow, f64::NAN, dof));
+        // The stretch judged on the wider fit's own chi2 below, not the narrow fit's: a mode
+        // above the cut that the narrow fit could not hold (its chi2/dof 50), the wider fit at
+        // 1.9 over the whole band and 0.8 below: the stretch at 3.55.
+        assert!(!explains_through(
+            &with(&[mode], 1.9),
+            &with(&[], 50.0),
+            480.0,
+            dof
+        ));
+        assert!(explains_through(
+            &with(&[mode], 1.0),
+            &with(&[], 50.0),
+            480.0,
+            dof
+        ));
+        // The whole band above 2 with the stretch at 2.0 (the fit worse below, 2.33 per).
+        assert!(!explains_through(&with(&[mode], 2.2), &narrow, 1400.0, dof));
         // Without the mode it was tried for, or without an effect the cut band's fit holds.
         assert!(!explains_through(
             &with(&[Effect::SensorLag], 0.8),
             &with(&[], 0.7),
+            below,
             dof
         ));
         assert!(!explains_through(
             &with(&[mode], 0.8),
             &with(&[mode, Effect::SensorLag], 0.7),
+            below,
             dof
         ));
         assert!(explains_through(
             &with(&[mode, Effect::SensorLag], 0.8),
             &narrow,
+            below,
             dof
         ));
-        // No band added.
-        assert!(!explains_through(&with(&[mode], 0.8), &narrow, [600.0, 600.0]));
+        // No band added (fewer or as many degrees of freedom).
+        assert!(!explains_through(
+            &with(&[mode], 0.8),
+            &narrow,
+            below,
+            [1000.0, 600.0]
+        ));
+        assert!(!explains_through(
+            &with(&[mode], 0.6),
+            &narrow,
+            below,
+            [600.0, 600.0]
+        ));
     }
 }

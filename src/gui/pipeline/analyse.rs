@@ -11,7 +11,7 @@ use super::identified::Identification;
 use super::stages::{self, Measured, Motion};
 use super::{Event, FailureKind, RunId, RunSummary, Stage};
 use crate::block::Block;
-use crate::diagnose::extend::prepare_for_effects;
+use crate::diagnose::extend::{prepare_for_effects, starts_match};
 use crate::diagnose::{DiagnoseError, Prepared, prepare};
 use crate::effect::Effect;
 use crate::ident::IdentError;
@@ -42,7 +42,7 @@ pub(super) struct RunCache {
     pub prepared: Option<(Settings, Arc<Prepared>)>,
     /// The accepted effects' starting points (`prepare_for_effects`) under the settings and
     /// effects they were made for: a retune or a refit from scratch with the same settings and
-    /// effects reuses them.
+    /// effects reuses them where they start from the model's bands (`starts_match`).
     pub effect_prepared: Option<EffectStart>,
 }
 
@@ -183,7 +183,9 @@ impl Analysis<'_> {
                 let cached = cache
                     .effect_prepared
                     .as_ref()
-                    .filter(|(s, a, _)| *s == settings && *a == accepted)
+                    .filter(|(s, a, p)| {
+                        *s == settings && *a == accepted && starts_match(p, &model, &accepted)
+                    })
                     .map(|(_, _, p)| p.clone());
                 let fresh = |cache: &mut RunCache| {
                     let p = Arc::new(prepare_for_effects(

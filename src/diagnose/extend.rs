@@ -170,13 +170,15 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
         if effects.is_empty() {
             continue;
         }
-        let wider = starts.iter().find(|pb| pb.band_hz[1] > top * (1.0 + 1e-9));
-        let identified = entry.clone();
+        // The model as identified, kept only where there is a wider start to fit it through.
+        let wider = starts
+            .iter()
+            .find(|pb| pb.band_hz[1] > top * (1.0 + 1e-9))
+            .map(|&pb| (pb, entry.clone()));
         extend_block(entry, own, &effects, calibrated);
-        let Some(&wider) = wider else {
+        let Some((wider, mut through)) = wider else {
             continue;
         };
-        let mut through = identified;
         let Some(fitted) = extend_block(&mut through, wider, &effects, calibrated) else {
             continue;
         };
@@ -425,8 +427,6 @@ mod tests {
             [-0.002, 0.003, 1.002],
         ];
         let effects = ModelEffects {
-            accepted: Vec::new(),
-            not_added: Vec::new(),
             lag_s: Some(theta.lag_s),
             channel_skew_s: Some(theta.channel_skew_s()),
             resonances: vec![
@@ -445,15 +445,7 @@ mod tests {
                 shape: BandLimitShape::Causal2,
                 t_s: theta.band_limit_t_s,
             }),
-            identified: Identified {
-                k,
-                tau_s: 0.004,
-                order: 0,
-                band_hz: None,
-            },
-            band_hz: [0.1, 40.0],
-            chi2_per_dof: [1.0, 1.0],
-            gap_db: [[0.0; 3]; 2],
+            ..accepted(&[])
         };
         for f in [0.3, 5.0, 22.9, 30.0, 39.0] {
             let filters = Filters::at(&structure, &theta, f);

@@ -319,9 +319,9 @@ impl BlockModel {
     /// where there is one.
     #[must_use]
     pub fn response(&self, f_hz: f64) -> Matrix3<Complex64> {
-        let r = match &self.effects {
-            Some(e) if e.extends() => e.response(&self.k, self.tau_s, f_hz),
-            _ => crate::ident::structural::rational_response(
+        let r = match self.extended_by() {
+            Some(e) => e.response(&self.k, self.tau_s, f_hz),
+            None => crate::ident::structural::rational_response(
                 &self.numerator,
                 &self.denominator,
                 self.tau_s,
@@ -332,6 +332,13 @@ impl BlockModel {
             Some(g) => r * Complex64::from(g.at(f_hz)),
             None => r,
         }
+    }
+
+    /// The accepted effects where the model is extended by them (at least one could be added,
+    /// [`ModelEffects::extends`]); `None` for a model as identified.
+    #[must_use]
+    pub fn extended_by(&self) -> Option<&ModelEffects> {
+        self.effects.as_ref().filter(|e| e.extends())
     }
 
     /// Replaces the structural model by the paper's model extended with `effects`, of gain `k`

@@ -198,13 +198,13 @@ fn equation(h: &mut String, b: &BlockModel) {
     };
     // With accepted effects the model is the joint fit: its own chi2/dof (not the
     // identification's, `fit.chi2_per_dof`), and the same fit's without them.
-    let chi2 = match &b.effects {
-        Some(e) if e.extends() => format!(
+    let chi2 = match b.extended_by() {
+        Some(e) => format!(
             "{} (whole-record fit with the accepted effects; {} without them)",
             sig(e.chi2_per_dof[1], 3),
             sig(e.chi2_per_dof[0], 3)
         ),
-        _ => sig(b.fit.chi2_per_dof, 3),
+        None => sig(b.fit.chi2_per_dof, 3),
     };
     let _ = write!(
         h,

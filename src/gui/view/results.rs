@@ -11,7 +11,6 @@ use crate::gui::app::{Command, RunEntry};
 use crate::ident::band::BandSetting;
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::model::BlockModel;
-use crate::model::effects::ModelEffects;
 
 /// `v ± std` with `decimals`, or with more where the deviation would round to zero (its first
 /// significant digit shown, at most 9 decimals): a deviation of 7e-5 ms reads `± 0.00007`, not
@@ -141,7 +140,7 @@ pub fn show(ui: &mut egui::Ui, run: Option<&RunEntry>, commands: &mut Vec<Comman
             ));
         }
         ui.label(tau_label(name, m));
-        if !m.effects.as_ref().is_some_and(ModelEffects::extends) {
+        if m.extended_by().is_none() {
             ui.label(format!(
                 "order {} ({}), {}",
                 m.order,
@@ -327,7 +326,7 @@ fn fit(ui: &mut egui::Ui, m: &BlockModel, settings: &Settings) {
     let lambda_auto = settings.lambda == LambdaSetting::Auto;
     // With accepted effects the model is the joint fit (its chi2/dof in the effect lines above);
     // these figures are the identification's, without them.
-    let whose = if m.effects.as_ref().is_some_and(ModelEffects::extends) {
+    let whose = if m.extended_by().is_some() {
         "identified without the accepted effects: "
     } else {
         ""

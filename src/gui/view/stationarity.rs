@@ -65,10 +65,7 @@ pub fn show(ui: &mut egui::Ui, name: &str, m: &BlockModel) {
         return;
     };
     // The stretches are the identification's, without the effects accepted since.
-    let extended = m
-        .effects
-        .as_ref()
-        .is_some_and(crate::model::ModelEffects::extends);
+    let extended = m.extended_by().is_some();
     let fitted_without = if extended {
         " (fitted without the accepted effects)"
     } else {

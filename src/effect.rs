@@ -115,6 +115,22 @@ impl Effect {
         matches!(self, Effect::ReferenceLag | Effect::ReferenceBandLimit)
     }
 
+    /// Whether the effect is a filter, the block's or the stand's, whose misfit grows towards the
+    /// band's top (a mount mode, a lag, a band limit, channel delays): what a band ended early
+    /// by the identified model's misfit there (`band_top_misfit`) may have missed, so that the
+    /// model with it accepted is tried through that band again (`diagnose::extend`).
+    #[must_use]
+    pub fn shapes_the_band_top(self) -> bool {
+        matches!(
+            self,
+            Effect::SensorLag
+                | Effect::AxisTimeSkew
+                | Effect::PlatformResonance
+                | Effect::ReferenceLag
+                | Effect::ReferenceBandLimit
+        )
+    }
+
     /// Every id, comma-separated (for messages).
     #[must_use]
     pub fn known_ids() -> String {

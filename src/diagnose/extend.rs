@@ -51,9 +51,10 @@ pub fn extended_model(
 /// the diagnosis's band: the diagnosis looks for misfit where the inputs may not be trustworthy,
 /// but a model is fitted only where they are (on the real recordings, over 0.1-40 Hz a gyro's K
 /// came out 0.4-1.4 % off; over its usable band, within 0.6 %). Where that top was cut because
-/// the identified model missed the data above it (`band_top_misfit`) and a mount resonance is
-/// accepted, a second one through the band that was cut ([`uncut_band`]; left out where it
-/// cannot be prepared): the mode may be what the identified model missed. [`apply_effects`]
+/// the identified model missed the data above it (`band_top_misfit`) and a filter is accepted
+/// (a mode, a lag, a band limit, channel delays: [`Effect::shapes_the_band_top`]), a second one
+/// through the band that was cut ([`uncut_band`]; left out where it cannot be prepared): the
+/// filter may be what the identified model missed. [`apply_effects`]
 /// tells them apart by their bands.
 ///
 /// # Errors
@@ -121,12 +122,13 @@ fn of_block(accepted: &[(Block, Effect)], block: Block) -> Vec<Effect> {
 }
 
 /// The band `entry` was identified over with its top where it was before the identified model's
-/// misfit cut it (`band_top_misfit`), where `effects` hold a mount resonance, a filter of the
-/// block's own that can be what the model missed there (a gyro with a 21.7 Hz mode: the band
-/// cut at 24.9 Hz of a usable 39.8, the model's chi2 per bin above it 24535 times its
-/// expectation). `None` otherwise.
+/// misfit cut it (`band_top_misfit`), where `effects` hold a filter that can be what the model
+/// missed there ([`Effect::shapes_the_band_top`]): a gyro with a 21.7 Hz mode, the band cut at
+/// 24.9 Hz of a usable 39.8, the model's chi2 per bin above it 24535 times its expectation; a
+/// stand whose angles are band-limited at 30 Hz, the band cut at 25.9 Hz of a usable 32.6, 37.5
+/// times. `None` otherwise.
 fn uncut_band(entry: &BlockModel, effects: &[Effect]) -> Option<[f64; 2]> {
-    if !effects.contains(&Effect::PlatformResonance) {
+    if !effects.iter().any(|e| e.shapes_the_band_top()) {
         return None;
     }
     entry.fit.warnings.iter().find_map(|w| match w {
@@ -204,8 +206,8 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
 }
 
 /// Whether `through`, the effects fitted through a wider band than `narrow`'s (`dof`: the two
-/// fits' degrees of freedom, narrow first), holds the mount resonance the wider band was tried
-/// for and every effect `narrow` adds, and explains the data there: its chi2/dof at most
+/// fits' degrees of freedom, narrow first), holds a filter the wider band was tried for
+/// ([`Effect::shapes_the_band_top`]) and every effect `narrow` adds, and explains the data there: its chi2/dof at most
 /// [`crate::ident::selfcheck::POOR_FIT`], and so is the chi2 the stretch added takes per degree
 /// of freedom it adds, `(chi2 - chi2_below) / (dof - narrow_dof)` with `chi2_below` its own chi2
 /// over the narrow band (the absolute arm of the rule that cut the band, which asks the stretch
@@ -221,10 +223,7 @@ fn explains_through(
 ) -> bool {
     let poor = crate::ident::selfcheck::POOR_FIT;
     let added = (through.chi2_per_dof[1] * through_dof - chi2_below) / (through_dof - narrow_dof);
-    through
-        .accepted
-        .iter()
-        .any(|a| a.effect == Effect::PlatformResonance)
+    through.accepted.iter().any(|a| a.effect.shapes_the_band_top())
         && narrow
             .accepted
             .iter()
@@ -524,7 +523,7 @@ mod tests {
     }
 
     /// A fit through the band the identified model's misfit cut replaces the cut band's where
-    /// it holds the mode and every effect the cut band's holds, explains the data, and so does
+    /// it holds a filter (the mode, a band limit, a lag) and every effect the cut band's holds, explains the data, and so does
     /// the stretch it adds (the chi2 it adds over its own below the cut, per degree of freedom
     /// added, at most 2), each condition alone deciding.
     #[test]
@@ -559,13 +558,35 @@ mod tests {
         ));
         // The whole band above 2 with the stretch at 2.0 (the fit worse below, 2.33 per).
         assert!(!explains_through(&with(&[mode], 2.2), &narrow, 1400.0, dof));
-        // Without the mode it was tried for, or without an effect the cut band's fit holds.
+        // Without a filter it was tried for (a g-sensitivity and a tone shape no band top), or
+        // without an effect the cut band's fit holds.
         assert!(!explains_through(
-            &with(&[Effect::SensorLag], 0.8),
+            &with(&[Effect::GSensitivity, Effect::VibrationTone], 0.8),
             &with(&[], 0.7),
             below,
             dof
         ));
+        // Any filter whose misfit grows towards the top may take the band back: the stand's
+        // band limit or lag, the block's lag or channel delays.
+        for filter in [
+            Effect::ReferenceBandLimit,
+            Effect::ReferenceLag,
+            Effect::SensorLag,
+            Effect::AxisTimeSkew,
+        ] {
+            assert!(explains_through(
+                &with(&[filter], 0.8),
+                &with(&[], 0.7),
+                below,
+                dof
+            ));
+            assert!(!explains_through(
+                &with(&[filter], 1.58),
+                &with(&[], 0.7),
+                below,
+                dof
+            ));
+        }
         assert!(!explains_through(
             &with(&[mode], 0.8),
             &with(&[mode, Effect::SensorLag], 0.7),

@@ -121,14 +121,20 @@ impl Effect {
     /// model with it accepted is tried through that band again (`diagnose::extend`).
     #[must_use]
     pub fn shapes_the_band_top(self) -> bool {
-        matches!(
-            self,
+        match self {
             Effect::SensorLag
-                | Effect::AxisTimeSkew
-                | Effect::PlatformResonance
-                | Effect::ReferenceLag
-                | Effect::ReferenceBandLimit
-        )
+            | Effect::AxisTimeSkew
+            | Effect::PlatformResonance
+            | Effect::ReferenceLag
+            | Effect::ReferenceBandLimit => true,
+            // A clock drift's misfit grows with frequency too, but its correction resamples the
+            // outputs: its chi2 is of another design, and the stretch's test compares chi2s.
+            Effect::ClockDrift
+            | Effect::GSensitivity
+            | Effect::ScaleNonlinearity
+            | Effect::VibrationTone
+            | Effect::LeverArmError => false,
+        }
     }
 
     /// Every id, comma-separated (for messages).

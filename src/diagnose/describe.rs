@@ -115,7 +115,18 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
                 pm(sd1("T_s"), 1e3, 3)
             )]
         }),
-        Effect::ReferenceBandLimit => band_limit_size(p, &sd1),
+        Effect::ReferenceBandLimit => band_limit_size(p, &sd1).map(|mut lines| {
+            // Its deviation given, and `null`: held at a bound or unseen by the band.
+            if sd("T_s").is_some_and(Value::is_null) {
+                lines.push(
+                    "the band does not determine it (at its bound, or its corner so far above the \
+                     band that the data do not see it): its size has no deviation, and the \
+                     model's others are those given it"
+                        .to_owned(),
+                );
+            }
+            lines
+        }),
         Effect::AxisTimeSkew => p.get("skew_s").and_then(three).map(|s| {
             vec![format!(
                 "channel delays relative to their mean, ms: {}",
@@ -320,6 +331,21 @@ mod tests {
             lines[0].contains("through a causal order-2 low-pass at 39.8 Hz"),
             "{lines:?}"
         );
+        // Its deviation given as `null` (held at its bound, or unseen by the band): said; not
+        // where no deviations are given at all (above).
+        let unseen = json!({
+            "T_s": 6.7e-4, "shape": "zero_phase", "order": 8, "causal": false, "band_top_hz": 33.9,
+            "gain_rise_at_band_top": 1.4e-14, "corner_hz": 238.1
+        });
+        let held = json!({"T_s": null, "corner_hz": null, "gain_rise_at_band_top": null});
+        let lines = describe_size(Block::Accel, Effect::ReferenceBandLimit, &unseen, &held);
+        assert_eq!(lines.len(), 2, "{lines:?}");
+        assert!(
+            lines[0].contains("by 0.00 % at 33.9 Hz") && lines[1].contains("does not determine it"),
+            "{lines:?}"
+        );
+        let lines = describe_size(Block::Accel, Effect::ReferenceBandLimit, &unseen, &Value::Null);
+        assert_eq!(lines.len(), 1, "{lines:?}");
         // Neither an order nor a rate: no words.
         let neither = json!({"T_s": 0.004, "causal": false, "band_top_hz": 38.0, "gain_rise_at_band_top": 0.1, "corner_hz": 39.8});
         let lines = describe_size(Block::Gyro, Effect::ReferenceBandLimit, &neither, &Value::Null);

@@ -207,7 +207,9 @@ pub fn apply_effects(model: &mut Model, preps: &[Prepared], accepted: &[(Block, 
 
 /// Whether `through`, the effects fitted through a wider band than `narrow`'s (`dof`: the two
 /// fits' degrees of freedom, narrow first), holds a filter the wider band was tried for
-/// ([`Effect::shapes_the_band_top`]) and every effect `narrow` adds, and explains the data there: its chi2/dof at most
+/// ([`Effect::shapes_the_band_top`]) that it determines (a deviation known: not held at a bound
+/// of its range or unseen by the band, `super::uncertainty`, a filter that does nothing there)
+/// and every effect `narrow` adds, and explains the data there: its chi2/dof at most
 /// [`crate::ident::selfcheck::POOR_FIT`], and so is the chi2 the stretch added takes per degree
 /// of freedom it adds, `(chi2 - chi2_below) / (dof - narrow_dof)` with `chi2_below` its own chi2
 /// over the narrow band (the absolute arm of the rule that cut the band, which asks the stretch
@@ -223,7 +225,10 @@ fn explains_through(
 ) -> bool {
     let poor = crate::ident::selfcheck::POOR_FIT;
     let added = (through.chi2_per_dof[1] * through_dof - chi2_below) / (through_dof - narrow_dof);
-    through.accepted.iter().any(|a| a.effect.shapes_the_band_top())
+    through
+        .accepted
+        .iter()
+        .any(|a| a.effect.shapes_the_band_top() && holds_a_deviation(&a.parameter_std))
         && narrow
             .accepted
             .iter()
@@ -231,6 +236,17 @@ fn explains_through(
         && through.chi2_per_dof[1] <= poor
         && through_dof > narrow_dof
         && added <= poor
+}
+
+/// Whether an accepted effect's `parameter_std` holds a finite number (a parameter held at a
+/// bound, or unseen by the band, has `null`).
+fn holds_a_deviation(std: &serde_json::Value) -> bool {
+    match std {
+        serde_json::Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
+        serde_json::Value::Array(a) => a.iter().any(holds_a_deviation),
+        serde_json::Value::Object(o) => o.values().any(holds_a_deviation),
+        _ => false,
+    }
 }
 
 /// Adds `effects` (in order, each once) to the block's whole-record model and writes the result
@@ -502,7 +518,7 @@ mod tests {
                     effect,
                     name: effect.name_on(Block::Gyro),
                     parameters: serde_json::Value::Null,
-                    parameter_std: serde_json::Value::Null,
+                    parameter_std: serde_json::json!({ "T_s": [null, 1e-4] }),
                 })
                 .collect(),
             not_added: Vec::new(),
@@ -523,9 +539,10 @@ mod tests {
     }
 
     /// A fit through the band the identified model's misfit cut replaces the cut band's where
-    /// it holds a filter (the mode, a band limit, a lag) and every effect the cut band's holds, explains the data, and so does
-    /// the stretch it adds (the chi2 it adds over its own below the cut, per degree of freedom
-    /// added, at most 2), each condition alone deciding.
+    /// it holds a filter it determines (the mode, a band limit, a lag) and every effect the cut
+    /// band's holds, explains the data, and so does the stretch it adds (the chi2 it adds over
+    /// its own below the cut, per degree of freedom added, at most 2), each condition alone
+    /// deciding.
     #[test]
     fn a_fit_through_the_cut_band_is_kept_where_it_explains_it() {
         let mode = Effect::PlatformResonance;
@@ -587,6 +604,11 @@ mod tests {
                 dof
             ));
         }
+        // A filter the wider fit does not determine (held at its bound or unseen: its deviations
+        // `null`) does not take the band back, whatever the chi2.
+        let mut held = with(&[Effect::ReferenceBandLimit], 0.8);
+        held.accepted[0].parameter_std = serde_json::json!({ "T_s": null, "corner_hz": [null] });
+        assert!(!explains_through(&held, &with(&[], 0.7), below, dof));
         assert!(!explains_through(
             &with(&[mode], 0.8),
             &with(&[mode, Effect::SensorLag], 0.7),

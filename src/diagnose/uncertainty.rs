@@ -33,6 +33,9 @@
 //! stretches, the curvature of the search's profiled cost (`clock::drift_deviation`; `null` when
 //! that curvature is not positive).
 //!
+//! A nonlinear parameter at a bound of its range, or one the band does not see (`unseen`), is
+//! held at its value: its own deviation is undetermined, the others' are those given it.
+//!
 //! Units: as the parameters (s, Hz, output units); `None` where the Hessian is not positive
 //! definite (a parameter the data do not determine).
 
@@ -93,8 +96,9 @@ impl Covariance {
 
 /// The covariance of `state`'s fitted parameters, widened by `chi2_per_dof` when above 1.
 /// A nonlinear parameter at a bound of its range (a step to either side leaves it: a band limit
-/// or a lag fitted at 0, a mode at the band's edge) is held at its value (its row and column NaN,
-/// the others' covariance conditional on it). `None` when any other parameter has no curvature,
+/// or a lag fitted at 0, a mode at the band's edge), or one the band does not see ([`unseen`]),
+/// is held at its value (its row and column NaN, the others' covariance conditional on it).
+/// `None` when any other parameter has no curvature,
 /// their Hessian is not positive definite, or a cross term's step leaves the range.
 #[must_use]
 pub fn covariance(state: &State, band_hz: [f64; 2], chi2_per_dof: f64) -> Option<Covariance> {
@@ -179,7 +183,8 @@ pub(super) fn hessian(
             continue;
         };
         let curvature = (c_up - 2.0 * c0 + c_down) / (hs[a] * hs[a]);
-        if unseen(curvature, hs[a]) {
+        // Not the delay (slot 0): a model whose delay the band does not see is no model.
+        if a > 0 && unseen(curvature, hs[a]) {
             held[a] = true;
             continue;
         }
@@ -207,8 +212,10 @@ pub(super) fn hessian(
 const UNSEEN_COST: f64 = 1e-3;
 
 /// Whether a nonlinear parameter whose cost has `curvature` at the Hessian's step `h` (a fiftieth
-/// of the search's first step, [`packed_with_steps`]) is not seen by the data: a step of the
-/// search's own size, either way, moves the cost by less than [`UNSEEN_COST`]. A band limit
+/// of the search's first step, [`packed_with_steps`]) is not seen by the data: at that curvature,
+/// a step of the search's own size would move the cost by less than [`UNSEEN_COST`] (the local
+/// curvature extrapolated, the most the parameter can hold with the others fixed: a band
+/// limit's `T`, whose effect grows as `T^16`, can move the cost more over a whole step). A band limit
 /// accepted on a stand without one whose fit puts its corner far above the band (`T` = 5 us
 /// to 0.76 ms beside a 30-40 Hz band top: its gain there moves as `(f/f_c)^16`) is such a one.
 /// It is held like one at a bound ([`determined`]): before, its curvature at rounding's level (of

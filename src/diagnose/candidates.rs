@@ -60,6 +60,23 @@ pub(super) fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) 
     })
 }
 
+/// How many candidates a round tried, for its look-elsewhere cost: each one offered, and a band
+/// limit's shapes all where any is offered (a causal shape set aside by
+/// `super::band_limit::without_needless_phase`, or a shape whose fit failed, was tried too).
+#[must_use]
+pub fn tried(cands: &[Candidate]) -> usize {
+    let shapes = cands
+        .iter()
+        .filter(|c| c.effect == Effect::ReferenceBandLimit)
+        .count();
+    let all_shapes = if shapes > 0 {
+        crate::model::band_limit::BandLimitShape::SHAPES.len()
+    } else {
+        0
+    };
+    cands.len() - shapes + all_shapes
+}
+
 /// Every candidate for the block that the current model does not already hold.
 #[must_use]
 pub fn candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {

@@ -7,7 +7,7 @@
 //! identified model is kept and they are listed with the reasons.
 
 use super::DiagnoseError;
-use super::candidates::{Candidate, Extension, candidates_among};
+use super::candidates::{Candidate, candidates_among};
 use super::design::WINDOW_ENBW;
 use super::fit::Fitted;
 use super::profile;
@@ -239,31 +239,11 @@ fn explains_through(
 }
 
 /// The candidate an accepted effect is fitted as: the one that explains most (its shapes are
-/// each a candidate: a band limit's), but a band limit's causal shape only where it explains more
-/// than the best shape without phase by `ln(dof)` (`dof` the band's real degrees of freedom: what
-/// the diagnosis asks of a parameter). In the band a causal shape far above it is all but a
-/// delay, its group delay traded for the block's: a band limit accepted on stands without one
-/// (a helper's campaign: perfect, latency-only and coloured-noise stands, 296 blocks) fitted it
-/// on 26-38 % of blocks, its corner at 130-230 Hz beside a 40 Hz top, and moved the delay by about
-/// its group delay, 1.0-1.7 ms, on 83 of them. The shapes without phase claim no group delay;
-/// a real causal filter near the band (a tracker's own) explains far more than they do.
-fn best_candidate(candidates: Vec<Candidate>, dof: f64) -> Option<Candidate> {
-    let causal = |c: &Candidate| match &c.extension {
-        Extension::Structural(f) => f
-            .structure
-            .band_limit
-            .is_some_and(crate::model::band_limit::BandLimitShape::causal),
-        _ => false,
-    };
-    let without_phase = candidates
-        .iter()
-        .filter(|c| !causal(c))
-        .map(|c| c.delta_chi2)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let margin = dof.max(1.0).ln();
+/// each a candidate: a band limit's, its causal shape among them only where it beats the shapes
+/// without phase, `super::band_limit::without_needless_phase`).
+fn best_candidate(candidates: Vec<Candidate>) -> Option<Candidate> {
     candidates
         .into_iter()
-        .filter(|c| !causal(c) || c.delta_chi2 - margin > without_phase)
         .max_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2))
 }
 
@@ -314,7 +294,7 @@ fn extend_block(
         } else {
             effect
         };
-        let best = best_candidate(candidates_among(&state, band, &|e| e == fitted), pb.dof);
+        let best = best_candidate(candidates_among(&state, band, &|e| e == fitted));
         let next = best.and_then(|c| state.with(&c, band));
         match next
             .as_ref()

@@ -2,6 +2,7 @@
 
 use num_complex::Complex64;
 
+use super::candidates::{Candidate, Extension};
 use super::design::{Design, DesignSignals};
 use super::fit::fit;
 use super::structure::{Structure, Theta};
@@ -306,4 +307,82 @@ fn a_tone_across_the_shared_motion_is_found() {
         "chi2 {} apart {apart}",
         tone.delta_chi2
     );
+}
+
+/// A band-limit candidate of `shape` with the given evidence (the fit itself is any fit: the rule
+/// reads only the shape and `delta_chi2`).
+fn shape_candidate(
+    base: &super::fit::Fitted,
+    shape: super::band_limit::BandLimitShape,
+    delta: f64,
+) -> Candidate {
+    let mut fitted = base.clone();
+    fitted.structure.band_limit = Some(shape);
+    Candidate {
+        effect: Effect::ReferenceBandLimit,
+        extension: Extension::Structural(Box::new(fitted)),
+        delta_chi2: delta,
+        added_params: 1,
+    }
+}
+
+#[test]
+fn a_causal_band_limit_that_beats_the_shapes_without_phase_by_less_than_ln_dof_is_set_aside() {
+    use super::band_limit::{BandLimitShape, without_needless_phase};
+    let (x, u) = synthetic(
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        2e-3,
+        0.05,
+        4000,
+        200.0,
+        5,
+    );
+    let d = design(&x, &u, 200.0, 0.05, &[]);
+    let grams = d.grams(&d.outputs());
+    let base = fit(
+        &d,
+        &grams,
+        &Structure::default(),
+        &Theta::delay_only(2e-3),
+        [0.5, 40.0],
+    )
+    .unwrap();
+    let (dof, best_without) = (3000.0_f64, 120.0);
+    let zero_phase = BandLimitShape::SHAPES.into_iter().find(|s| !s.causal()).unwrap();
+    let offered = |causal_delta: f64| {
+        vec![
+            shape_candidate(&base, zero_phase, best_without),
+            shape_candidate(&base, zero_phase, best_without - 50.0),
+            shape_candidate(&base, BandLimitShape::Causal2, causal_delta),
+        ]
+    };
+    let causal_kept = |c: &[Candidate]| {
+        c.iter().any(|c| match &c.extension {
+            Extension::Structural(f) => f.structure.band_limit == Some(BandLimitShape::Causal2),
+            _ => false,
+        })
+    };
+    let margin = dof.ln();
+    // Better than the shapes without phase, but by less than ln(dof): set aside.
+    let kept = without_needless_phase(offered(best_without + margin - 0.1), dof);
+    assert_eq!(kept.len(), 2);
+    assert!(!causal_kept(&kept));
+    // By more: kept, with the others.
+    let kept = without_needless_phase(offered(best_without + margin + 0.1), dof);
+    assert_eq!(kept.len(), 3);
+    assert!(causal_kept(&kept));
+    // Below them: kept for the candidates' table, where they come first.
+    let kept = without_needless_phase(offered(best_without - 1.0), dof);
+    assert_eq!(kept.len(), 3);
+    // Alone (every other shape's fit failed): nothing to beat.
+    let alone = without_needless_phase(vec![shape_candidate(&base, BandLimitShape::Causal2, 5.0)], dof);
+    assert!(causal_kept(&alone));
+    // The round's look-elsewhere cost counts every shape tried, the one set aside too.
+    let set_aside = without_needless_phase(offered(best_without + 1.0), dof);
+    assert_eq!(set_aside.len(), 2);
+    assert_eq!(
+        super::candidates::tried(&set_aside),
+        super::candidates::tried(&offered(best_without + 1.0)),
+    );
+    assert_eq!(super::candidates::tried(&set_aside), BandLimitShape::SHAPES.len());
 }

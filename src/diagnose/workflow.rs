@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 
 use super::DiagnoseError;
-use super::candidates::{Candidate, Extension, candidates, candidates_among};
+use super::candidates::{Candidate, Extension, candidates, candidates_among, tried};
 use super::halves::{HalvesSource, compare_halves};
 use super::map::{disagreement_map, power, psd_cells};
 use super::noisy_angles::asked_below;
@@ -201,7 +201,7 @@ fn diagnose_block(
         cands.retain(|c| !rejected.contains(&c.effect));
         let rule = Rule {
             per_parameter: dof.ln(),
-            multiplicity: 2.0 * (cands.len().max(1) as f64).ln(),
+            multiplicity: 2.0 * (tried(&cands).max(1) as f64).ln(),
         };
         last_rule = Some(rule);
         cands.sort_by(|a, b| rule.gain(b).total_cmp(&rule.gain(a)));

@@ -23,8 +23,8 @@
 //!
 //! A first-order causal filter is a lag of the inputs, the lag candidate's
 //! ([`Effect::ReferenceLag`] when both blocks share it). Each shape is a candidate of its own
-//! (as each axis's resonance is) with one parameter, `T`; the causal one only where it beats the
-//! shapes without phase by more than a parameter's worth ([`without_needless_phase`]).
+//! (as each axis's resonance is) with one parameter, `T`; the causal one set aside where it beats
+//! the shapes without phase by less than a parameter's worth (`without_needless_phase`).
 //!
 //! Units: `T` in s, `omega` in rad/s, frequencies in Hz. Non-finite or non-positive band tops
 //! give no candidate.
@@ -41,9 +41,9 @@ const START_RISES: [f64; 3] = [0.005, 0.02, 0.08];
 
 /// The candidates, one per shape: each from the best of a few starting points (by their rise at
 /// the band's top), fitted. Each shape is a candidate of its own, so the search's look-elsewhere
-/// cost counts every shape tried (on perfect simulated stands the best of the shapes, one
-/// parameter each, came within a few units of chi2 of the threshold on 2 of 54 runs when
-/// counted as one).
+/// cost counts every shape tried (`super::candidates::tried`, one set aside too; on perfect
+/// simulated stands the best of the shapes, one parameter each, came within a few units of chi2
+/// of the threshold on 2 of 54 runs when counted as one).
 pub(super) fn band_limit_candidates(state: &State, band_hz: [f64; 2]) -> Vec<Candidate> {
     let current = &state.fitted;
     let top = band_hz[1];
@@ -77,15 +77,16 @@ pub(super) fn band_limit_candidates(state: &State, band_hz: [f64; 2]) -> Vec<Can
 
 /// The shapes fitted, the causal one set aside where it explains more than the best shape
 /// without phase but not by `ln(dof)` (`dof` the band's real degrees of freedom: what the
-/// diagnosis asks of a parameter). In the band a causal shape far above it is all but a delay, its group delay
-/// traded for the block's: a band limit accepted on stands without one (a helper's campaign:
-/// perfect, latency-only and coloured-noise stands, 296 blocks) fitted it on 26-38 % of blocks,
-/// its corner at 130-230 Hz beside a 40 Hz top, and moved the delay by about its group delay,
-/// 1.0-1.7 ms, on 83 of them. The shapes without phase claim no group delay; a real causal
-/// filter near the band (a tracker's own) explains far more than they do. Here, where the shapes
-/// become candidates, the diagnosis's rounds and an accepted effect's fit take the same shape
-/// (the rule sat in the latter alone until 30 Nov: the diagnosis could name a causal shape
-/// that its acceptance then fitted without phase).
+/// diagnosis asks of a parameter). In the band a causal shape far above it is all but a delay,
+/// its group delay traded for the block's: a band limit accepted on stands without one (a
+/// helper's campaign: perfect, latency-only and coloured-noise stands, 296 blocks) fitted it on
+/// 26-38 % of blocks, its corner at 130-230 Hz beside a 40 Hz top, and moved the delay by about
+/// its group delay, 1.0-1.7 ms, on 83 of them. The shapes without phase claim no group delay; a
+/// real causal filter near the band (a tracker's own) explains far more than they do. Here,
+/// where the shapes become candidates, the diagnosis's rounds and an accepted effect's fit apply
+/// the same rule (it sat in the latter alone until 30 Nov: the diagnosis could name a causal
+/// shape that its acceptance then fitted without phase). A tie with the best shape without phase
+/// sets the causal one aside too (the old rule's choice).
 pub(super) fn without_needless_phase(candidates: Vec<Candidate>, dof: f64) -> Vec<Candidate> {
     let causal = |c: &Candidate| match &c.extension {
         Extension::Structural(f) => f.structure.band_limit.is_some_and(BandLimitShape::causal),
@@ -100,7 +101,7 @@ pub(super) fn without_needless_phase(candidates: Vec<Candidate>, dof: f64) -> Ve
     // One below the shapes without phase stays (the candidates' table lists it; they come first).
     candidates
         .into_iter()
-        .filter(|c| !causal(c) || c.delta_chi2 <= without_phase || c.delta_chi2 - margin > without_phase)
+        .filter(|c| !causal(c) || c.delta_chi2 < without_phase || c.delta_chi2 - margin > without_phase)
         .collect()
 }
 

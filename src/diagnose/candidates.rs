@@ -62,9 +62,10 @@ pub(super) fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) 
 
 /// How many candidates a round tried, for its look-elsewhere cost: each one offered, and a band
 /// limit's shapes all where any is offered (a causal shape set aside by
-/// `super::band_limit::without_needless_phase`, or a shape whose fit failed, was tried too).
+/// `super::band_limit::without_needless_phase`, or a shape whose fit failed, was tried too;
+/// before 30 Nov a failed shape was not counted; other effects' failed fits still are not).
 #[must_use]
-pub fn tried(cands: &[Candidate]) -> usize {
+pub(super) fn tried(cands: &[Candidate]) -> usize {
     let shapes = cands
         .iter()
         .filter(|c| c.effect == Effect::ReferenceBandLimit)

@@ -239,8 +239,8 @@ fn explains_through(
 }
 
 /// The candidate an accepted effect is fitted as: the one that explains most (its shapes are
-/// each a candidate: a band limit's, its causal shape among them only where it beats the shapes
-/// without phase, `super::band_limit::without_needless_phase`).
+/// each a candidate: a band limit's, its causal shape set aside where it beats the shapes without
+/// phase by less than `ln(dof)`, `super::band_limit::without_needless_phase`).
 fn best_candidate(candidates: Vec<Candidate>) -> Option<Candidate> {
     candidates
         .into_iter()

@@ -385,4 +385,16 @@ fn a_causal_band_limit_that_beats_the_shapes_without_phase_by_less_than_ln_dof_i
         super::candidates::tried(&offered(best_without + 1.0)),
     );
     assert_eq!(super::candidates::tried(&set_aside), BandLimitShape::SHAPES.len());
+    // A tie with the best shape without phase: set aside (no better than it at all).
+    assert_eq!(without_needless_phase(offered(best_without), dof).len(), 2);
+    // Another effect's candidate counts once beside the six shapes.
+    let mut mixed = set_aside;
+    mixed.push(Candidate {
+        effect: Effect::SensorLag,
+        extension: Extension::Structural(Box::new(base.clone())),
+        delta_chi2: 3.0,
+        added_params: 1,
+    });
+    assert_eq!(super::candidates::tried(&mixed), BandLimitShape::SHAPES.len() + 1);
+    assert_eq!(super::candidates::tried(&mixed[2..]), 1);
 }

@@ -253,7 +253,8 @@ fn diagnose_block(
             // By effect alone: a resonance, one candidate per axis, is not asked; the band
             // limit, one per shape, is confirmed by any of its shapes (a rise below of any form:
             // the steep shapes have none there, and asking for the same shape set an
-            // eighth-order band limit aside, a fourth-order one and false lags in its place).
+            // eighth-order band limit aside, a fourth-order one and false lags in its place; a causal
+            // shape set aside below, `band_limit::without_needless_phase`, confirms nothing).
             let confirmed = candidates_among(&low.state, low.band_hz, &|e| e == c.effect)
                 .into_iter()
                 .filter(|t| rule_below.gain(t) > 0.0)

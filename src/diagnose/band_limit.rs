@@ -29,7 +29,7 @@
 //! Units: `T` in s, `omega` in rad/s, frequencies in Hz. Non-finite or non-positive band tops
 //! give no candidate.
 
-use super::candidates::{Candidate, Extension, structural};
+use super::candidates::{Candidate, structural};
 use super::design::WINDOW_ENBW;
 use super::fit::{cost_at, fit};
 use super::state::State;
@@ -88,10 +88,7 @@ pub(super) fn band_limit_candidates(state: &State, band_hz: [f64; 2]) -> Vec<Can
 /// shape that its acceptance then fitted without phase). A tie with the best shape without phase
 /// sets the causal one aside too (the old rule's choice).
 pub(super) fn without_needless_phase(candidates: Vec<Candidate>, dof: f64) -> Vec<Candidate> {
-    let causal = |c: &Candidate| match &c.extension {
-        Extension::Structural(f) => f.structure.band_limit.is_some_and(BandLimitShape::causal),
-        Extension::Tone(_) | Extension::ClockCorrected { .. } => false,
-    };
+    let causal = |c: &Candidate| c.band_limit_shape().is_some_and(BandLimitShape::causal);
     let without_phase = candidates
         .iter()
         .filter(|c| !causal(c))

@@ -46,6 +46,17 @@ pub struct Candidate {
     pub added_params: usize,
 }
 
+impl Candidate {
+    /// The band limit's shape this candidate adds (`None` for any other effect).
+    #[must_use]
+    pub fn band_limit_shape(&self) -> Option<crate::model::band_limit::BandLimitShape> {
+        match &self.extension {
+            Extension::Structural(f) if self.effect == Effect::ReferenceBandLimit => f.structure.band_limit,
+            _ => None,
+        }
+    }
+}
+
 /// The flag of [`Structure`] that turns an effect on.
 type Switch = fn(&mut Structure) -> &mut bool;
 

@@ -357,10 +357,8 @@ fn a_causal_band_limit_that_beats_the_shapes_without_phase_by_less_than_ln_dof_i
         ]
     };
     let causal_kept = |c: &[Candidate]| {
-        c.iter().any(|c| match &c.extension {
-            Extension::Structural(f) => f.structure.band_limit == Some(BandLimitShape::Causal2),
-            _ => false,
-        })
+        c.iter()
+            .any(|c| c.band_limit_shape() == Some(BandLimitShape::Causal2))
     };
     let margin = dof.ln();
     // Better than the shapes without phase, but by less than ln(dof): set aside.

@@ -167,10 +167,7 @@ fn summary(c: &Candidate, rule: Rule) -> CandidateSummary {
         delta_chi2: c.delta_chi2,
         added_parameters: c.added_params,
         criterion_gain: rule.gain(c),
-        band_limit: match &c.extension {
-            Extension::Structural(f) if c.effect == Effect::ReferenceBandLimit => f.structure.band_limit,
-            _ => None,
-        },
+        band_limit: c.band_limit_shape(),
     }
 }
 

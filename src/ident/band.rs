@@ -111,11 +111,9 @@ pub fn coherence_of(
     s_xu: &Matrix3<Complex64>,
     s_xx: &Matrix3<Complex64>,
 ) -> [f64; 3] {
-    let s_uu = (s_uu + s_uu.adjoint()) * Complex64::from(0.5);
-    let Some(inv) = s_uu.try_inverse() else {
+    let Some((explained, _)) = super::explained::explained(s_uu, s_xu, 0.0) else {
         return [0.0; 3];
     };
-    let explained: Matrix3<Complex64> = s_xu * inv * s_xu.adjoint();
     std::array::from_fn(|i| {
         let total = s_xx[(i, i)].re;
         let c = explained[(i, i)].re / total;

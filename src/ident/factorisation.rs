@@ -1,6 +1,7 @@
 //! The factorisation stage (everything that does not depend on A, Lambda or the order):
 //! - `H1 = S_xu S_uu^-1` and the residual (disturbance) spectrum `S_psi = S_xx - S_xu S_uu^-1 S_ux`
-//!   on the one-sided grid; this `S_psi` is the model's `noise_psd`;
+//!   on the one-sided grid ([`super::explained`]: along `S_uu`'s eigenvectors, its diagonal
+//!   floored at the output's rounding); this `S_psi` is the model's `noise_psd`;
 //! - the minimum-phase factor `W_psi` of the two-sided `S_psi` (Wilson), so
 //!   `S_psi(f) = 2 W_psi W_psi^H` for `0 < f < fs/2` (`W_psi` is the shaping filter for white
 //!   noise of unit two-sided intensity);
@@ -21,7 +22,9 @@ use nalgebra::{Matrix3, SymmetricEigen};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use super::FactorStageError::NonFiniteResidual;
 use super::causal_stage::{CausalStage, causal_stage};
+use super::explained::residual;
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::{FactorStageError, IdentError};
@@ -197,12 +200,13 @@ pub fn factorise_from(
         .zip(&s_uu_inv)
         .map(|(sxu, inv)| sxu * inv)
         .collect();
+    // Along S_uu's eigenvectors, not through `h1`: resolved where S_uu is ill-conditioned.
     let noise_psd: Vec<Matrix3<Complex64>> = (0..h1.len())
         .map(|k| {
-            let r = spectra.s_xx[k] - h1[k] * spectra.s_xu[k].adjoint();
-            (r + r.adjoint()) * Complex64::from(0.5)
+            residual(&spectra.s_xx[k], &spectra.s_uu[k], &spectra.s_xu[k], floor)
+                .ok_or_else(|| factor_error(NonFiniteResidual { bin: k }))
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
 
     // The disturbance's factorisation and the causal stage (the input's) are independent: one per
     // core when both are computed.

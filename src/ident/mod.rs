@@ -18,6 +18,7 @@ pub mod delay_scatter;
 pub mod delay_step;
 pub mod even_gain;
 pub mod excitation;
+pub mod explained;
 pub mod factorisation;
 pub mod gain_curvature;
 pub mod holdout;
@@ -157,6 +158,12 @@ pub enum FactorStageError {
     /// The causal estimate was asked of a factorisation computed without its causal stage.
     #[error("the causal estimate needs the factorisation's causal stage, which was not computed")]
     NoCausalStage,
+    /// The residual spectrum is not finite at a bin (spectra too large to multiply).
+    #[error("the residual spectrum is not finite at bin {bin}")]
+    NonFiniteResidual {
+        /// The bin, on the one-sided grid.
+        bin: usize,
+    },
 }
 
 /// The end of a refusal's advice: `, {alternative}, or leave this block out (settings "blocks")`

@@ -1,0 +1,83 @@
+//! The part of a block's output spectrum its inputs explain, `S_xu S_uu^-1 S_ux`, and the
+//! residual (disturbance) spectrum `S_psi = S_xx - S_xu S_uu^-1 S_ux`, at one bin.
+//!
+//! Computed along `S_uu`'s eigenvectors `v_k`: `sum_k (S_xu v_k)(S_xu v_k)^H / lambda_k`. Where
+//! `S_uu` is ill-conditioned (a stand's sine on two axes and nothing on the third: condition
+//! numbers of 1e7 at the sine's bin) the explicit product `(S_xu S_uu^-1) S_ux` sums terms of
+//! `|S_xu|^2 / lambda_min`, ten million times the output's power, that cancel to it: the residual
+//! then carries rounding of 1e-6 of the output's power, more than a gyro's own noise, and came
+//! out negative (a non-finite structural weight followed). Along the eigenvectors the term of a
+//! small `lambda_k` is `|S_xu v_k|^2 / lambda_k`, itself of the order of the output's power, and
+//! the residual is resolved to the rounding of `S_xx`.
+//!
+//! Units: those of the spectra (output units squared per Hz for `S_xx`). Contracts: `S_uu` is
+//! made Hermitian first; its eigenvalues are floored at `floor` (the identifier's
+//! [`super::factorisation::input_floor`]) and the result says whether the floor was needed; with
+//! `floor` 0 an eigenvalue that is not positive gives `None` (a singular `S_uu`), as does any
+//! value that is not finite. The residual's diagonal is never below [`RESOLUTION`] of `S_xx`'s:
+//! below that it is rounding, and the row weights `n_eq S_uu / S_psi,ii` divide by it.
+
+use nalgebra::{Matrix3, SymmetricEigen};
+use num_complex::Complex64;
+
+/// The residual's diagonal is not resolved below this fraction of the output's own power: a few
+/// hundred roundings of `S_xx,ii` (the Welch sums' and this subtraction's).
+pub const RESOLUTION: f64 = 256.0 * f64::EPSILON;
+
+/// `S_xu S_uu^-1 S_ux` (exactly Hermitian) with `S_uu`'s eigenvalues floored at `floor`, and
+/// whether the floor was needed; `None` when not finite, or singular with `floor` 0.
+#[must_use]
+pub fn explained(
+    s_uu: &Matrix3<Complex64>,
+    s_xu: &Matrix3<Complex64>,
+    floor: f64,
+) -> Option<(Matrix3<Complex64>, bool)> {
+    let finite = |m: &Matrix3<Complex64>| m.iter().all(|z| z.re.is_finite() && z.im.is_finite());
+    if !(finite(s_uu) && finite(s_xu)) {
+        return None;
+    }
+    let h = (s_uu + s_uu.adjoint()) * Complex64::from(0.5);
+    let eig = SymmetricEigen::new(h);
+    let mut floored = false;
+    let mut sum = Matrix3::<Complex64>::zeros();
+    for k in 0..3 {
+        let mut lambda = eig.eigenvalues[k];
+        if !lambda.is_finite() {
+            return None;
+        }
+        if lambda < floor {
+            floored = true;
+            lambda = floor;
+        }
+        if lambda <= 0.0 {
+            return None;
+        }
+        let b = s_xu * eig.eigenvectors.column(k);
+        sum += b * b.adjoint() / Complex64::from(lambda);
+    }
+    let sum = (sum + sum.adjoint()) * Complex64::from(0.5);
+    finite(&sum).then_some((sum, floored))
+}
+
+/// `S_psi = S_xx - S_xu S_uu^-1 S_ux` (exactly Hermitian, its diagonal at least [`RESOLUTION`]
+/// of `S_xx`'s), with `S_uu`'s eigenvalues floored at `floor`; `None` as for [`explained`].
+#[must_use]
+pub fn residual(
+    s_xx: &Matrix3<Complex64>,
+    s_uu: &Matrix3<Complex64>,
+    s_xu: &Matrix3<Complex64>,
+    floor: f64,
+) -> Option<Matrix3<Complex64>> {
+    let (explained, _) = explained(s_uu, s_xu, floor)?;
+    let r = s_xx - explained;
+    let mut r = (r + r.adjoint()) * Complex64::from(0.5);
+    for i in 0..3 {
+        let least = RESOLUTION * s_xx[(i, i)].re.abs();
+        r[(i, i)] = Complex64::from(r[(i, i)].re.max(least));
+    }
+    Some(r)
+}
+
+#[cfg(test)]
+#[path = "explained_tests.rs"]
+mod tests;

@@ -621,16 +621,19 @@ fn an_accepted_band_limit_takes_back_the_band_the_identified_model_s_misfit_cut(
 }
 
 /// A band limit accepted on a stand without one (coloured angle noise only) can fit with its
-/// corner far above the band (the accelerometer's `T` 0.67 and 0.37 ms here, corners at 238 and
-/// 435 Hz beside band tops of 33.9 and 32.6 Hz: its gain there moves as `(f/f_c)^16`, 1e-14 and
-/// less), where the data do not see it: its own
-/// deviation is undetermined, and `K`'s and the delay's are those of the model given it, of the
-/// identified model's size. Before, its curvature at rounding's level left every deviation of
-/// the accelerometer's model `null` on both runs (and on 8 of 72 blocks of a 300 s campaign).
+/// corner far above the band (the accelerometer's `T` 0.67 and 0.36 ms here, corners far above
+/// band tops near 33 Hz: its gain there moves as `(f/f_c)^16`), where the data do not see it: its
+/// own deviation is undetermined, and `K`'s and the delay's are those of the model given it, of
+/// the identified model's size. Before, its curvature at rounding's level left every deviation of
+/// the accelerometer's model `null` (8 of 72 blocks of a 300 s campaign). Seeds 141 and 146 until
+/// 1 Dec: with the residual spectrum resolved at ill-conditioned bins (`ident::explained`) seed
+/// 146's band limit fits at its bound (the case
+/// `a_band_limit_at_its_bound_leaves_the_other_deviations_determined` tests); of seeds 141-154,
+/// 141, 147, 150, 152 and 153 fit far above the band.
 #[test]
 fn a_band_limit_the_band_does_not_see_leaves_the_other_deviations_determined() {
     use imu_attest::sim::SimConfig;
-    for seed in [141, 146] {
+    for seed in [150, 153] {
         let mut config = SimConfig::new(Regime::Approach);
         (config.seed, config.duration_s) = (seed, 120.0);
         config.stand.coloured_noise_rad = 3e-5;

@@ -1,7 +1,8 @@
 //! The speed work must not change what is identified: the sample runs' models (K, delay, order
 //! of each block) as identified before it (commit 6afbdeb, stored in
 //! `tests/data/sample_models_before_speed_work.json`) are what the session gives today, to
-//! rounding (1e-9 on K, 1e-12 s on the delay; measured differences 1.2e-10 and 3e-13 s). The
+//! rounding (1e-9 on K, 1e-11 s on the delay; measured differences 1.2e-10 and 3e-13 s, then
+//! 1.0e-12 s since the residual spectrum is computed along `S_uu`'s eigenvectors). The
 //! models were fitted to the causal Wiener estimate, the default then; the default is now `H1`
 //! (issue 13, 26 Nov), so the check asks for the causal estimate: it guards the computation.
 
@@ -50,7 +51,7 @@ fn the_sample_runs_are_identified_as_before_the_speed_work() {
             let s = &b.structural;
             assert_eq!(s.order, want.order, "{file} {}", b.block);
             assert!(
-                (s.tau_s - want.tau_s).abs() < 1e-12,
+                (s.tau_s - want.tau_s).abs() < 1e-11,
                 "{file} {}: tau {} vs {}",
                 b.block,
                 s.tau_s,

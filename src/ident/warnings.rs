@@ -652,27 +652,36 @@ pub fn block_warnings(
 ) -> Vec<IdentWarning> {
     let causal = fact.causal_for(estimate);
     let mut warnings = Vec::new();
-    let near_singular = |s: &[Matrix3<Complex64>], floor: f64| {
+    let near_singular = |s: &[Matrix3<Complex64>], floor: &dyn Fn(usize) -> f64| {
         band.iter()
             .filter(|&&k| {
                 s.get(k).is_some_and(|m| {
                     let smallest = min_eigenvalue(m);
-                    smallest.is_nan() || smallest < floor
+                    smallest.is_nan() || smallest < floor(k)
                 })
             })
             .count()
     };
     let floor = input_floor(&spectra.s_uu);
-    let residual_floor = residual_loading(spectra, &fact.noise_psd, settings);
+    // A residual vanishes below its loading, or at the rounding of the outputs' power where
+    // `explained::residual` floors its diagonal.
+    let loading = residual_loading(spectra, &fact.noise_psd, settings);
+    let residual_floor = |k: usize| {
+        let power = spectra
+            .s_xx
+            .get(k)
+            .map_or(0.0, |m| (0..3).map(|i| m[(i, i)].re).fold(0.0, f64::max));
+        loading.max(2.0 * super::explained::RESOLUTION * power)
+    };
     for (spectrum, bins, factor) in [
         (
             Spectrum::Input,
-            near_singular(&spectra.s_uu, floor),
+            near_singular(&spectra.s_uu, &|_| floor),
             causal.map(|c| (c.input_factor_error, c.input_factor_converged)),
         ),
         (
             Spectrum::Residual,
-            near_singular(&fact.noise_psd, residual_floor),
+            near_singular(&fact.noise_psd, &residual_floor),
             Some((fact.noise_factor_error, fact.noise_factor_converged)),
         ),
     ] {

@@ -175,15 +175,14 @@ fn an_imprecise_gain_is_said_and_a_precise_one_is_not() {
 }
 
 /// The gyro's own noise in the angle-noise model (`ident::witness_noise`): with white noise of a
-/// third of its signal's rms added to the gyro's outputs, the observer takes part of it for angle
-/// noise and the gyro's gains read high (1.0-3.3 %, every diagonal element). The first-order
-/// estimate (near 1 %) is said (`witness_noise_bias`) and held in the standard deviations: over
-/// four seeds the diagonal's normalised errors have an rms of 1.5 with it, 3.1 without it; since
-/// the gain's change across the band is said where it moves one element beyond its own
-/// deviation (30 Nov), these runs' fits over the even gain widen the deviations too: 1.18 with
-/// it, 2.38 without (asserted: below 2 with it; without it above 2 and 1.5 times that); the clean
-/// runs say nothing. The estimate is
-/// low by a factor of about 2 here, which the module docs and the warning say.
+/// third of its signal's rms added to the gyro's outputs, the observer took part of it for angle
+/// noise and the gyro's gains read high (1.0-3.3 %, every diagonal element); the first-order
+/// estimate (near 1 %) is said (`witness_noise_bias`) and held in the standard deviations. Since
+/// 30 Nov the observer takes the gyro's white floor out itself (`stand::witness_floor`): the
+/// errors are 0.16-0.59 %, and the fit's own deviations (without the estimate) give them an rms
+/// of 1.21 (2.38 before: asserted below 1.4, the bar). The estimate is still said and
+/// held (rms 0.31 with it, asserted below 2): conservative now, kept until it is measured again
+/// with the floor out (`ident::witness_noise`). The clean runs say nothing.
 #[test]
 fn the_gyro_s_noise_taken_for_angle_noise_is_estimated_and_said() {
     use imu_attest::ident::warnings::IdentWarning;
@@ -245,7 +244,7 @@ fn the_gyro_s_noise_taken_for_angle_noise_is_estimated_and_said() {
     eprintln!("normalised error rms {z:.2} (without the estimate {raw:.2})");
     assert!(z < 2.0, "rms {z}");
     assert!(
-        raw > 2.0 && raw > 1.5 * z,
-        "the case does not test the estimate: rms {raw} without it, {z} with it"
+        raw < 1.4,
+        "the gyro's floor taken for angle noise: rms {raw} without the estimate, {z} with it"
     );
 }

@@ -104,15 +104,51 @@ fn zeros_lag(warnings: &[IdentWarning]) -> Option<[f64; 2]> {
 
 /// A sensor's 25 Hz Butterworth filter (no zeros) at 1 kHz, found at order 2 with its poles,
 /// whose delay came out 0.49 ms short (5.8 of its deviations) with the numerator lagging by as
-/// much, said by nothing (a test campaign's case): now said, and the low-frequency delay the
-/// words quote (delay plus the zeros' lag) is the block's within its bound.
+/// much (a test campaign's case). The cause was the observer's: the gyro's own noise, added
+/// behind its filter, left the witness more of the angles unexplained where the filter cut the
+/// signal, and that was taken for angle noise, the inputs shrunk by it
+/// (`stand::witness_floor`). Now the delay is the block's within three of its deviations and
+/// nothing is split with zeros: the accelerometer (0.54 ms long before, its zeros leading by as
+/// much) too.
 #[test]
-fn zeros_that_take_part_of_a_filtered_blocks_delay_are_said() {
+fn a_filtered_block_s_delay_is_not_split_with_zeros() {
     let mut config = SimConfig::new(Regime::Cruise);
     config.seed = 910;
     config.duration_s = 300.0;
     config.rate_hz = 1000.0;
     config.sensor_filter_hz = Some(25.0);
+    let (sim, run) = sim_common::simulated_run(&config);
+    let id = identify_run(&run, &Settings::default()).expect("identified");
+    for b in &id.blocks {
+        let (s, truth) = (&b.structural, truth_of(&sim, b.block));
+        eprintln!(
+            "{:?}: order {}, tau {:.6} +- {:.6} (true {:.6}), {:?}",
+            b.block, s.order, s.tau_s, s.tau_std_s, truth.tau_s, b.warnings
+        );
+        assert_eq!(s.order, 2, "{:?}: {:?}", b.block, s.candidates);
+        assert!(
+            (s.tau_s - truth.tau_s).abs() < 3.0 * s.tau_std_s,
+            "{:?}: tau {} +- {} against {}",
+            b.block,
+            s.tau_s,
+            s.tau_std_s,
+            truth.tau_s
+        );
+        assert_eq!(zeros_lag(&b.warnings), None, "{:?}", b.block);
+        assert_eq!(zeros_lead(&b.warnings), None, "{:?}", b.block);
+    }
+}
+
+/// Zeros that take part of a filtered block's delay are said, and the low-frequency delay the
+/// words quote (delay plus the zeros' lag) is the block's: a 15 Hz Butterworth filter on a gyro
+/// with white noise (cruise, seed 8406, found in a campaign of 12 such runs: the one whose fit
+/// split its delay), the delay alone 0.41 ms short, more than three of its deviations.
+#[test]
+fn zeros_that_take_part_of_a_filtered_blocks_delay_are_said() {
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.seed = 8406;
+    config.sensor_filter_hz = Some(15.0);
+    config.sensor_noise.white_only = true;
     let (sim, run) = sim_common::simulated_run(&config);
     let id = identify_run(&run, &Settings::default()).expect("identified");
     let gyro = id.blocks.iter().find(|b| b.block == Block::Gyro).expect("gyro");
@@ -279,6 +315,62 @@ fn an_anti_alias_filter_at_1_khz_is_a_stable_pair_at_its_corner() {
             assert!(k_error < 0.003, "seed {seed} {:?}: K {k_error}", b.block);
             // Its delay is its own: no zeros take part of it.
             assert_eq!(zeros_lag(&b.warnings), None, "seed {seed} {:?}", b.block);
+        }
+    }
+}
+
+/// A sensor's 20 Hz Butterworth filter at 500 Hz (inside the band), on both blocks, the gyro's
+/// noise behind it: before the witness's own floor was taken out (`stand::witness_floor`), the
+/// observer took that noise for angle noise where the filter cut the signal, the gyro's response
+/// estimate read 10 % high at 35-40 Hz, and on twelve such runs (seeds 8401-8406, cruise and
+/// approach) every order-2 fit put zeros leading or lagging beside a delay 0.4-1.0 ms off (delay
+/// z rms 8.8 gyro, 11.5 accelerometer); after, z rms 1.0 and 0.6, no zeros said. Four of them.
+#[test]
+fn a_filter_inside_the_band_keeps_the_observer_s_inputs_whole() {
+    for (seed, regime) in [
+        (8401, Regime::Approach),
+        (8401, Regime::Cruise),
+        (8403, Regime::Approach),
+        (8403, Regime::Cruise),
+    ] {
+        let mut config = SimConfig::new(regime);
+        config.seed = seed;
+        config.sensor_filter_hz = Some(20.0);
+        let (sim, run) = sim_common::simulated_run(&config);
+        let id = identify_run(&run, &Settings::default()).expect("identified");
+        for b in &id.blocks {
+            let (s, truth) = (&b.structural, truth_of(&sim, b.block));
+            eprintln!(
+                "seed {seed} {regime:?} {:?}: order {}, tau {:.6} +- {:.6} (true {:.6})",
+                b.block, s.order, s.tau_s, s.tau_std_s, truth.tau_s
+            );
+            assert_eq!(
+                s.order, 2,
+                "seed {seed} {regime:?} {:?}: {:?}",
+                b.block, s.candidates
+            );
+            // Within three deviations, and within 0.35 ms (some order-2 fits put the delay's
+            // deviation at 3 ms, where the zeros and the delay trade freely: honest, no test).
+            assert!(
+                (s.tau_s - truth.tau_s).abs() < (3.0 * s.tau_std_s).min(0.35e-3),
+                "seed {seed} {regime:?} {:?}: tau {} +- {} against {}",
+                b.block,
+                s.tau_s,
+                s.tau_std_s,
+                truth.tau_s
+            );
+            assert_eq!(
+                zeros_lead(&b.warnings),
+                None,
+                "seed {seed} {regime:?} {:?}",
+                b.block
+            );
+            assert_eq!(
+                zeros_lag(&b.warnings),
+                None,
+                "seed {seed} {regime:?} {:?}",
+                b.block
+            );
         }
     }
 }

@@ -22,6 +22,11 @@
 //!
 //! `b_i = sum_k min(1, S_g,i / S_psi,ik) / sum_k SNR_ik`,  `S_psi,ik = (1 - gamma2_ik) S_xx,ik`.
 //!
+//! Since 30 Nov the observer takes the gyro's white floor, as the witness's fit sees it, out of
+//! the unexplained part itself (`stand::witness_floor`), so what this estimate stands for is
+//! mostly gone where the gyro's noise is white up to 0.7 of Nyquist; it is kept (deviations wider,
+//! not narrower) until it is measured again with that. The measurements below are from before.
+//!
 //! It is a first-order estimate, not a bound. Measured: on an independent simulator's weak
 //! motions (0.02 degrees, white gyro noise near the motion) estimates of 0.1-1.2 % beside gain
 //! errors of 0.05-1.4 % (1 to 1.9 times the estimate on the noisiest axes) that the fit's own

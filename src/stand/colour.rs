@@ -29,13 +29,15 @@
 //! kinematics, at the angles one delay earlier (in a fast rotation the attitude turns within the
 //! delay).
 //!
-//! What `N_c` also holds: the gyro's own noise as seen in angle units, `S_psi / w^2`. Where the
+//! What `N_c` also holds: the gyro's own noise as seen in angle units, `S_psi / w^2`; its white
+//! floor, read near Nyquist, is taken out ([`super::witness_floor`]: behind a gyro's own filter
+//! it grows as the filter cuts the signal). Where the
 //! gyro's signal-to-noise ratio is high (most of a certification run's band) it is negligible;
 //! where it is not, taking it as the reference's noise shrinks the input estimate by the gyro's
 //! noise-to-signal ratio (gains biased high by that ratio), the mirror of the white model's
 //! error. The observer uses `clamp(N_c, white floor, S_yy)` per axis and bin; with one block of
-//! outputs the two noises cannot be told apart in a bin, and this choice errs on the side the
-//! gyro's quality bounds. Where the unexplained part is below a thousandth of the angles' power
+//! outputs the two noises cannot be told apart in a bin beyond the gyro's floor, and this choice
+//! errs on the side the gyro's quality bounds. Where the unexplained part is below a thousandth of the angles' power
 //! ([`MIN_SHARE`]) the white floor is kept: there it is as likely the gyro's noise (which, seen in
 //! angle units, grows as `1/f^2` at low frequency, where the angles are strong) and either way
 //! moves a gain by less than a thousandth; taking it as angle noise put a false 0.1 mm lever-arm
@@ -64,6 +66,7 @@ use super::mount::{in_platform_axes, turned_mounting};
 use super::witness_delay::{
     advance, align, angle_spectra, drift, first_delay, hann_windowed, witness_angles, witness_euler_rates,
 };
+use super::witness_floor::WitnessFloor;
 use crate::fourier::{RecordFft, fast_len};
 
 /// The angle noise the observer assumes, per bin, as per-sample variances per axis.
@@ -349,13 +352,16 @@ fn stretch_cells(
     let late = angles.map(|a| delayed(a, |i| late_s(i) * rate));
     let late = late.each_ref().map(Vec::as_slice);
     let len = fft.len();
+    let rates = witness_euler_rates(late, body_rates);
+    // The gyro's own white floor as the witness carries it (`super::witness_floor`).
+    let witness_floor = WitnessFloor::of_rates(&rates, fft, power_norm);
     let mut spectra = |r: Vec<f64>| {
         fft.forward(&hann_windowed(
             &delayed(&witness_angles(&r, rate), |i| -late_s(i) * rate),
             len,
         ))
     };
-    let mut w = witness_euler_rates(late, body_rates).map(&mut spectra);
+    let mut w = rates.map(&mut spectra);
     // The witness split by gyro axis (`colour_split`), moved as the witness is.
     let mut v = split_euler_rates(late, body_rates).map(&mut spectra);
     let (delay_s, _) = align(&mut w, y, fft, equivalent_per_bin);
@@ -374,6 +380,7 @@ fn stretch_cells(
             independent: independent_bins_per_bin,
         },
         power_norm,
+        witness_floor,
     };
     let out = slide(y, &w, &v, &windows)
         .into_iter()

@@ -52,6 +52,7 @@ use num_complex::Complex64;
 
 use super::colour_split::{SPLIT_F, SplitSums, split_residual};
 use super::observer::daniell_half_width;
+use super::witness_floor::WitnessFloor;
 
 /// Regressors per angle with the slope: the witness's three channels and the same times the
 /// distance from the window's centre.
@@ -292,6 +293,9 @@ pub(super) struct Windows {
     pub per_bin: Dof,
     /// The Hann window's `sum w^2`.
     pub power_norm: f64,
+    /// The witness's own white floor, taken out of what it leaves unexplained
+    /// ([`super::witness_floor`]; `None`: nothing taken out).
+    pub witness_floor: Option<WitnessFloor>,
 }
 
 fn bin(spectra: &[Vec<Complex64>; 3], k: usize) -> Vector3<Complex64> {
@@ -319,6 +323,7 @@ pub(super) fn slide(
         cell,
         per_bin,
         power_norm,
+        witness_floor,
     } = *windows;
     let bins = y[0].len().min(w[0].len()).min(v[0].len());
     // Distances from the sums' origin in units of `min_half` bins.
@@ -365,9 +370,50 @@ pub(super) fn slide(
             equivalent: count as f64 * per_bin.equivalent,
             independent: count as f64 * per_bin.independent,
         };
-        out.push(unexplained(&about_centre, count as f64, dof, power_norm));
+        let (total, left) = unexplained(&about_centre, count as f64, dof, power_norm);
+        let left = match (left, witness_floor) {
+            (Some(left), Some(floor)) => Some(beyond_witness_noise(
+                &about_centre,
+                (count as f64, power_norm),
+                left,
+                floor.in_angle_units(centre / bins_per_hz),
+            )),
+            (left, _) => left,
+        };
+        out.push((total, left));
     }
     out
+}
+
+/// `left` with the witness's own noise `floor` (angle units) taken out, as the witness's fit sees
+/// it: `S_yw ((S_ww - S_e)^-1 - S_ww^-1) S_wy`, the unexplained part's excess over what a
+/// noiseless witness would leave ([`super::witness_floor`]), with each axis's `S_e` at most half
+/// its `S_ww` (where the witness is mostly its own noise it says little, and the correction's
+/// factor `S_ww / (S_ww - S_e)` would grow without bound). Not below 0; unchanged where `S_ww`, or
+/// `S_ww - S_e`, is singular. `sums` over `count` bins, `power_norm` as [`unexplained`]'s.
+fn beyond_witness_noise(
+    sums: &Sums,
+    (count, power_norm): (f64, f64),
+    left: [f64; 3],
+    floor: [f64; 3],
+) -> [f64; 3] {
+    let scale = Complex64::from(1.0 / (count.max(1.0) * power_norm));
+    let (a0, b0) = (sums.ww[0] * scale, sums.yw[0] * scale);
+    let Some(a0_inv) = hermitian_inverse(&a0) else {
+        return left;
+    };
+    let mut less = a0;
+    for (j, f) in floor.iter().enumerate() {
+        less[(j, j)] -= Complex64::from(f.min(0.5 * a0[(j, j)].re).max(0.0));
+    }
+    let Some(less_inv) = hermitian_inverse(&less) else {
+        return left;
+    };
+    let seen = b0 * (less_inv - a0_inv) * b0.adjoint();
+    [0, 1, 2].map(|a| {
+        let v = left[a] - seen[(a, a)].re;
+        if v.is_finite() { v.max(0.0) } else { left[a] }
+    })
 }
 
 /// The sums of `cells` (each about its centre bin) about the bin `origin`, and their bins.

@@ -110,6 +110,7 @@ fn sliding_windows_equal_each_window_summed_afresh() {
             independent: 0.5,
         },
         power_norm: 1.0,
+        witness_floor: None,
     };
     let slid = slide(&y, &w, &v, &windows);
     let cells = bins.div_ceil(4);
@@ -172,6 +173,7 @@ fn a_hann_windowed_white_noise_reads_its_variance() {
                 independent,
             },
             power_norm: 3.0 * n as f64 / 8.0,
+            witness_floor: None,
         };
         let said = slide(&y, &w, &no_split, &windows);
         // Away from DC and Nyquist, where a bin is real.

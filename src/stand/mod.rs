@@ -14,3 +14,4 @@ pub mod kinematics;
 pub mod mount;
 pub mod observer;
 mod witness_delay;
+mod witness_floor;

@@ -371,12 +371,13 @@ pub(super) fn slide(
             independent: count as f64 * per_bin.independent,
         };
         let (total, left) = unexplained(&about_centre, count as f64, dof, power_norm);
+        let centre_hz = centre / bins_per_hz;
         let left = match (left, witness_floor) {
-            (Some(left), Some(floor)) => Some(beyond_witness_noise(
+            (Some(left), Some(floor)) if centre_hz <= floor.top_hz => Some(beyond_witness_noise(
                 &about_centre,
                 (count as f64, power_norm),
                 left,
-                floor.in_angle_units(centre / bins_per_hz),
+                floor.in_angle_units(centre_hz),
             )),
             (left, _) => left,
         };

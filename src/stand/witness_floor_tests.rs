@@ -26,6 +26,7 @@ fn angle_units_follow_the_trapezoid_rule() {
     let floor = WitnessFloor {
         rate_level: [1.0, 4.0, 0.0],
         sample_rate_hz: 1000.0,
+        top_hz: 40.0,
     };
     let at_one = floor.in_angle_units(1.0);
     let want = 1.0 / (2.0 * PI).powi(2);

@@ -371,7 +371,10 @@ fn an_extended_gyro_keeps_the_witness_noise_estimate_in_its_deviations() {
 
 /// A reference interpolated from 120 Hz: the delay-only model gives `K` at low frequency and
 /// carries the even gain; the joint fit of an accepted effect (its own design and weights) gives
-/// its gain as fitted, without the even gain, and the warning says `K` is not moved.
+/// its gain as fitted, without the even gain, and the warning says `K` is not moved. (Seed 94
+/// until 1 Dec: with the witness's own floor taken out of the angle-noise model its delay-only
+/// model's order-2 rival no longer had a negative delay and took the even gain's place, said by
+/// `poles_or_even_gain`; seeds 95-100 all carry the even gain.)
 #[test]
 fn an_extended_model_gives_its_own_gain_without_the_even_gain() {
     use imu_attest::ident::warnings::IdentWarning;
@@ -380,7 +383,7 @@ fn an_extended_model_gives_its_own_gain_without_the_even_gain() {
     let mut config = SimConfig::new(Regime::Cruise);
     config.duration_s = 120.0;
     config.rate_hz = 500.0;
-    config.seed = 94;
+    config.seed = 95;
     config.effects = vec!["scale_nonlinearity:gyro".parse().expect("effect")];
     config.stand = StandImperfections {
         reference_rate_hz: Some(120.0),

@@ -10,7 +10,8 @@
 //! own delay here.
 
 use imu_attest::ident::identify::identify_run;
-use imu_attest::ident::settings::Settings;
+use imu_attest::ident::settings::{OrderSetting, Settings};
+use imu_attest::ident::warnings::IdentWarning;
 #[path = "common/real.rs"]
 #[expect(dead_code, reason = "this test needs only `real`, `k_error` and `gyro_late`")]
 mod real_common;
@@ -27,12 +28,6 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
         // high at order 0, order 3 by default, said by nothing (`stand::mount::best_lag`).
         ("broad25_tapping", 11),
         ("broad25_tapping", 12),
-        // 60.2 ms, beyond the usual range: order 3 at 46 ms until 30 Nov, its poles beating the
-        // delay-only fit over the even gain by 8.8-9.4 on the criterion (said,
-        // `poles_or_even_gain`, now tested on a slower reference,
-        // `tests/identify_slower_reference.rs`); order 0 at the recording's delay since the
-        // witness's own floor is out of the angle-noise model (`stand::witness_floor`).
-        ("broad07_fast_rotation", 16),
     ] {
         let run = gyro_late(real(name), samples);
         let shift_s = samples as f64 * run.dt_s();
@@ -54,4 +49,89 @@ fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {
         );
         assert!(k_err < 0.01, "{name} +{samples}: ||K - I|| {k_err}");
     }
+}
+
+/// broad07 with its gyro 16 samples late (60.2 ms): the first fit is order 3 at 46 ms, its poles
+/// beating the delay-only fit over the even gain by 8.8-9.4 on the criterion, and kept; said
+/// (`poles_or_even_gain`) with the even gain's delay, the right one. Before, said by nothing but
+/// the delay's range. Fixing the order to 0, as the words advise, gives that delay and no such
+/// warning.
+#[test]
+fn poles_kept_over_the_even_gain_are_said_with_its_delay() {
+    let samples = 16;
+    let run = gyro_late(real("broad07_fast_rotation"), samples);
+    let shift_s = samples as f64 * run.dt_s();
+    let said = |b: &imu_attest::ident::identify::BlockIdentification| {
+        b.warnings.iter().find_map(|w| match w {
+            IdentWarning::PolesOrEvenGain {
+                order,
+                tau_s,
+                tau_std_s,
+                even_tau_s,
+                margin,
+                ..
+            } => Some((*order, *tau_s, *tau_std_s, *even_tau_s, *margin, w.to_string())),
+            _ => None,
+        })
+    };
+    let mut id = identify_run(&run, &Settings::default()).expect("identified");
+    let b = id.blocks.remove(0);
+    let s = &b.structural;
+    eprintln!(
+        "+{samples}: order {}, tau {:.3} ms, {:?}",
+        s.order,
+        s.tau_s * 1e3,
+        b.warnings
+    );
+    assert!(
+        s.order > 0,
+        "order {}: the case this test stands for is gone",
+        s.order
+    );
+    let (order, tau_s, tau_std_s, even_tau_s, margin, words) =
+        said(&b).expect("poles kept over the even gain are said");
+    assert_eq!(order, s.order);
+    assert!(
+        (tau_s - s.tau_s).abs() < 1e-12,
+        "the chosen model's delay: {tau_s} {}",
+        s.tau_s
+    );
+    let own_ms = (even_tau_s - shift_s) * 1e3;
+    assert!(
+        (3.9..=4.5).contains(&own_ms),
+        "the even gain's delay, own part {own_ms} ms"
+    );
+    assert!(
+        even_tau_s - tau_s > 3.0 * tau_std_s,
+        "the poles' lag traded: {tau_s} +- {tau_std_s} against {even_tau_s}"
+    );
+    assert!(margin > 0.0, "kept because the poles won: {margin}");
+    // The delay outside the usual range is the delay-only model's, and said so beside the
+    // chosen model's own (inside the range).
+    assert!(
+        b.warnings.iter().any(|w| matches!(
+            w,
+            IdentWarning::DelayOutsideUsualRange { tau_s: outside, model_tau_s: Some(own), .. }
+                if (own - s.tau_s).abs() < 1e-12 && (outside - even_tau_s).abs() < 1e-4
+        )),
+        "{:?}",
+        b.warnings
+    );
+    assert!(
+        words.contains(&format!("{:.3} ms", even_tau_s * 1e3)) && words.contains("fix the order to 0"),
+        "{words}"
+    );
+    let fixed = Settings {
+        order: OrderSetting::Fixed(0).into(),
+        ..Settings::default()
+    };
+    let mut id = identify_run(&run, &fixed).expect("identified at order 0");
+    let b0 = id.blocks.remove(0);
+    assert_eq!(b0.structural.order, 0);
+    assert!(
+        (b0.structural.tau_s - even_tau_s).abs() < 5e-5,
+        "order 0: {} against {even_tau_s}",
+        b0.structural.tau_s
+    );
+    assert!(said(&b0).is_none(), "{:?}", b0.warnings);
 }

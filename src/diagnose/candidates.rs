@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use super::design::Design;
 use super::fit::{Fitted, cost_at, fit};
 use super::state::State;
-use super::structure::Structure;
+use super::structure::{LagShape, Structure, lag_damping_held};
 use super::tone::{TONE_PARAMETERS, Tone, strongest_line};
 use crate::block::Block;
 use crate::effect::Effect;
@@ -55,6 +55,15 @@ impl Candidate {
             _ => None,
         }
     }
+
+    /// The lag's shape this candidate adds (`None` for any other effect).
+    #[must_use]
+    pub fn lag_shape(&self) -> Option<LagShape> {
+        match &self.extension {
+            Extension::Structural(f) if self.effect == Effect::SensorLag => f.structure.lag,
+            _ => None,
+        }
+    }
 }
 
 /// The flag of [`Structure`] that turns an effect on.
@@ -72,21 +81,21 @@ pub(super) fn structural(effect: Effect, state: &State, fitted: Option<Fitted>) 
 }
 
 /// How many candidates a round tried, for its look-elsewhere cost: each one offered, and a band
-/// limit's shapes all where any is offered (a causal shape set aside by
+/// limit's or a lag's shapes all where any is offered (a causal shape set aside by
 /// `super::band_limit::without_needless_phase`, or a shape whose fit failed, was tried too;
 /// before 30 Nov a failed shape was not counted; other effects' failed fits still are not).
 #[must_use]
 pub(super) fn tried(cands: &[Candidate]) -> usize {
-    let shapes = cands
-        .iter()
-        .filter(|c| c.effect == Effect::ReferenceBandLimit)
-        .count();
-    let all_shapes = if shapes > 0 {
-        crate::model::band_limit::BandLimitShape::SHAPES.len()
-    } else {
-        0
+    let offered = |effect: Effect, all: usize| {
+        let shapes = cands.iter().filter(|c| c.effect == effect).count();
+        (shapes, if shapes > 0 { all } else { 0 })
     };
-    cands.len() - shapes + all_shapes
+    let (band_limits, all_band_limits) = offered(
+        Effect::ReferenceBandLimit,
+        crate::model::band_limit::BandLimitShape::SHAPES.len(),
+    );
+    let (lags, all_lags) = offered(Effect::SensorLag, LagShape::SHAPES.len());
+    cands.len() - band_limits - lags + all_band_limits + all_lags
 }
 
 /// Every candidate for the block that the current model does not already hold.
@@ -122,10 +131,12 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
             out.extend(structural(effect, state, run_fit(&s, &current.theta)));
         }
     }
-    if wanted(Effect::SensorLag) && !s0.lag {
+    if wanted(Effect::SensorLag) && s0.lag.is_none() {
+        // Each shape a candidate of its own (as the band limit's are), the second order with
+        // its extra parameter paid for by the criterion.
         let mut s = s0.clone();
-        s.lag = true;
-        let best = [0.5e-3, 2e-3, 6e-3, 15e-3]
+        s.lag = Some(LagShape::FirstOrder);
+        let best = LAG_STARTS_S
             .into_iter()
             .filter_map(|t| {
                 let mut theta = current.theta.clone();
@@ -135,6 +146,12 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
             })
             .min_by(|a, b| a.profile.cost.total_cmp(&b.profile.cost));
         out.extend(structural(Effect::SensorLag, state, best));
+        s.lag = Some(LagShape::SecondOrder);
+        // Held at a bound of its damping it is not a low-pass of this form: set aside.
+        let second = second_order_start(state, &s)
+            .and_then(|theta| run_fit(&s, &theta))
+            .filter(|f| !lag_damping_held(f.theta.lag_damping));
+        out.extend(structural(Effect::SensorLag, state, second));
     }
     if wanted(Effect::ReferenceBandLimit) && s0.band_limit.is_none() {
         out.extend(super::band_limit::band_limit_candidates(state, band_hz));
@@ -193,6 +210,29 @@ fn lag_start_delay(tau_s: f64, lag_s: f64) -> f64 {
     } else {
         (tau_s - lag_s).max(0.0)
     }
+}
+
+/// The lag's time constants each search starts from (corners from 318 to 11 Hz).
+const LAG_STARTS_S: [f64; 4] = [0.5e-3, 2e-3, 6e-3, 15e-3];
+
+/// The best point, by the cost without a search, of a grid over a second-order lag's time
+/// constant ([`LAG_STARTS_S`] and the points between) and damping (from a resonant to an
+/// overdamped section); its low-frequency phase lag `2 zeta T` taken out of the start's delay.
+fn second_order_start(state: &State, structure: &Structure) -> Option<super::structure::Theta> {
+    let mut best: Option<(f64, super::structure::Theta)> = None;
+    for t in [0.5e-3, 1e-3, 2e-3, 4e-3, 6e-3, 10e-3, 15e-3] {
+        for zeta in [0.6, 0.8, 1.1, 1.8] {
+            let mut theta = state.fitted.theta.clone();
+            theta.lag_s = t;
+            theta.lag_damping = zeta;
+            theta.tau_s = lag_start_delay(theta.tau_s, 2.0 * zeta * t);
+            let c = cost_at(&state.design, &state.grams, structure, &theta);
+            if c.is_finite() && best.as_ref().is_none_or(|(b, _)| c < *b) {
+                best = Some((c, theta));
+            }
+        }
+    }
+    best.map(|(_, t)| t)
 }
 
 /// The best point of a grid over a new resonance's frequency (log-spaced inside the band, from

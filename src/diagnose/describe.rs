@@ -102,15 +102,32 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
             out
         }),
         Effect::SensorLag => p.get("T_s").and_then(num).map(|t| {
-            vec![format!(
-                "first-order lag, time constant T = {:.3}{} ms",
-                t * 1e3,
-                pm(sd1("T_s"), 1e3, 3)
-            )]
+            match (p.get("damping").and_then(num), p.get("corner_hz").and_then(num)) {
+                (Some(zeta), Some(corner)) => vec![format!(
+                    "second-order low-pass, corner {corner:.2}{} Hz (T = {:.3}{} ms), damping {zeta:.2}{}",
+                    pm(sd1("corner_hz"), 1.0, 2),
+                    t * 1e3,
+                    pm(sd1("T_s"), 1e3, 3),
+                    pm(sd1("damping"), 1.0, 2)
+                )],
+                _ => vec![format!(
+                    "first-order lag, time constant T = {:.3}{} ms",
+                    t * 1e3,
+                    pm(sd1("T_s"), 1e3, 3)
+                )],
+            }
         }),
         Effect::ReferenceLag => p.get("T_s").and_then(num).map(|t| {
+            let form = match (p.get("damping").and_then(num), p.get("corner_hz").and_then(num)) {
+                (Some(zeta), Some(corner)) => format!(
+                    " (a second-order low-pass, corner {corner:.2}{} Hz, damping {zeta:.2}{})",
+                    pm(sd1("corner_hz"), 1.0, 2),
+                    pm(sd1("damping"), 1.0, 2)
+                ),
+                _ => String::new(),
+            };
             vec![format!(
-                "the angle measurement lags: T = {:.3}{} ms, the same on both blocks (the stand's band limit or latency, not the sensor)",
+                "the angle measurement lags: T = {:.3}{} ms{form}, the same on both blocks (the stand's band limit or latency, or one filter both sensor blocks share: this run cannot tell them apart)",
                 t * 1e3,
                 pm(sd1("T_s"), 1e3, 3)
             )]

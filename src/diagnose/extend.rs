@@ -14,6 +14,7 @@ use super::profile;
 use super::report::{gain, parameters};
 use super::rules::within_reach;
 use super::state::State;
+use super::structure::LagShape;
 use super::uncertainty::{covariance, parameter_std, tau_std};
 use super::workflow::{Prepared, PreparedBlock, prepare};
 use crate::block::Block;
@@ -241,10 +242,10 @@ fn explains_through(
 /// The candidate an accepted effect is fitted as: the one that explains most (its shapes are
 /// each a candidate: a band limit's, its causal shape set aside where it beats the shapes without
 /// phase by less than `ln(dof)`, `super::band_limit::without_needless_phase`).
-fn best_candidate(candidates: Vec<Candidate>) -> Option<Candidate> {
-    candidates
-        .into_iter()
-        .max_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2))
+fn best_candidate(candidates: Vec<Candidate>, dof: f64) -> Option<Candidate> {
+    // Shapes with more parameters pay for them as in the diagnosis's criterion.
+    let gain = |c: &Candidate| c.delta_chi2 - dof.max(1.0).ln() * c.added_params as f64;
+    candidates.into_iter().max_by(|a, b| gain(a).total_cmp(&gain(b)))
 }
 
 /// Whether an accepted effect's `parameter_std` holds a finite number (a parameter held at a
@@ -294,7 +295,7 @@ fn extend_block(
         } else {
             effect
         };
-        let best = best_candidate(candidates_among(&state, band, &|e| e == fitted));
+        let best = best_candidate(candidates_among(&state, band, &|e| e == fitted), pb.dof);
         let next = best.and_then(|c| state.with(&c, band));
         match next
             .as_ref()
@@ -331,7 +332,8 @@ fn extend_block(
     let effects = ModelEffects {
         accepted,
         not_added,
-        lag_s: f.structure.lag.then_some(f.theta.lag_s),
+        lag_s: f.structure.lag.map(|_| f.theta.lag_s),
+        lag_damping: (f.structure.lag == Some(LagShape::SecondOrder)).then_some(f.theta.lag_damping),
         channel_skew_s: f.structure.skew.then(|| f.theta.channel_skew_s()),
         resonances: f
             .structure
@@ -421,7 +423,7 @@ fn index_of(state: &State, effect: Effect) -> usize {
 mod tests {
     use super::explains_through;
     use crate::block::Block;
-    use crate::diagnose::structure::{Filters, Structure, Theta};
+    use crate::diagnose::structure::{Filters, LagShape, Structure, Theta};
     use crate::effect::Effect;
     use crate::model::band_limit::{BandLimitShape, FittedBandLimit};
     use crate::model::effects::{AcceptedEffect, Identified, ModelEffects, Resonance};
@@ -430,7 +432,7 @@ mod tests {
     fn the_model_files_response_is_the_fitted_structures() {
         // The model file's formula against the diagnosis's filters, term by term.
         let structure = Structure {
-            lag: true,
+            lag: Some(LagShape::FirstOrder),
             skew: true,
             resonance_axes: vec![2, 0],
             band_limit: Some(BandLimitShape::Causal2),
@@ -440,6 +442,7 @@ mod tests {
             tau_s: 0.0042,
             skew_s: [0.0003, -0.0001],
             lag_s: 0.0015,
+            lag_damping: 0.0,
             band_limit_t_s: 0.002,
             resonances: vec![(23.0, 0.05), (31.0, 0.2)],
         };
@@ -450,6 +453,7 @@ mod tests {
         ];
         let effects = ModelEffects {
             lag_s: Some(theta.lag_s),
+            lag_damping: None,
             channel_skew_s: Some(theta.channel_skew_s()),
             resonances: vec![
                 Resonance {
@@ -488,6 +492,47 @@ mod tests {
         assert!((poles[0][0] + 1.0 / 0.0015).abs() < 1e-9);
         let w = std::f64::consts::TAU * 23.0;
         assert!((poles[1][0] + 0.05 * w).abs() < 1e-9 && (poles[1][0].hypot(poles[1][1]) - w).abs() < 1e-9);
+    }
+
+    /// A second-order lag in the model file: its response the diagnosis's filter's, `1 / 2 zeta`
+    /// at its corner with a phase of -90 degrees, and its poles the roots of
+    /// `(T s)^2 + 2 zeta T s + 1`, a pair when underdamped, two real ones when overdamped.
+    #[test]
+    fn a_second_order_lag_is_the_same_in_the_model_file() {
+        let structure = Structure {
+            lag: Some(LagShape::SecondOrder),
+            ..Structure::default()
+        };
+        let k = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        for zeta in [0.5, 1.0 / 2f64.sqrt(), 1.6] {
+            let theta = Theta {
+                lag_s: 1.0 / (std::f64::consts::TAU * 20.0),
+                lag_damping: zeta,
+                ..Theta::delay_only(0.0)
+            };
+            let effects = ModelEffects {
+                lag_s: Some(theta.lag_s),
+                lag_damping: Some(zeta),
+                ..accepted(&[])
+            };
+            for f in [0.3, 5.0, 20.0, 39.0] {
+                let want = Filters::at(&structure, &theta, f).channel[0];
+                let h = effects.response(&k, 0.0, f)[(0, 0)];
+                assert!((h - want).norm() < 1e-12, "{zeta} {f}: {h} {want}");
+            }
+            let at_corner = effects.response(&k, 0.0, 20.0)[(1, 1)];
+            assert!(
+                (at_corner.norm() - 1.0 / (2.0 * zeta)).abs() < 1e-12,
+                "{at_corner}"
+            );
+            assert!((at_corner.arg() + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+            let poles = effects.poles();
+            assert_eq!(poles.len(), 2);
+            for [re, im] in poles {
+                let p = num_complex::Complex64::new(re, im) * theta.lag_s;
+                assert!((p * p + 2.0 * zeta * p + 1.0).norm() < 1e-9, "{zeta}: {p}");
+            }
+        }
     }
 
     /// The mode's gain is the resonant low-pass's: 1 at DC, `1 / 2 zeta` at the mode, and each
@@ -530,6 +575,7 @@ mod tests {
                 .collect(),
             not_added: Vec::new(),
             lag_s: None,
+            lag_damping: None,
             channel_skew_s: None,
             resonances: Vec::new(),
             reference_band_limit: None,

@@ -2,7 +2,8 @@
 //! evaluation solving the linear ones ([`project`]). Parameters are searched in scaled units
 //! (delays, the lag and the band limit's time constant in ms, resonance frequency in Hz, log
 //! damping) and kept inside their physical range (lag and band limit's time constant >= 0,
-//! damping in [0.005, 1], resonance inside the band).
+//! a resonance's damping in [0.005, 1] and a second-order lag's in `LAG_DAMPING`, resonance
+//! inside the band).
 
 use nalgebra::DMatrix;
 use num_complex::Complex64;
@@ -10,7 +11,7 @@ use num_complex::Complex64;
 use super::design::{Design, WINDOW_ENBW};
 use super::profile::{Profile, project};
 use super::simplex::minimise;
-use super::structure::{Layout, Structure, Theta};
+use super::structure::{LAG_DAMPING, LagShape, Layout, Structure, Theta};
 
 /// A fitted structure.
 #[derive(Clone, Debug)]
@@ -48,9 +49,13 @@ pub(super) fn pack(structure: &Structure, theta: &Theta) -> (Vec<f64>, Vec<f64>)
         x.extend(theta.skew_s.map(|v| v * 1e3));
         step.extend([0.2, 0.2]);
     }
-    if structure.lag {
+    if let Some(shape) = structure.lag {
         x.push(theta.lag_s * 1e3);
         step.push(0.3 * (theta.lag_s * 1e3).max(0.5));
+        if shape == LagShape::SecondOrder {
+            x.push(theta.lag_damping.ln());
+            step.push(0.3);
+        }
     }
     if structure.band_limit.is_some() {
         x.push(theta.band_limit_t_s * 1e3);
@@ -73,8 +78,22 @@ pub(super) fn unpack(structure: &Structure, x: &[f64], band_hz: [f64; 2]) -> Opt
     } else {
         [0.0; 2]
     };
-    let lag_s = if structure.lag { next() * 1e-3 } else { 0.0 };
+    let lag_s = if structure.lag.is_some() {
+        next() * 1e-3
+    } else {
+        0.0
+    };
     if lag_s < 0.0 {
+        return None;
+    }
+    let lag_damping = if structure.lag == Some(LagShape::SecondOrder) {
+        next().exp()
+    } else {
+        0.0
+    };
+    if structure.lag == Some(LagShape::SecondOrder)
+        && !(LAG_DAMPING[0]..=LAG_DAMPING[1]).contains(&lag_damping)
+    {
         return None;
     }
     let band_limit_t_s = if structure.band_limit.is_some() {
@@ -97,6 +116,7 @@ pub(super) fn unpack(structure: &Structure, x: &[f64], band_hz: [f64; 2]) -> Opt
         tau_s,
         skew_s,
         lag_s,
+        lag_damping,
         band_limit_t_s,
         resonances,
     })

@@ -10,7 +10,7 @@ use serde_json::{Value, json};
 
 use super::map::{DisagreementMap, ResidualPsd};
 use super::state::State;
-use super::structure::Theta;
+use super::structure::{LagShape, Theta};
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::ident::selfcheck::POOR_FIT;
@@ -235,6 +235,10 @@ pub struct CandidateSummary {
     /// its own); absent for the other effects.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub band_limit: Option<crate::model::band_limit::BandLimitShape>,
+    /// A lag's shape (`sensor_lag` is tried first and second order, each a candidate of its
+    /// own); absent for the other effects.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lag_shape: Option<LagShape>,
 }
 
 /// One block's details.
@@ -321,7 +325,15 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
                 .map_or([[0.0; 3]; 3], |p| [0, 1, 2].map(|i| slice3(b, Some(p + 3 * i))));
             json!({"G": g, "units": "output units per m/s^2"})
         }
-        Effect::SensorLag | Effect::ReferenceLag => json!({"T_s": theta.lag_s}),
+        Effect::SensorLag | Effect::ReferenceLag => match f.structure.lag {
+            Some(shape @ LagShape::SecondOrder) => json!({
+                "T_s": theta.lag_s,
+                "damping": theta.lag_damping,
+                "corner_hz": (theta.lag_s > 0.0).then(|| 1.0 / (2.0 * std::f64::consts::PI * theta.lag_s)),
+                "shape": shape.name(),
+            }),
+            _ => json!({"T_s": theta.lag_s}),
+        },
         Effect::ReferenceBandLimit => {
             let top = state.design.frequency_hz.last().copied().unwrap_or(0.0);
             let Some(shape) = f.structure.band_limit else {

@@ -7,19 +7,82 @@
 //! Per output channel `i`, with `s = 2 pi i f`:
 //! `x_i = c_i(s) [sum_j K_ij M_j(s) u_j + k2_i q_i + sum_l dr_l df_i/dr_l] + d(s) sum_j G_ij f_j`,
 //! `d(s) = e^(-tau s) g(s)`,
-//! `c_i(s) = g(s) e^(-(tau + skew_i) s) / (T s + 1)`, `M_j(s) = w^2 / (s^2 + 2 zeta w s + w^2)` on
+//! `c_i(s) = g(s) e^(-(tau + skew_i) s) L(s)`, `M_j(s) = w^2 / (s^2 + 2 zeta w s + w^2)` on
 //! resonant axes (1 elsewhere), `q_i = u_i |u_i|`. The lever-arm term uses `K ~ I` (its gain
 //! errors, of order 1e-3, change the offset's estimate by as little). `g(s) = 1 / H(s)` undoes the
 //! stand's band limit (the angle measurement through a low-pass `H`, so the inputs computed from
 //! the angles fall short of the motion), 1 unless [`Structure::band_limit`] gives its shape
 //! (`super::band_limit`); its time constant `T >= 0` ([`Theta::band_limit_t_s`]) is searched.
+//! `L(s)` is the lag ([`LagShape`]): 1 without one, `1 / (T s + 1)` first order, or
+//! `1 / ((T s)^2 + 2 zeta T s + 1)` second order (a sensor's low-pass of its own: a read-out's
+//! anti-alias or a configurable digital low-pass, commonly a second-order section), its damping
+//! `zeta` searched between [`LAG_DAMPING`]'s bounds (below, a mode: `platform_resonance`; above,
+//! a first-order lag and a little delay; a fit held at either is set aside).
 
 use std::f64::consts::PI;
 
 use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
 
 use super::band_limit::BandLimitShape;
 use super::design::{AUX, Q, U};
+
+/// The range of a second-order lag's damping the search keeps: from 0.5, a low-pass's section
+/// with a peak of 1.15 (1.25 dB; a Butterworth's is 0.71, a Bessel's 0.87), to 4, where it is a
+/// first-order lag and a little delay. A fit held at either bound is not a low-pass of this form
+/// (below: a mode, `platform_resonance`; above: the first order), and is not offered
+/// ([`lag_damping_held`]).
+pub const LAG_DAMPING: [f64; 2] = [0.5, 4.0];
+
+/// Whether a second-order lag's fitted damping sits at a bound of [`LAG_DAMPING`] (within 2 %).
+#[must_use]
+pub fn lag_damping_held(zeta: f64) -> bool {
+    !(zeta > LAG_DAMPING[0] * 1.02 && zeta < LAG_DAMPING[1] / 1.02)
+}
+
+/// The form of a lag (a sensor's own bandwidth, or the stand's reference lag fitted as one), each
+/// with one time constant `T` ([`Theta::lag_s`]), the second order with its damping too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LagShape {
+    /// `1 / (T s + 1)`.
+    FirstOrder,
+    /// `1 / ((T s)^2 + 2 zeta T s + 1)`, corner `1 / (2 pi T)`.
+    SecondOrder,
+}
+
+impl LagShape {
+    /// Every shape, in the order the candidates are offered.
+    pub const SHAPES: [Self; 2] = [Self::FirstOrder, Self::SecondOrder];
+
+    /// The lag's response at `s` with time constant `t_s` and (second order) damping `zeta`.
+    #[must_use]
+    pub fn response(self, t_s: f64, zeta: f64, s: Complex64) -> Complex64 {
+        let st = s * t_s;
+        match self {
+            Self::FirstOrder => 1.0 / (1.0 + st),
+            Self::SecondOrder => 1.0 / (1.0 + 2.0 * zeta * st + st * st),
+        }
+    }
+
+    /// Nonlinear parameters it adds: `T`, and the damping for the second order.
+    #[must_use]
+    pub fn parameters(self) -> usize {
+        match self {
+            Self::FirstOrder => 1,
+            Self::SecondOrder => 2,
+        }
+    }
+
+    /// The name used in reports (`"first_order"`, `"second_order"`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::FirstOrder => "first_order",
+            Self::SecondOrder => "second_order",
+        }
+    }
+}
 
 /// Which effects the model holds (besides tones).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -28,8 +91,8 @@ use super::design::{AUX, Q, U};
     reason = "each flag is one catalogue effect present or not; a set type would only hide that"
 )]
 pub struct Structure {
-    /// First-order lag `1/(T s + 1)`.
-    pub lag: bool,
+    /// The lag's shape; `None`: no lag.
+    pub lag: Option<LagShape>,
     /// Per-channel delays.
     pub skew: bool,
     /// Quadratic scale factor per channel.
@@ -53,6 +116,8 @@ pub struct Theta {
     pub skew_s: [f64; 2],
     /// Lag time constant, s.
     pub lag_s: f64,
+    /// A second-order lag's damping (unused otherwise).
+    pub lag_damping: f64,
     /// The stand's band limit's time constant `T`, s (module docs).
     pub band_limit_t_s: f64,
     /// `(frequency_hz, damping)` per resonant axis.
@@ -67,6 +132,7 @@ impl Theta {
             tau_s,
             skew_s: [0.0; 2],
             lag_s: 0.0,
+            lag_damping: 0.0,
             band_limit_t_s: 0.0,
             resonances: Vec::new(),
         }
@@ -186,7 +252,7 @@ impl Structure {
     #[must_use]
     pub fn n_nonlinear_extra(&self) -> usize {
         2 * usize::from(self.skew)
-            + usize::from(self.lag)
+            + self.lag.map_or(0, LagShape::parameters)
             + usize::from(self.band_limit.is_some())
             + 2 * self.resonance_axes.len()
     }
@@ -208,11 +274,9 @@ impl Filters {
     #[must_use]
     pub fn at(structure: &Structure, theta: &Theta, f: f64) -> Self {
         let s = Complex64::new(0.0, 2.0 * PI * f);
-        let lag = if structure.lag {
-            1.0 / (1.0 + s * theta.lag_s)
-        } else {
-            Complex64::from(1.0)
-        };
+        let lag = structure.lag.map_or(Complex64::from(1.0), |shape| {
+            shape.response(theta.lag_s, theta.lag_damping, s)
+        });
         let skew = if structure.skew {
             theta.channel_skew_s()
         } else {

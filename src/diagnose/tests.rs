@@ -388,11 +388,28 @@ fn a_causal_band_limit_that_beats_the_shapes_without_phase_by_less_than_ln_dof_i
     // Another effect's candidate counts once beside the six shapes.
     let mut mixed = set_aside;
     mixed.push(Candidate {
+        effect: Effect::GSensitivity,
+        extension: Extension::Structural(Box::new(base.clone())),
+        delta_chi2: 3.0,
+        added_params: 9,
+    });
+    assert_eq!(super::candidates::tried(&mixed), BandLimitShape::SHAPES.len() + 1);
+    assert_eq!(super::candidates::tried(&mixed[2..]), 1);
+    // A lag counts both its shapes, one of them offered or both.
+    let lag = Candidate {
         effect: Effect::SensorLag,
         extension: Extension::Structural(Box::new(base.clone())),
         delta_chi2: 3.0,
         added_params: 1,
-    });
-    assert_eq!(super::candidates::tried(&mixed), BandLimitShape::SHAPES.len() + 1);
-    assert_eq!(super::candidates::tried(&mixed[2..]), 1);
+    };
+    mixed.push(lag.clone());
+    assert_eq!(
+        super::candidates::tried(&mixed),
+        BandLimitShape::SHAPES.len() + 1 + 2
+    );
+    mixed.push(lag);
+    assert_eq!(
+        super::candidates::tried(&mixed),
+        BandLimitShape::SHAPES.len() + 1 + 2
+    );
 }

@@ -341,8 +341,8 @@ struct Slots {
 fn slots(structure: &super::structure::Structure) -> Slots {
     let skew = structure.skew.then_some(1);
     let after_skew = 1 + 2 * usize::from(structure.skew);
-    let lag = structure.lag.then_some(after_skew);
-    let after_lag = after_skew + usize::from(structure.lag);
+    let lag = structure.lag.map(|_| after_skew);
+    let after_lag = after_skew + structure.lag.map_or(0, super::structure::LagShape::parameters);
     Slots {
         skew,
         lag,
@@ -398,7 +398,19 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
             json!({"G": g})
         }
         Effect::SensorLag | Effect::ReferenceLag => {
-            json!({"T_s": slot.lag.and_then(|k| cov?.nonlinear_std(k)).map(|v| v * 1e-3)})
+            let t_std = slot.lag.and_then(|k| cov?.nonlinear_std(k)).map(|v| v * 1e-3);
+            if f.structure.lag != Some(super::structure::LagShape::SecondOrder) {
+                return json!({"T_s": t_std});
+            }
+            // The damping is searched as its logarithm: its deviation is `zeta` times that one's;
+            // the corner `1 / (2 pi T)` moves by `-1 / (2 pi T^2)` per s of `T` (`T` in ms).
+            let (t, zeta) = (f.theta.lag_s, f.theta.lag_damping);
+            let corner = -1.0 / (2.0 * std::f64::consts::PI * t * t);
+            json!({
+                "T_s": t_std,
+                "damping": slot.lag.and_then(|k| cov?.nonlinear_std(k + 1)).map(|v| v * zeta),
+                "corner_hz": slot.lag.and_then(|k| cov?.std_of(&[(n + k, corner * 1e-3)])).filter(|_| t > 0.0),
+            })
         }
         Effect::ReferenceBandLimit => {
             let (Some(at), Some(shape)) = (slot.band_limit, f.structure.band_limit) else {

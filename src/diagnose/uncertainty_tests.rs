@@ -124,7 +124,7 @@ fn the_taper_factor_is_that_of_a_hann_window() {
 fn each_nonlinear_slot_holds_its_own_parameter() {
     let structure = Structure {
         skew: true,
-        lag: true,
+        lag: Some(crate::diagnose::structure::LagShape::FirstOrder),
         band_limit: Some(BandLimitShape::Causal2),
         resonance_axes: vec![1, 2],
         ..Structure::default()
@@ -133,6 +133,7 @@ fn each_nonlinear_slot_holds_its_own_parameter() {
         tau_s: 4e-3,
         skew_s: [0.3e-3, -0.1e-3],
         lag_s: 2e-3,
+        lag_damping: 0.0,
         band_limit_t_s: 3e-3,
         resonances: vec![(20.0, 0.05), (30.0, 0.2)],
     };
@@ -144,6 +145,32 @@ fn each_nonlinear_slot_holds_its_own_parameter() {
     assert!((x[slot.band_limit.expect("band limit")] - 3.0).abs() < 1e-12);
     assert!((x[slot.resonances] - 20.0).abs() < 1e-12);
     assert!((x[slot.resonances + 2] - 30.0).abs() < 1e-12);
+    // A second-order lag's damping (as its logarithm) follows its time constant, and the
+    // resonances move one slot on; unpacking gives the parameters back.
+    let second = Structure {
+        lag: Some(crate::diagnose::structure::LagShape::SecondOrder),
+        ..structure
+    };
+    let theta = Theta {
+        lag_damping: 0.7,
+        ..theta
+    };
+    let (x, _) = pack(&second, &theta);
+    let slot = slots(&second);
+    assert_eq!(x.len(), 1 + second.n_nonlinear_extra());
+    assert!((x[slot.lag.expect("lag") + 1] - 0.7f64.ln()).abs() < 1e-12);
+    assert!((x[slot.band_limit.expect("band limit")] - 3.0).abs() < 1e-12);
+    assert!((x[slot.resonances] - 20.0).abs() < 1e-12);
+    let back = crate::diagnose::fit::unpack(&second, &x, [0.1, 40.0]).expect("in range");
+    assert!((back.lag_damping - 0.7).abs() < 1e-12 && (back.lag_s - 2e-3).abs() < 1e-15);
+    // A damping outside the range kept is refused.
+    let mut outside = x.clone();
+    outside[slot.lag.expect("lag") + 1] = 0.1f64.ln();
+    assert!(crate::diagnose::fit::unpack(&second, &outside, [0.1, 40.0]).is_none());
+    // A damping held at a bound (within 2 %) is said so; a Butterworth's and a Bessel's are not.
+    use crate::diagnose::structure::lag_damping_held;
+    assert!(lag_damping_held(0.5) && lag_damping_held(0.505) && lag_damping_held(3.95));
+    assert!(!lag_damping_held(0.5f64.sqrt()) && !lag_damping_held(0.866) && !lag_damping_held(2.0));
 }
 
 #[test]

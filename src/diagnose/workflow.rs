@@ -168,6 +168,7 @@ fn summary(c: &Candidate, rule: Rule) -> CandidateSummary {
         added_parameters: c.added_params,
         criterion_gain: rule.gain(c),
         band_limit: c.band_limit_shape(),
+        lag_shape: c.lag_shape(),
     }
 }
 
@@ -452,6 +453,22 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
         return;
     };
     if (tg - ta).abs() > SHARED_LAG_SIGMAS * sg.hypot(sa) {
+        return;
+    }
+    // One lag: the same shape, and a second order's damping within as many deviations.
+    let shape = |f: &Finding| f.parameters.get("shape").cloned();
+    if shape(&findings[g]) != shape(&findings[a]) {
+        return;
+    }
+    let damping = |f: &Finding| {
+        Some((
+            f.parameters.get("damping")?.as_f64()?,
+            f.parameter_std.get("damping")?.as_f64()?,
+        ))
+    };
+    if let (Some((zg, dg)), Some((za, da))) = (damping(&findings[g]), damping(&findings[a]))
+        && (zg - za).abs() > SHARED_LAG_SIGMAS * dg.hypot(da)
+    {
         return;
     }
     for k in [g, a] {

@@ -114,9 +114,13 @@ pub struct ModelEffects {
     /// Effects asked for that could not be added, each with the reason in words.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub not_added: Vec<NotAdded>,
-    /// First-order lag time constant, s (absent: no lag).
+    /// The lag's time constant `T`, s (absent: no lag): `1 / (T s + 1)`, or with
+    /// [`Self::lag_damping`] `1 / ((T s)^2 + 2 zeta T s + 1)`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lag_s: Option<f64>,
+    /// A second-order lag's damping `zeta` (absent: the lag, if any, is first order).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lag_damping: Option<f64>,
     /// Per-channel delays relative to `tau_s`, s (absent: no skew).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channel_skew_s: Option<[f64; 3]>,
@@ -160,7 +164,12 @@ impl ModelEffects {
     #[must_use]
     pub fn response(&self, k: &[[f64; 3]; 3], tau_s: f64, f_hz: f64) -> nalgebra::Matrix3<Complex64> {
         let s = Complex64::new(0.0, std::f64::consts::TAU * f_hz);
-        let lag = self.lag_s.map_or(Complex64::from(1.0), |t| 1.0 / (1.0 + s * t));
+        let lag = self
+            .lag_s
+            .map_or(Complex64::from(1.0), |t| match self.lag_damping {
+                Some(zeta) => 1.0 / (1.0 + 2.0 * zeta * s * t + s * s * t * t),
+                None => 1.0 / (1.0 + s * t),
+            });
         let skew = self.channel_skew_s.unwrap_or([0.0; 3]);
         let mut resonant = [Complex64::from(1.0); 3];
         for r in &self.resonances {
@@ -181,12 +190,20 @@ impl ModelEffects {
     /// upper one and its conjugate).
     #[must_use]
     pub fn poles(&self) -> Vec<[f64; 2]> {
-        let mut poles: Vec<[f64; 2]> = self
-            .lag_s
-            .iter()
-            .filter(|t| **t > 0.0)
-            .map(|t| [-1.0 / t, 0.0])
-            .collect();
+        let mut poles: Vec<[f64; 2]> = Vec::new();
+        match (self.lag_s.filter(|t| *t > 0.0), self.lag_damping) {
+            (Some(t), None) => poles.push([-1.0 / t, 0.0]),
+            // The roots of (T s)^2 + 2 zeta T s + 1: a pair, or two real ones when overdamped.
+            (Some(t), Some(zeta)) if zeta < 1.0 => {
+                let (re, im) = (-zeta / t, (1.0 - zeta * zeta).sqrt() / t);
+                poles.extend([[re, im], [re, -im]]);
+            }
+            (Some(t), Some(zeta)) => {
+                let root = (zeta * zeta - 1.0).sqrt();
+                poles.extend([[(-zeta + root) / t, 0.0], [(-zeta - root) / t, 0.0]]);
+            }
+            (None, _) => {}
+        }
         for r in &self.resonances {
             let w = std::f64::consts::TAU * r.frequency_hz;
             let (re, im) = (-r.damping * w, w * (1.0 - r.damping * r.damping).max(0.0).sqrt());

@@ -129,6 +129,7 @@ fn no_effects(tau_s: f64, order: usize) -> crate::model::effects::ModelEffects {
         accepted: Vec::new(),
         not_added: Vec::new(),
         lag_s: None,
+        lag_damping: None,
         channel_skew_s: None,
         resonances: Vec::new(),
         reference_band_limit: None,
@@ -257,6 +258,7 @@ fn effects_that_add_nothing_leave_the_identified_response() {
             reason: "the band does not reach the mode".to_owned(),
         }],
         lag_s: None,
+        lag_damping: None,
         channel_skew_s: None,
         resonances: Vec::new(),
         reference_band_limit: None,
@@ -508,6 +510,7 @@ fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
     };
     let lag = || ModelEffects {
         lag_s: Some(0.004),
+        lag_damping: None,
         ..no_effects(0.004, 0)
     };
     // Below it, the 21.7 Hz mode's skirt rises across 0.1-20 Hz: it takes a rise, not a fall.

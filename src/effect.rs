@@ -15,7 +15,8 @@ use crate::block::Block;
 pub enum Effect {
     /// Gyro outputs respond to the specific force at the block: `x += G f`.
     GSensitivity,
-    /// A first-order lag `1/(T s + 1)` beyond the pure delay.
+    /// The sensor's own bandwidth beyond the pure delay: a first-order lag `1/(T s + 1)` or a
+    /// second-order low-pass (`diagnose::structure::LagShape`).
     SensorLag,
     /// Per-channel delays.
     AxisTimeSkew,
@@ -31,7 +32,8 @@ pub enum Effect {
     /// through the run.
     ClockDrift,
     /// Stand side, not a sensor effect: the angle measurement lags (its band limit or latency),
-    /// which both blocks see through their inputs as the same first-order lag. Not in
+    /// which both blocks see through their inputs as the same lag (or one filter both sensor blocks
+    /// share, which one run cannot tell apart). Not in
     /// [`Effect::ALL`] (the sensors' catalogue the simulator hides); the diagnosis names it.
     ReferenceLag,
     /// Stand side, not a sensor effect: the angle measurement is low-passed (a reference
@@ -77,7 +79,7 @@ impl Effect {
     pub fn what(self) -> &'static str {
         match self {
             Effect::GSensitivity => "g-sensitivity",
-            Effect::SensorLag => "first-order lag",
+            Effect::SensorLag => "low-pass lag",
             Effect::AxisTimeSkew => "channel time skew",
             Effect::ScaleNonlinearity => "quadratic scale factor",
             Effect::VibrationTone => "vibration tone",

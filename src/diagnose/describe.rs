@@ -25,6 +25,29 @@ fn pm(sd: Option<f64>, scale: f64, decimals: usize) -> String {
         .map_or_else(String::new, |v| format!(" ± {:.decimals$}", v * scale))
 }
 
+/// A second-order lag's words: its -3 dB corner, natural frequency and damping (no frequencies
+/// at `T = 0`).
+fn second_order_words(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>, t: f64) -> String {
+    let zeta = p.get("damping").and_then(num).unwrap_or(f64::NAN);
+    let frequencies = match (
+        p.get("corner_hz").and_then(num),
+        p.get("natural_frequency_hz").and_then(num),
+    ) {
+        (Some(corner), Some(natural)) => format!(
+            ", -3 dB at {corner:.2}{} Hz (natural frequency {natural:.2}{} Hz)",
+            pm(sd1("corner_hz"), 1.0, 2),
+            pm(sd1("natural_frequency_hz"), 1.0, 2)
+        ),
+        _ => String::new(),
+    };
+    format!(
+        "second-order low-pass{frequencies}, damping {zeta:.3}{}, T = {:.3}{} ms",
+        pm(sd1("damping"), 1.0, 3),
+        t * 1e3,
+        pm(sd1("T_s"), 1e3, 3)
+    )
+}
+
 /// Three standard deviations, each possibly unknown.
 fn three_std(v: Option<&Value>) -> [Option<f64>; 3] {
     let a = v.and_then(Value::as_array);
@@ -102,29 +125,21 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
             out
         }),
         Effect::SensorLag => p.get("T_s").and_then(num).map(|t| {
-            match (p.get("damping").and_then(num), p.get("corner_hz").and_then(num)) {
-                (Some(zeta), Some(corner)) => vec![format!(
-                    "second-order low-pass, corner {corner:.2}{} Hz (T = {:.3}{} ms), damping {zeta:.2}{}",
-                    pm(sd1("corner_hz"), 1.0, 2),
-                    t * 1e3,
-                    pm(sd1("T_s"), 1e3, 3),
-                    pm(sd1("damping"), 1.0, 2)
-                )],
-                _ => vec![format!(
+            if p.get("shape").and_then(Value::as_str) == Some("second_order") {
+                vec![second_order_words(p, &sd1, t)]
+            } else {
+                vec![format!(
                     "first-order lag, time constant T = {:.3}{} ms",
                     t * 1e3,
                     pm(sd1("T_s"), 1e3, 3)
-                )],
+                )]
             }
         }),
         Effect::ReferenceLag => p.get("T_s").and_then(num).map(|t| {
-            let form = match (p.get("damping").and_then(num), p.get("corner_hz").and_then(num)) {
-                (Some(zeta), Some(corner)) => format!(
-                    " (a second-order low-pass, corner {corner:.2}{} Hz, damping {zeta:.2}{})",
-                    pm(sd1("corner_hz"), 1.0, 2),
-                    pm(sd1("damping"), 1.0, 2)
-                ),
-                _ => String::new(),
+            let form = if p.get("shape").and_then(Value::as_str) == Some("second_order") {
+                format!(" ({})", second_order_words(p, &sd1, t))
+            } else {
+                String::new()
             };
             vec![format!(
                 "the angle measurement lags: T = {:.3}{} ms{form}, the same on both blocks (the stand's band limit or latency, or one filter both sensor blocks share: this run cannot tell them apart)",

@@ -239,9 +239,11 @@ fn explains_through(
         && added <= poor
 }
 
-/// The candidate an accepted effect is fitted as: the one that explains most (its shapes are
-/// each a candidate: a band limit's, its causal shape set aside where it beats the shapes without
-/// phase by less than `ln(dof)`, `super::band_limit::without_needless_phase`).
+/// The candidate an accepted effect is fitted as: the one that explains most, each added
+/// parameter charged `ln(dof)` as in the diagnosis's criterion (its shapes are each a candidate:
+/// a band limit's, its causal shape set aside where it beats the shapes without phase by less
+/// than `ln(dof)`, `super::band_limit::without_needless_phase`; a lag's first and second order).
+/// The shape is chosen again on the record the model is fitted to, not read from the finding.
 fn best_candidate(candidates: Vec<Candidate>, dof: f64) -> Option<Candidate> {
     // Shapes with more parameters pay for them as in the diagnosis's criterion.
     let gain = |c: &Candidate| c.delta_chi2 - dof.max(1.0).ln() * c.added_params as f64;

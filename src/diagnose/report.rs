@@ -326,12 +326,20 @@ pub fn parameters(effect: Effect, state: &State, index: usize, input_names: [&st
             json!({"G": g, "units": "output units per m/s^2"})
         }
         Effect::SensorLag | Effect::ReferenceLag => match f.structure.lag {
-            Some(shape @ LagShape::SecondOrder) => json!({
-                "T_s": theta.lag_s,
-                "damping": theta.lag_damping,
-                "corner_hz": (theta.lag_s > 0.0).then(|| 1.0 / (2.0 * std::f64::consts::PI * theta.lag_s)),
-                "shape": shape.name(),
-            }),
+            Some(shape @ LagShape::SecondOrder) => {
+                let mut v = json!({
+                    "T_s": theta.lag_s,
+                    "damping": theta.lag_damping,
+                    "shape": shape.name(),
+                });
+                // No frequencies at T = 0 (a report holds no null outside deviations).
+                if theta.lag_s > 0.0 {
+                    let natural = 1.0 / (2.0 * std::f64::consts::PI * theta.lag_s);
+                    v["natural_frequency_hz"] = json!(natural);
+                    v["corner_hz"] = json!(natural * LagShape::corner_ratio(theta.lag_damping));
+                }
+                v
+            }
             _ => json!({"T_s": theta.lag_s}),
         },
         Effect::ReferenceBandLimit => {

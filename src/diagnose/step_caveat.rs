@@ -53,6 +53,22 @@ pub fn untested_step_caveat(effect: Effect, delays_s: &[f64]) -> Option<String> 
 /// scatter and the step's own deviation).
 const LAG_MARGIN: f64 = 1.2;
 
+/// The first-order lag's time constant whose gain droops as a lag's does at low frequency: `T`
+/// for the first order; for the second order, whose droop is `(2 zeta^2 - 1) (w T)^2` against
+/// the first order's `(w T)^2 / 2`, `T sqrt(4 zeta^2 - 2)`; `None` where it does not droop
+/// (`zeta <= 1 / sqrt 2`: flat or rising, which no step makes, so it is never the step's).
+fn lag_droop_time_s(parameters: &Value) -> Option<f64> {
+    let t = parameters.get("T_s")?.as_f64()?;
+    match parameters.get("damping") {
+        None => Some(t),
+        Some(z) => {
+            let zeta = z.as_f64()?;
+            let square = 4.0 * zeta * zeta - 2.0;
+            (square > 0.0).then(|| t * square.sqrt())
+        }
+    }
+}
+
 /// The words to add to a finding of `effect` with `parameters` on a block whose delay steps as
 /// `step` says; `None` where the finding cannot be the step's (another
 /// effect, or a size beyond what the step makes).
@@ -70,7 +86,7 @@ pub fn step_caveat(effect: Effect, parameters: &Value, step: &DelayStep) -> Opti
         d
     };
     let fits = match effect {
-        Effect::SensorLag | Effect::ReferenceLag => parameters.get("T_s")?.as_f64()? <= LAG_MARGIN * d / 2.0,
+        Effect::SensorLag | Effect::ReferenceLag => lag_droop_time_s(parameters)? <= LAG_MARGIN * d / 2.0,
         Effect::AxisTimeSkew => parameters
             .get("skew_s")?
             .as_array()?
@@ -155,6 +171,12 @@ mod tests {
         assert!(step_caveat(Effect::GSensitivity, &json!({"G": []}), &s).is_none());
         assert!(step_caveat(Effect::SensorLag, &json!({"T_s": 1e-3}), &step(0.0)).is_none());
         assert!(step_caveat(Effect::SensorLag, &json!({}), &s).is_none());
+        // A second-order lag by its droop: 0.5 ms at damping 2 droops as a first-order 1.87 ms
+        // does (beyond the step's 1.2 ms), 0.3 ms as 1.12 ms (within); a Butterworth's is flat.
+        let second = |t: f64, zeta: f64| json!({"T_s": t, "damping": zeta, "shape": "second_order"});
+        assert!(step_caveat(Effect::SensorLag, &second(0.5e-3, 2.0), &s).is_none());
+        assert!(step_caveat(Effect::SensorLag, &second(0.3e-3, 2.0), &s).is_some());
+        assert!(step_caveat(Effect::SensorLag, &second(0.1e-3, 0.5f64.sqrt()), &s).is_none());
         // An angle slip steps the delay down: said by its size; a slip that comes back, both places.
         let mut down = step(-2e-3);
         down.back_between_s = Some([150.0, 170.0]);

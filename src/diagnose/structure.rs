@@ -74,6 +74,14 @@ impl LagShape {
         }
     }
 
+    /// A second-order section's -3 dB frequency over its natural frequency `1 / (2 pi T)`:
+    /// `sqrt(1 - 2 zeta^2 + sqrt((1 - 2 zeta^2)^2 + 1))` (1 for a Butterworth's `1 / sqrt 2`).
+    #[must_use]
+    pub fn corner_ratio(zeta: f64) -> f64 {
+        let a = 1.0 - 2.0 * zeta * zeta;
+        (a + (a * a + 1.0).sqrt()).sqrt()
+    }
+
     /// The name used in reports (`"first_order"`, `"second_order"`).
     #[must_use]
     pub fn name(self) -> &'static str {

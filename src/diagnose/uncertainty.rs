@@ -403,14 +403,26 @@ pub fn parameter_std(effect: Effect, state: &State, index: usize, cov: Option<&C
                 return json!({"T_s": t_std});
             }
             // The damping is searched as its logarithm: its deviation is `zeta` times that one's;
-            // the corner `1 / (2 pi T)` moves by `-1 / (2 pi T^2)` per s of `T` (`T` in ms).
+            // the natural frequency `1 / (2 pi T)` moves by `-1 / (2 pi T^2)` per s of `T` (`T`
+            // in ms), the corner `f_n r(zeta)` with it and with the damping (`r`'s slope by
+            // central difference, per unit of `ln zeta`).
             let (t, zeta) = (f.theta.lag_s, f.theta.lag_damping);
-            let corner = -1.0 / (2.0 * std::f64::consts::PI * t * t);
-            json!({
+            let mut v = json!({
                 "T_s": t_std,
                 "damping": slot.lag.and_then(|k| cov?.nonlinear_std(k + 1)).map(|v| v * zeta),
-                "corner_hz": slot.lag.and_then(|k| cov?.std_of(&[(n + k, corner * 1e-3)])).filter(|_| t > 0.0),
-            })
+            });
+            if t > 0.0 {
+                let natural = 1.0 / (2.0 * std::f64::consts::PI * t);
+                let ratio = super::structure::LagShape::corner_ratio;
+                let h = 1e-6 * zeta;
+                let ratio_slope = zeta * (ratio(zeta + h) - ratio(zeta - h)) / (2.0 * h);
+                let d_t = -natural / t * 1e-3;
+                v["natural_frequency_hz"] = json!(slot.lag.and_then(|k| cov?.std_of(&[(n + k, d_t)])));
+                v["corner_hz"] = json!(slot.lag.and_then(|k| {
+                    cov?.std_of(&[(n + k, d_t * ratio(zeta)), (n + k + 1, natural * ratio_slope)])
+                }));
+            }
+            v
         }
         Effect::ReferenceBandLimit => {
             let (Some(at), Some(shape)) = (slot.band_limit, f.structure.band_limit) else {

@@ -417,7 +417,7 @@ fn tone_limit(state: &State, chi2_needed: f64, from_hz: f64) -> Option<ToneLimit
 /// How many standard deviations two blocks' lags may differ by and still be one lag.
 const SHARED_LAG_SIGMAS: f64 = 3.0;
 
-/// A first-order lag found on both blocks with the same time constant (within
+/// A lag found on both blocks with the same time constant (within
 /// [`SHARED_LAG_SIGMAS`] of their combined standard deviation) is taken for the angle
 /// measurement's: both blocks see the stand's band limit or latency through their inputs, and
 /// per block an input lag and an output lag are the same filter. Both findings are renamed
@@ -430,6 +430,8 @@ const SHARED_LAG_SIGMAS: f64 = 3.0;
 pub(super) fn name_stand_side(findings: &mut [Finding]) {
     // Over the band searched, where both were found: a block's size over its own usable band
     // (`super::usable_band`) is over a band the other block's need not share.
+    // Its `T`, shape and (second order) damping with their deviations, all from one band; a
+    // second order's damping without a deviation is not compared, and not called shared.
     let lag = |f: &Finding| {
         let (parameters, std) = f
             .search_band
@@ -439,7 +441,12 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
             });
         let t = parameters.get("T_s")?.as_f64()?;
         let sd = std.get("T_s")?.as_f64()?;
-        Some((t, sd))
+        let shape = parameters.get("shape").cloned();
+        let damping = match parameters.get("damping") {
+            Some(z) => Some((z.as_f64()?, std.get("damping")?.as_f64()?)),
+            None => None,
+        };
+        Some((t, sd, shape, damping))
     };
     let of = |findings: &[Finding], block: Block| {
         findings
@@ -449,24 +456,16 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
     let (Some(g), Some(a)) = (of(findings, Block::Gyro), of(findings, Block::Accel)) else {
         return;
     };
-    let (Some((tg, sg)), Some((ta, sa))) = (lag(&findings[g]), lag(&findings[a])) else {
+    let (Some((tg, sg, shape_g, damping_g)), Some((ta, sa, shape_a, damping_a))) =
+        (lag(&findings[g]), lag(&findings[a]))
+    else {
         return;
     };
-    if (tg - ta).abs() > SHARED_LAG_SIGMAS * sg.hypot(sa) {
+    // One lag: the same shape, `T` and a second order's damping within as many deviations.
+    if (tg - ta).abs() > SHARED_LAG_SIGMAS * sg.hypot(sa) || shape_g != shape_a {
         return;
     }
-    // One lag: the same shape, and a second order's damping within as many deviations.
-    let shape = |f: &Finding| f.parameters.get("shape").cloned();
-    if shape(&findings[g]) != shape(&findings[a]) {
-        return;
-    }
-    let damping = |f: &Finding| {
-        Some((
-            f.parameters.get("damping")?.as_f64()?,
-            f.parameter_std.get("damping")?.as_f64()?,
-        ))
-    };
-    if let (Some((zg, dg)), Some((za, da))) = (damping(&findings[g]), damping(&findings[a]))
+    if let (Some((zg, dg)), Some((za, da))) = (damping_g, damping_a)
         && (zg - za).abs() > SHARED_LAG_SIGMAS * dg.hypot(da)
     {
         return;

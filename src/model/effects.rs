@@ -3,7 +3,8 @@
 //! (`diagnose::extend`). A block model that carries them has `K`, `tau_s` and their standard
 //! deviations from that joint fit, `order` 0, and its response ([`super::BlockModel::response`])
 //! includes the effects that are filters:
-//! `H_ij(s) = e^(-(tau + skew_i) s) / (T s + 1) K_ij M_j(s) / H(s)`, `M_j` a mount resonance on
+//! `H_ij(s) = e^(-(tau + skew_i) s) L(s) K_ij M_j(s) / H(s)`, `L` the lag (`1 / (T s + 1)`, or
+//! `1 / ((T s)^2 + 2 zeta T s + 1)` with `lag_damping`), `M_j` a mount resonance on
 //! input axis `j`, `H` the stand's angle-measurement low-pass where `reference_band_limit` was
 //! accepted (the response is then the one against this stand's angles). The others
 //! (g-sensitivity, quadratic scale factor, lever-arm offset, tones, clock drift) are terms beside
@@ -28,7 +29,7 @@ use crate::effect::Effect;
 pub struct AcceptedEffect {
     /// The catalogue entry (its id in JSON).
     pub effect: Effect,
-    /// Readable name, e.g. "gyro first-order lag".
+    /// Readable name, e.g. "gyro low-pass lag".
     pub name: String,
     /// Its size, as the discrepancy report's `parameters`.
     pub parameters: Value,

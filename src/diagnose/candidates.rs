@@ -147,10 +147,15 @@ pub fn candidates_among(state: &State, band_hz: [f64; 2], wanted: &dyn Fn(Effect
             .min_by(|a, b| a.profile.cost.total_cmp(&b.profile.cost));
         out.extend(structural(Effect::SensorLag, state, best));
         s.lag = Some(LagShape::SecondOrder);
-        // Held at a bound of its damping it is not a low-pass of this form: set aside.
+        // Held at a bound of its damping it is not a low-pass of this form: set aside. Nor is
+        // one that takes more phase than the block's whole delay (a delay below 0 where the
+        // delay-only model's is not): a sensor's filter sits behind its own delay, which is not
+        // negative (the tapping recording with one channel moved 3 ms: a second-order lag of
+        // 7.7 ms at damping 0.62 and a delay of -6.3 ms for the recording's 4.2 ms).
+        let causal = |f: &Fitted| current.theta.tau_s < 0.0 || f.theta.tau_s >= 0.0;
         let second = second_order_start(state, &s)
             .and_then(|theta| run_fit(&s, &theta))
-            .filter(|f| !lag_damping_held(f.theta.lag_damping));
+            .filter(|f| !lag_damping_held(f.theta.lag_damping) && causal(f));
         out.extend(structural(Effect::SensorLag, state, second));
     }
     if wanted(Effect::ReferenceBandLimit) && s0.band_limit.is_none() {

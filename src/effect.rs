@@ -79,7 +79,7 @@ impl Effect {
     pub fn what(self) -> &'static str {
         match self {
             Effect::GSensitivity => "g-sensitivity",
-            Effect::SensorLag => "low-pass lag",
+            Effect::SensorLag => "first-order lag",
             Effect::AxisTimeSkew => "channel time skew",
             Effect::ScaleNonlinearity => "quadratic scale factor",
             Effect::VibrationTone => "vibration tone",

@@ -325,7 +325,10 @@ fn extend_block(
         .iter()
         .map(|&(effect, index)| AcceptedEffect {
             effect,
-            name: effect.name_on(pb.block),
+            name: match (effect, state.fitted.structure.lag) {
+                (Effect::SensorLag, Some(shape)) => shape.name_on(pb.block),
+                _ => effect.name_on(pb.block),
+            },
             parameters: parameters(effect, &state, index, input_names),
             parameter_std: parameter_std(effect, &state, index, cov.as_ref()),
         })

@@ -82,6 +82,19 @@ impl LagShape {
         (a + (a * a + 1.0).sqrt()).sqrt()
     }
 
+    /// The readable name of a lag of this shape on `block`, as an effect's (`Effect::name_on`):
+    /// "gyro first-order lag", "gyro second-order low-pass".
+    #[must_use]
+    pub fn name_on(self, block: crate::block::Block) -> String {
+        match self {
+            Self::FirstOrder => crate::effect::Effect::SensorLag.name_on(block),
+            Self::SecondOrder => {
+                let first = crate::effect::Effect::SensorLag.name_on(block);
+                first.replace("first-order lag", "second-order low-pass")
+            }
+        }
+    }
+
     /// The name used in reports (`"first_order"`, `"second_order"`).
     #[must_use]
     pub fn name(self) -> &'static str {

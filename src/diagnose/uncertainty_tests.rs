@@ -3,7 +3,7 @@ use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use super::{Covariance, TAPER_VARIANCE, band_limit_std, sandwich_widening, slots};
 use crate::diagnose::band_limit::BandLimitShape;
 use crate::diagnose::fit::pack;
-use crate::diagnose::structure::{Structure, Theta};
+use crate::diagnose::structure::{Structure, Theta, lag_damping_held};
 use crate::rng::Rng;
 
 /// Least squares on 800 groups (a design's count) weighted as if the noise were white;
@@ -168,7 +168,6 @@ fn each_nonlinear_slot_holds_its_own_parameter() {
     outside[slot.lag.expect("lag") + 1] = 0.1f64.ln();
     assert!(crate::diagnose::fit::unpack(&second, &outside, [0.1, 40.0]).is_none());
     // A damping held at a bound (within 2 %) is said so; a Butterworth's and a Bessel's are not.
-    use crate::diagnose::structure::lag_damping_held;
     assert!(lag_damping_held(0.5) && lag_damping_held(0.505) && lag_damping_held(3.95));
     assert!(!lag_damping_held(0.5f64.sqrt()) && !lag_damping_held(0.866) && !lag_damping_held(2.0));
 }

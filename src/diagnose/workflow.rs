@@ -295,7 +295,9 @@ fn diagnose_block(
         let finding = Finding {
             block: b.block,
             effect: best.effect,
-            name: best.effect.name_on(b.block),
+            name: best
+                .lag_shape()
+                .map_or_else(|| best.effect.name_on(b.block), |shape| shape.name_on(b.block)),
             // Filled from the final model: every finding's size is re-identified with the others.
             parameters: serde_json::Value::Null,
             parameter_std: serde_json::Value::Null,

@@ -29,7 +29,8 @@ use crate::effect::Effect;
 pub struct AcceptedEffect {
     /// The catalogue entry (its id in JSON).
     pub effect: Effect,
-    /// Readable name, e.g. "gyro low-pass lag".
+    /// Readable name, e.g. "gyro first-order lag" ("gyro second-order low-pass" for the lag's
+    /// second shape).
     pub name: String,
     /// Its size, as the discrepancy report's `parameters`.
     pub parameters: Value,

@@ -26,8 +26,8 @@ fn pm(sd: Option<f64>, scale: f64, decimals: usize) -> String {
 }
 
 /// A second-order lag's words: its -3 dB corner, natural frequency and damping (no frequencies
-/// at `T = 0`).
-fn second_order_words(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>, t: f64) -> String {
+/// at `T = 0`); the caller gives `T`.
+fn second_order_words(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>) -> String {
     let zeta = p.get("damping").and_then(num).unwrap_or(f64::NAN);
     let frequencies = match (
         p.get("corner_hz").and_then(num),
@@ -41,10 +41,8 @@ fn second_order_words(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>, t: f64) -> S
         _ => String::new(),
     };
     format!(
-        "second-order low-pass{frequencies}, damping {zeta:.3}{}, T = {:.3}{} ms",
-        pm(sd1("damping"), 1.0, 3),
-        t * 1e3,
-        pm(sd1("T_s"), 1e3, 3)
+        "second-order low-pass{frequencies}, damping {zeta:.3}{}",
+        pm(sd1("damping"), 1.0, 3)
     )
 }
 
@@ -126,7 +124,12 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
         }),
         Effect::SensorLag => p.get("T_s").and_then(num).map(|t| {
             if p.get("shape").and_then(Value::as_str) == Some("second_order") {
-                vec![second_order_words(p, &sd1, t)]
+                vec![format!(
+                    "{}, T = {:.3}{} ms",
+                    second_order_words(p, &sd1),
+                    t * 1e3,
+                    pm(sd1("T_s"), 1e3, 3)
+                )]
             } else {
                 vec![format!(
                     "first-order lag, time constant T = {:.3}{} ms",
@@ -137,7 +140,7 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
         }),
         Effect::ReferenceLag => p.get("T_s").and_then(num).map(|t| {
             let form = if p.get("shape").and_then(Value::as_str) == Some("second_order") {
-                format!(" ({})", second_order_words(p, &sd1, t))
+                format!(" ({})", second_order_words(p, &sd1))
             } else {
                 String::new()
             };
@@ -418,6 +421,33 @@ mod tests {
     fn sizes_read_with_units() {
         let f = finding(Block::Gyro, Effect::SensorLag, json!({"T_s": 0.004_02}));
         assert_eq!(describe(&f), vec!["first-order lag, time constant T = 4.020 ms"]);
+        // A second order: its corner, natural frequency and damping, `T` once; the shared
+        // lag's words carry the same in brackets; no frequencies at `T = 0`.
+        let second = json!({"T_s": 0.007_958, "damping": 0.7071, "natural_frequency_hz": 20.0,
+            "corner_hz": 20.0, "shape": "second_order"});
+        let f = finding(Block::Gyro, Effect::SensorLag, second.clone());
+        assert_eq!(
+            describe(&f),
+            vec![
+                "second-order low-pass, -3 dB at 20.00 Hz (natural frequency 20.00 Hz), damping 0.707, T = 7.958 ms"
+            ]
+        );
+        let f = finding(Block::Gyro, Effect::ReferenceLag, second);
+        let words = describe(&f).join(" ");
+        assert_eq!(words.matches("T = ").count(), 1, "{words}");
+        assert!(
+            words.contains("(second-order low-pass, -3 dB at 20.00 Hz"),
+            "{words}"
+        );
+        let f = finding(
+            Block::Gyro,
+            Effect::SensorLag,
+            json!({"T_s": 0.0, "damping": 0.7071, "shape": "second_order"}),
+        );
+        assert_eq!(
+            describe(&f),
+            vec!["second-order low-pass, damping 0.707, T = 0.000 ms"]
+        );
         let f = finding(
             Block::Accel,
             Effect::ClockDrift,

@@ -423,13 +423,13 @@ mod tests {
         assert_eq!(describe(&f), vec!["first-order lag, time constant T = 4.020 ms"]);
         // A second order: its corner, natural frequency and damping, `T` once; the shared
         // lag's words carry the same in brackets; no frequencies at `T = 0`.
-        let second = json!({"T_s": 0.007_958, "damping": 0.7071, "natural_frequency_hz": 20.0,
+        let second = json!({"T_s": 0.007_958, "damping": 0.72, "natural_frequency_hz": 20.0,
             "corner_hz": 20.0, "shape": "second_order"});
         let f = finding(Block::Gyro, Effect::SensorLag, second.clone());
         assert_eq!(
             describe(&f),
             vec![
-                "second-order low-pass, -3 dB at 20.00 Hz (natural frequency 20.00 Hz), damping 0.707, T = 7.958 ms"
+                "second-order low-pass, -3 dB at 20.00 Hz (natural frequency 20.00 Hz), damping 0.720, T = 7.958 ms"
             ]
         );
         let f = finding(Block::Gyro, Effect::ReferenceLag, second);
@@ -442,11 +442,11 @@ mod tests {
         let f = finding(
             Block::Gyro,
             Effect::SensorLag,
-            json!({"T_s": 0.0, "damping": 0.7071, "shape": "second_order"}),
+            json!({"T_s": 0.0, "damping": 0.72, "shape": "second_order"}),
         );
         assert_eq!(
             describe(&f),
-            vec!["second-order low-pass, damping 0.707, T = 0.000 ms"]
+            vec!["second-order low-pass, damping 0.720, T = 0.000 ms"]
         );
         let f = finding(
             Block::Accel,

@@ -63,8 +63,9 @@ fn lag_droop_time_s(parameters: &Value) -> Option<f64> {
         None => Some(t),
         Some(z) => {
             let zeta = z.as_f64()?;
+            // Rounding: a Butterworth's 1/sqrt(2) squared is 0.5 to within one unit.
             let square = 4.0 * zeta * zeta - 2.0;
-            (square > 0.0).then(|| t * square.sqrt())
+            (square > 1e-12).then(|| t * square.sqrt())
         }
     }
 }

@@ -46,10 +46,11 @@
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
+use super::FactorStageError::NonFiniteInput;
 use super::IdentError;
+use super::explained::InputEigen;
 use super::factorisation::{
-    Factorisation, FactorisationSettings, factor_error, floored_inverse, input_floor, loaded_two_sided,
-    max_trace,
+    Factorisation, FactorisationSettings, factor_error, input_floor, loaded_two_sided, max_trace,
 };
 use super::spectra::BlockSpectra;
 use crate::spectral::causal::CausalProjector;
@@ -117,11 +118,14 @@ pub fn causal_stage(
         .iter()
         .zip(&s_uu_two)
         .zip(&d_u_inv)
-        .map(|((s, suu), di)| {
-            let h = s * floored_inverse(suu, floor * 0.5).0;
-            (s + h * Complex64::from(eps)) * di.adjoint()
+        .enumerate()
+        .map(|(bin, ((s, suu), di))| {
+            let eig =
+                InputEigen::new(suu, floor * 0.5).ok_or_else(|| factor_error(NonFiniteInput { bin }))?;
+            let h = s * eig.inverse();
+            Ok((s + h * Complex64::from(eps)) * di.adjoint())
         })
-        .collect();
+        .collect::<Result<_, IdentError>>()?;
     let mut projector = CausalProjector::new(g.len()).map_err(factor_error)?;
     // The refined grid has the same lag spacing (one sample), only more lags: the allowance in
     // samples is unchanged.

@@ -17,12 +17,102 @@
 //! value that is not finite. The residual's diagonal is never below [`RESOLUTION`] of `S_xx`'s:
 //! below that it is rounding, and the row weights `n_eq S_uu / S_psi,ii` divide by it.
 
-use nalgebra::{Matrix3, SymmetricEigen};
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use num_complex::Complex64;
 
 /// The residual's diagonal is not resolved below this fraction of the output's own power: a few
 /// hundred roundings of `S_xx,ii` (the Welch sums' and this subtraction's).
 pub const RESOLUTION: f64 = 256.0 * f64::EPSILON;
+
+/// `S_uu`'s eigen decomposition at one bin, its eigenvalues floored: the one decomposition its
+/// inverse, the explained part and the residual are all taken from.
+#[derive(Debug, Clone)]
+pub struct InputEigen {
+    vectors: Matrix3<Complex64>,
+    values: Vector3<f64>,
+    floored: bool,
+}
+
+impl InputEigen {
+    /// The decomposition of `S_uu` (made Hermitian) with its eigenvalues floored at `floor`;
+    /// `None` when not finite, or when an eigenvalue is not positive after the floor (a singular
+    /// `S_uu` with `floor` 0).
+    #[must_use]
+    pub fn new(s_uu: &Matrix3<Complex64>, floor: f64) -> Option<Self> {
+        if !finite(s_uu) {
+            return None;
+        }
+        let eig = SymmetricEigen::new((s_uu + s_uu.adjoint()) * Complex64::from(0.5));
+        let mut floored = false;
+        let mut values = eig.eigenvalues;
+        for lambda in values.iter_mut() {
+            if !lambda.is_finite() {
+                return None;
+            }
+            if *lambda < floor {
+                floored = true;
+                *lambda = floor;
+            }
+            if *lambda <= 0.0 {
+                return None;
+            }
+        }
+        Some(Self {
+            vectors: eig.eigenvectors,
+            values,
+            floored,
+        })
+    }
+
+    /// Whether the floor was needed.
+    #[must_use]
+    pub fn floored(&self) -> bool {
+        self.floored
+    }
+
+    /// The (floored) inverse `S_uu^-1`.
+    #[must_use]
+    pub fn inverse(&self) -> Matrix3<Complex64> {
+        let inv = self.values.map(|l| Complex64::from(1.0 / l));
+        self.vectors * Matrix3::from_diagonal(&inv) * self.vectors.adjoint()
+    }
+
+    /// `S_xu S_uu^-1 S_ux` (exactly Hermitian); `None` when not finite.
+    #[must_use]
+    pub fn explained(&self, s_xu: &Matrix3<Complex64>) -> Option<Matrix3<Complex64>> {
+        if !finite(s_xu) {
+            return None;
+        }
+        let mut sum = Matrix3::<Complex64>::zeros();
+        for k in 0..3 {
+            let b = s_xu * self.vectors.column(k);
+            sum += b * b.adjoint() / Complex64::from(self.values[k]);
+        }
+        let sum = (sum + sum.adjoint()) * Complex64::from(0.5);
+        finite(&sum).then_some(sum)
+    }
+
+    /// `S_psi = S_xx - S_xu S_uu^-1 S_ux` (exactly Hermitian, its diagonal at least
+    /// [`RESOLUTION`] of `S_xx`'s); `None` when not finite.
+    #[must_use]
+    pub fn residual(
+        &self,
+        s_xx: &Matrix3<Complex64>,
+        s_xu: &Matrix3<Complex64>,
+    ) -> Option<Matrix3<Complex64>> {
+        let r = s_xx - self.explained(s_xu)?;
+        let mut r = (r + r.adjoint()) * Complex64::from(0.5);
+        for i in 0..3 {
+            let least = RESOLUTION * s_xx[(i, i)].re.abs();
+            r[(i, i)] = Complex64::from(r[(i, i)].re.max(least));
+        }
+        finite(&r).then_some(r)
+    }
+}
+
+fn finite(m: &Matrix3<Complex64>) -> bool {
+    m.iter().all(|z| z.re.is_finite() && z.im.is_finite())
+}
 
 /// `S_xu S_uu^-1 S_ux` (exactly Hermitian) with `S_uu`'s eigenvalues floored at `floor`, and
 /// whether the floor was needed; `None` when not finite, or singular with `floor` 0.
@@ -32,31 +122,8 @@ pub fn explained(
     s_xu: &Matrix3<Complex64>,
     floor: f64,
 ) -> Option<(Matrix3<Complex64>, bool)> {
-    let finite = |m: &Matrix3<Complex64>| m.iter().all(|z| z.re.is_finite() && z.im.is_finite());
-    if !(finite(s_uu) && finite(s_xu)) {
-        return None;
-    }
-    let h = (s_uu + s_uu.adjoint()) * Complex64::from(0.5);
-    let eig = SymmetricEigen::new(h);
-    let mut floored = false;
-    let mut sum = Matrix3::<Complex64>::zeros();
-    for k in 0..3 {
-        let mut lambda = eig.eigenvalues[k];
-        if !lambda.is_finite() {
-            return None;
-        }
-        if lambda < floor {
-            floored = true;
-            lambda = floor;
-        }
-        if lambda <= 0.0 {
-            return None;
-        }
-        let b = s_xu * eig.eigenvectors.column(k);
-        sum += b * b.adjoint() / Complex64::from(lambda);
-    }
-    let sum = (sum + sum.adjoint()) * Complex64::from(0.5);
-    finite(&sum).then_some((sum, floored))
+    let eig = InputEigen::new(s_uu, floor)?;
+    Some((eig.explained(s_xu)?, eig.floored()))
 }
 
 /// `S_psi = S_xx - S_xu S_uu^-1 S_ux` (exactly Hermitian, its diagonal at least [`RESOLUTION`]
@@ -68,14 +135,7 @@ pub fn residual(
     s_xu: &Matrix3<Complex64>,
     floor: f64,
 ) -> Option<Matrix3<Complex64>> {
-    let (explained, _) = explained(s_uu, s_xu, floor)?;
-    let r = s_xx - explained;
-    let mut r = (r + r.adjoint()) * Complex64::from(0.5);
-    for i in 0..3 {
-        let least = RESOLUTION * s_xx[(i, i)].re.abs();
-        r[(i, i)] = Complex64::from(r[(i, i)].re.max(least));
-    }
-    Some(r)
+    InputEigen::new(s_uu, floor)?.residual(s_xx, s_xu)
 }
 
 #[cfg(test)]

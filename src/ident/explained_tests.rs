@@ -1,7 +1,7 @@
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use num_complex::Complex64;
 
-use super::{RESOLUTION, explained, residual};
+use super::{InputEigen, RESOLUTION, explained, residual};
 use crate::rng::Rng;
 
 fn complex_matrix(rng: &mut Rng) -> Matrix3<Complex64> {
@@ -94,8 +94,12 @@ fn the_floor_is_said_and_singular_or_non_finite_inputs_are_refused() {
     let (with_floor, floored) = explained(&s_uu, &s_xu, 1e-6).unwrap();
     assert!(floored);
     // The floor's eigenvalue stands in: the same as inverting with the floor explicitly.
-    let (inv, _) = super::super::factorisation::floored_inverse(&s_uu, 1e-6);
+    let eig = SymmetricEigen::new(s_uu);
+    let floored = eig.eigenvalues.map(|l| Complex64::from(l.max(1e-6)));
+    let inv =
+        eig.eigenvectors * Matrix3::from_diagonal(&floored.map(|l| 1.0 / l)) * eig.eigenvectors.adjoint();
     let naive = s_xu * inv * s_xu.adjoint();
+    assert!((InputEigen::new(&s_uu, 1e-6).unwrap().inverse() - inv).norm() < 1e-9 * inv.norm());
     assert!((with_floor - naive).norm() < 1e-9 * naive.norm());
     let singular = input_spectrum(&mut rng, [1.0, 0.0, 1.0]);
     let exact_zero = Matrix3::from_diagonal(&Vector3::new(1.0, 0.0, 1.0).map(Complex64::from));
@@ -107,4 +111,28 @@ fn the_floor_is_said_and_singular_or_non_finite_inputs_are_refused() {
     let mut nan_xu = s_xu;
     nan_xu[(1, 2)] = Complex64::new(0.0, f64::INFINITY);
     assert!(residual(&s_uu, &s_uu, &nan_xu, 1e-9).is_none());
+}
+
+#[test]
+fn one_decomposition_gives_the_inverse_and_the_residual() {
+    let mut rng = Rng::new(75);
+    let (s_uu, s_xu, s_xx) = spectra(&mut rng, [2.0, 0.5, 0.1], 0.3);
+    let eig = InputEigen::new(&s_uu, 0.0).unwrap();
+    assert!(!eig.floored());
+    // Against nalgebra's LU inverse on a well-conditioned S_uu.
+    let lu = s_uu.try_inverse().unwrap();
+    assert!(
+        (eig.inverse() - lu).norm() < 1e-12 * lu.norm(),
+        "{}",
+        eig.inverse() - lu
+    );
+    // The residual through the explicit inverse agrees where S_uu is well-conditioned.
+    let naive = s_xx - s_xu * lu * s_xu.adjoint();
+    let r = eig.residual(&s_xx, &s_xu).unwrap();
+    assert!((r - naive).norm() < 1e-12 * s_xx.norm(), "{}", r - naive);
+    assert_eq!(residual(&s_xx, &s_uu, &s_xu, 0.0), Some(r));
+    // A non-finite output spectrum is refused, not carried.
+    let mut bad = s_xx;
+    bad[(2, 2)] = Complex64::new(f64::NAN, 0.0);
+    assert!(eig.residual(&bad, &s_xu).is_none());
 }

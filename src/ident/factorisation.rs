@@ -18,13 +18,13 @@
 
 use std::sync::Arc;
 
-use nalgebra::{Matrix3, SymmetricEigen};
+use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::FactorStageError::NonFiniteResidual;
 use super::causal_stage::{CausalStage, causal_stage};
-use super::explained::residual;
+use super::explained::InputEigen;
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::{FactorStageError, IdentError};
@@ -184,29 +184,25 @@ pub fn factorise_from(
     estimate: Estimate,
 ) -> Result<Factorisation, IdentError> {
     let floor = input_floor(&spectra.s_uu);
+    // One decomposition of S_uu per bin gives its inverse and, along its eigenvectors (resolved
+    // where S_uu is ill-conditioned, unlike `h1 S_ux`), the residual.
     let mut floored_input_bins = 0;
-    let s_uu_inv: Vec<Matrix3<Complex64>> = spectra
-        .s_uu
-        .iter()
-        .map(|s| {
-            let (inv, floored) = floored_inverse(s, floor);
-            floored_input_bins += usize::from(floored);
-            inv
-        })
-        .collect();
+    let mut s_uu_inv = Vec::with_capacity(spectra.s_uu.len());
+    let mut noise_psd = Vec::with_capacity(spectra.s_uu.len());
+    for (k, s) in spectra.s_uu.iter().enumerate() {
+        let residual = InputEigen::new(s, floor).and_then(|eig| {
+            floored_input_bins += usize::from(eig.floored());
+            s_uu_inv.push(eig.inverse());
+            eig.residual(&spectra.s_xx[k], &spectra.s_xu[k])
+        });
+        noise_psd.push(residual.ok_or_else(|| factor_error(NonFiniteResidual { bin: k }))?);
+    }
     let h1: Vec<Matrix3<Complex64>> = spectra
         .s_xu
         .iter()
         .zip(&s_uu_inv)
         .map(|(sxu, inv)| sxu * inv)
         .collect();
-    // Along S_uu's eigenvectors, not through `h1`: resolved where S_uu is ill-conditioned.
-    let noise_psd: Vec<Matrix3<Complex64>> = (0..h1.len())
-        .map(|k| {
-            residual(&spectra.s_xx[k], &spectra.s_uu[k], &spectra.s_xu[k], floor)
-                .ok_or_else(|| factor_error(NonFiniteResidual { bin: k }))
-        })
-        .collect::<Result<_, _>>()?;
 
     // The disturbance's factorisation and the causal stage (the input's) are independent: one per
     // core when both are computed.
@@ -328,22 +324,4 @@ pub(super) fn loaded_two_sided(
         *s += load;
     }
     Ok(two)
-}
-
-/// Inverse of a Hermitian PSD matrix with eigenvalues floored at `floor`; says whether the floor
-/// was needed.
-pub(super) fn floored_inverse(s: &Matrix3<Complex64>, floor: f64) -> (Matrix3<Complex64>, bool) {
-    let h = (s + s.adjoint()) * Complex64::from(0.5);
-    let eig = SymmetricEigen::new(h);
-    let mut floored = false;
-    let inv_diag = eig.eigenvalues.map(|l| {
-        if l < floor {
-            floored = true;
-        }
-        Complex64::from(1.0 / l.max(floor))
-    });
-    (
-        eig.eigenvectors * Matrix3::from_diagonal(&inv_diag) * eig.eigenvectors.adjoint(),
-        floored,
-    )
 }

@@ -164,6 +164,12 @@ pub enum FactorStageError {
         /// The bin, on the one-sided grid.
         bin: usize,
     },
+    /// The input spectrum is not finite at a bin of the causal stage's finer two-sided grid.
+    #[error("the input spectrum is not finite at bin {bin} of the causal stage's grid")]
+    NonFiniteInput {
+        /// The bin, on the finer two-sided grid.
+        bin: usize,
+    },
 }
 
 /// The end of a refusal's advice: `, {alternative}, or leave this block out (settings "blocks")`

@@ -453,9 +453,9 @@ pub(super) fn h1_estimate(s: &StretchSpectra, native: &[usize], step: usize) -> 
     for &k in native {
         let b = k / step;
         let s_uu = (s.s_uu.get(b)? + s.s_uu.get(b)?.adjoint()) * Complex64::from(0.5);
-        let w = s.s_xu[b] * s_uu.try_inverse()?;
-        let residual = super::explained::residual(&s.s_xx[b], &s_uu, &s.s_xu[b], 0.0)?;
-        response.push(w);
+        let eig = super::explained::InputEigen::new(&s_uu, 0.0)?;
+        let residual = eig.residual(&s.s_xx[b], &s.s_xu[b])?;
+        response.push(s.s_xu[b] * eig.inverse());
         weights.push(super::identify::row_weights(&s_uu, &residual, dof));
     }
     Some((response, weights))

@@ -31,6 +31,15 @@ impl Block {
         }
     }
 
+    /// The block in the lab's words, as readable names begin ("gyro", "accelerometer").
+    #[must_use]
+    pub fn word(self) -> &'static str {
+        match self {
+            Block::Gyro => "gyro",
+            Block::Accel => "accelerometer",
+        }
+    }
+
     /// The block whose contract name is `name`.
     #[must_use]
     pub fn from_name(name: &str) -> Option<Self> {

@@ -94,11 +94,7 @@ impl Effect {
     /// The readable name on a block, e.g. "gyro g-sensitivity".
     #[must_use]
     pub fn name_on(self, block: Block) -> String {
-        let b = match block {
-            Block::Gyro => "gyro",
-            Block::Accel => "accelerometer",
-        };
-        format!("{b} {}", self.what())
+        format!("{} {}", block.word(), self.what())
     }
 
     /// The blocks the effect can apply to.
@@ -199,5 +195,14 @@ mod tests {
         );
         assert_eq!(Effect::LeverArmError.blocks(), &[Block::Accel]);
         assert_eq!(Effect::ClockDrift.blocks(), &Block::BOTH);
+        // A sensor lag's two shapes: the first order's name is the effect's.
+        assert_eq!(
+            crate::diagnose::structure::LagShape::FirstOrder.name_on(Block::Gyro),
+            Effect::SensorLag.name_on(Block::Gyro)
+        );
+        assert_eq!(
+            crate::diagnose::structure::LagShape::SecondOrder.name_on(Block::Accel),
+            "accelerometer second-order low-pass"
+        );
     }
 }

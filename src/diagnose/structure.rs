@@ -82,17 +82,21 @@ impl LagShape {
         (a + (a * a + 1.0).sqrt()).sqrt()
     }
 
+    /// What a lag of this shape is, in the lab's words: the first order's is
+    /// [`Effect::SensorLag`](crate::effect::Effect::SensorLag)'s.
+    #[must_use]
+    pub fn what(self) -> &'static str {
+        match self {
+            Self::FirstOrder => crate::effect::Effect::SensorLag.what(),
+            Self::SecondOrder => "second-order low-pass",
+        }
+    }
+
     /// The readable name of a lag of this shape on `block`, as an effect's (`Effect::name_on`):
     /// "gyro first-order lag", "gyro second-order low-pass".
     #[must_use]
     pub fn name_on(self, block: crate::block::Block) -> String {
-        match self {
-            Self::FirstOrder => crate::effect::Effect::SensorLag.name_on(block),
-            Self::SecondOrder => {
-                let first = crate::effect::Effect::SensorLag.name_on(block);
-                first.replace("first-order lag", "second-order low-pass")
-            }
-        }
+        format!("{} {}", block.word(), self.what())
     }
 
     /// The name used in reports (`"first_order"`, `"second_order"`).

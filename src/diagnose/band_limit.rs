@@ -31,7 +31,7 @@
 
 use super::candidates::{Candidate, structural};
 use super::design::WINDOW_ENBW;
-use super::fit::{cost_at, fit};
+use super::fit::{cheapest, cost_at, fit};
 use super::state::State;
 use crate::effect::Effect;
 pub use crate::model::band_limit::BandLimitShape;
@@ -55,16 +55,13 @@ pub(super) fn band_limit_candidates(state: &State, band_hz: [f64; 2]) -> Vec<Can
         .filter_map(|shape| {
             let mut s = current.structure.clone();
             s.band_limit = Some(shape);
-            let start = START_RISES
-                .into_iter()
-                .map(|rise| {
-                    let mut theta = current.theta.clone();
-                    theta.band_limit_t_s = shape.t_for_rise(rise, top);
-                    theta.tau_s += shape.group_delay_s(theta.band_limit_t_s);
-                    (cost_at(&state.design, &state.grams, &s, &theta), theta)
-                })
-                .min_by(|a, b| a.0.total_cmp(&b.0))?
-                .1;
+            let starts = START_RISES.into_iter().map(|rise| {
+                let mut theta = current.theta.clone();
+                theta.band_limit_t_s = shape.t_for_rise(rise, top);
+                theta.tau_s += shape.group_delay_s(theta.band_limit_t_s);
+                theta
+            });
+            let start = cheapest(&state.design, &state.grams, &s, starts)?;
             structural(
                 Effect::ReferenceBandLimit,
                 state,

@@ -6,7 +6,7 @@
 use std::f64::consts::PI;
 
 use super::design::Design;
-use super::fit::{Fitted, cost_at, fit};
+use super::fit::{Fitted, cheapest, fit};
 use super::state::State;
 use super::structure::{LagShape, Structure, lag_damping_held};
 use super::tone::{TONE_PARAMETERS, Tone, strongest_line};
@@ -224,20 +224,17 @@ const LAG_STARTS_S: [f64; 4] = [0.5e-3, 2e-3, 6e-3, 15e-3];
 /// constant ([`LAG_STARTS_S`] and the points between) and damping (from a resonant to an
 /// overdamped section); its low-frequency phase lag `2 zeta T` taken out of the start's delay.
 fn second_order_start(state: &State, structure: &Structure) -> Option<super::structure::Theta> {
-    let mut best: Option<(f64, super::structure::Theta)> = None;
-    for t in [0.5e-3, 1e-3, 2e-3, 4e-3, 6e-3, 10e-3, 15e-3] {
-        for zeta in [0.6, 0.8, 1.1, 1.8] {
+    let grid = [0.5e-3, 1e-3, 2e-3, 4e-3, 6e-3, 10e-3, 15e-3]
+        .into_iter()
+        .flat_map(|t| [0.6, 0.8, 1.1, 1.8].map(|zeta| (t, zeta)))
+        .map(|(t, zeta)| {
             let mut theta = state.fitted.theta.clone();
             theta.lag_s = t;
             theta.lag_damping = zeta;
             theta.tau_s = lag_start_delay(theta.tau_s, 2.0 * zeta * t);
-            let c = cost_at(&state.design, &state.grams, structure, &theta);
-            if c.is_finite() && best.as_ref().is_none_or(|(b, _)| c < *b) {
-                best = Some((c, theta));
-            }
-        }
-    }
-    best.map(|(_, t)| t)
+            theta
+        });
+    cheapest(&state.design, &state.grams, structure, grid)
 }
 
 /// The best point of a grid over a new resonance's frequency (log-spaced inside the band, from
@@ -252,19 +249,15 @@ fn resonance_start(
         return None;
     }
     let n: u32 = 48;
-    let mut best: Option<(f64, super::structure::Theta)> = None;
-    for m in 0..n {
-        let f = lo * (hi / lo).powf(f64::from(m) / f64::from(n - 1));
-        for zeta in [0.03, 0.1, 0.3, 0.7] {
+    let grid = (0..n)
+        .map(|m| lo * (hi / lo).powf(f64::from(m) / f64::from(n - 1)))
+        .flat_map(|f| [0.03, 0.1, 0.3, 0.7].map(|zeta| (f, zeta)))
+        .map(|(f, zeta)| {
             let mut theta = state.fitted.theta.clone();
             theta.resonances.push((f, zeta));
             // A resonance adds phase lag 2 zeta f / f_r below f_r: start tau without it.
             theta.tau_s = lag_start_delay(theta.tau_s, zeta / (PI * f));
-            let c = cost_at(&state.design, &state.grams, structure, &theta);
-            if best.as_ref().is_none_or(|(b, _)| c < *b) {
-                best = Some((c, theta));
-            }
-        }
-    }
-    best.map(|(_, t)| t)
+            theta
+        });
+    cheapest(&state.design, &state.grams, structure, grid)
 }

@@ -164,3 +164,20 @@ pub fn fit(
 pub fn cost_at(design: &Design, grams: &[DMatrix<Complex64>], structure: &Structure, theta: &Theta) -> f64 {
     project(design, grams, structure, &structure.layout(), theta).map_or(f64::INFINITY, |p| p.cost)
 }
+
+/// The point of `points` with the least [`cost_at`] (the first of equals; points whose cost is not
+/// finite are passed over): a search's start from a grid. `None` when no cost is finite.
+#[must_use]
+pub fn cheapest(
+    design: &Design,
+    grams: &[DMatrix<Complex64>],
+    structure: &Structure,
+    points: impl IntoIterator<Item = Theta>,
+) -> Option<Theta> {
+    points
+        .into_iter()
+        .map(|theta| (cost_at(design, grams, structure, &theta), theta))
+        .filter(|(c, _)| c.is_finite())
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, theta)| theta)
+}

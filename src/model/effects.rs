@@ -38,8 +38,10 @@ pub struct AcceptedEffect {
     pub parameter_std: Value,
 }
 
-/// A mount resonance in the response.
+/// A mount resonance in the response. Read from a model file only with an axis 0 to 2, and a
+/// natural frequency and damping that are finite and positive.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawResonance")]
 pub struct Resonance {
     /// Input axis (0, 1, 2).
     pub axis: usize,
@@ -47,6 +49,64 @@ pub struct Resonance {
     pub frequency_hz: f64,
     /// Damping ratio.
     pub damping: f64,
+}
+
+/// [`Resonance`] as read, before its check.
+#[derive(Deserialize)]
+struct RawResonance {
+    axis: usize,
+    frequency_hz: f64,
+    damping: f64,
+}
+
+impl TryFrom<RawResonance> for Resonance {
+    type Error = String;
+
+    fn try_from(raw: RawResonance) -> Result<Self, String> {
+        if raw.axis > 2 {
+            return Err(format!("a resonance's axis must be 0, 1 or 2: {}", raw.axis));
+        }
+        if !(raw.frequency_hz.is_finite() && raw.frequency_hz > 0.0) {
+            return Err(format!(
+                "a resonance's frequency_hz must be finite and positive: {}",
+                raw.frequency_hz
+            ));
+        }
+        if !(raw.damping.is_finite() && raw.damping > 0.0) {
+            return Err(format!(
+                "a resonance's damping must be finite and positive: {}",
+                raw.damping
+            ));
+        }
+        Ok(Self {
+            axis: raw.axis,
+            frequency_hz: raw.frequency_hz,
+            damping: raw.damping,
+        })
+    }
+}
+
+/// A lag's time constant as read: finite and not negative.
+fn lag_time<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    let t = Option::<f64>::deserialize(d)?;
+    match t {
+        Some(t) if !(t.is_finite() && t >= 0.0) => Err(serde::de::Error::custom(format!(
+            "a lag's time constant lag_s must be finite and not negative: {t}"
+        ))),
+        _ => Ok(t),
+    }
+}
+
+/// A second-order lag's damping as read: finite and positive (zero or less is not a low-pass:
+/// an undamped or growing oscillation).
+fn lag_damping<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    let zeta = Option::<f64>::deserialize(d)?;
+    match zeta {
+        Some(z) if !(z.is_finite() && z > 0.0) => Err(serde::de::Error::custom(format!(
+            "a second-order lag's damping lag_damping must be finite and positive: {z}"
+        ))),
+        _ => Ok(zeta),
+    }
 }
 
 impl Resonance {
@@ -116,12 +176,22 @@ pub struct ModelEffects {
     /// Effects asked for that could not be added, each with the reason in words.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub not_added: Vec<NotAdded>,
-    /// The lag's time constant `T`, s (absent: no lag): `1 / (T s + 1)`, or with
+    /// The lag's time constant `T`, s (absent: no lag; read only finite and not negative):
+    /// `1 / (T s + 1)`, or with
     /// [`Self::lag_damping`] `1 / ((T s)^2 + 2 zeta T s + 1)`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "lag_time"
+    )]
     pub lag_s: Option<f64>,
-    /// A second-order lag's damping `zeta` (absent: the lag, if any, is first order).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// A second-order lag's damping `zeta` (absent: the lag, if any, is first order; read only
+    /// finite and positive).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "lag_damping"
+    )]
     pub lag_damping: Option<f64>,
     /// Per-channel delays relative to `tau_s`, s (absent: no skew).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -213,5 +283,52 @@ impl ModelEffects {
             poles.push([re, -im]);
         }
         poles
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The effects' JSON with `lag` spliced in among their fields.
+    fn effects_json(lag: &str) -> String {
+        format!(
+            r#"{{"accepted": [], {lag} "identified": {{"K": [[1,0,0],[0,1,0],[0,0,1]], "tau_s": 0.004,
+            "order": 0}}, "band_hz": [0.5, 40], "chi2_per_dof": [1, 1], "gap_db": [[0,0,0],[0,0,0]]}}"#
+        )
+    }
+
+    #[test]
+    fn sizes_that_are_no_filter_are_refused_when_read() {
+        let good = r#""lag_s": 0.002, "lag_damping": 0.7, "channel_skew_s": [0, 1e-4, -1e-4],
+            "resonances": [{"axis": 2, "frequency_hz": 30, "damping": 0.05}],"#;
+        let e: ModelEffects = serde_json::from_str(&effects_json(good)).expect("read");
+        assert_eq!((e.lag_s, e.lag_damping), (Some(0.002), Some(0.7)));
+        assert_eq!(e.resonances[0].axis, 2);
+        // Absent fields stay absent.
+        let e: ModelEffects = serde_json::from_str(&effects_json("")).expect("read");
+        assert_eq!((e.lag_s, e.lag_damping, e.channel_skew_s), (None, None, None));
+        for (bad, said) in [
+            (r#""lag_s": -0.002,"#, "lag_s"),
+            (r#""lag_s": 0.002, "lag_damping": 0,"#, "lag_damping"),
+            (r#""lag_s": 0.002, "lag_damping": -0.5,"#, "lag_damping"),
+            (
+                r#""resonances": [{"axis": 3, "frequency_hz": 30, "damping": 0.05}],"#,
+                "axis",
+            ),
+            (
+                r#""resonances": [{"axis": 0, "frequency_hz": 0, "damping": 0.05}],"#,
+                "frequency_hz",
+            ),
+            (
+                r#""resonances": [{"axis": 0, "frequency_hz": 30, "damping": -0.05}],"#,
+                "damping",
+            ),
+        ] {
+            let error = serde_json::from_str::<ModelEffects>(&effects_json(bad))
+                .expect_err(bad)
+                .to_string();
+            assert!(error.contains(said), "{bad}: {error}");
+        }
     }
 }

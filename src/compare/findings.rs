@@ -6,9 +6,12 @@
 //! (a quadratic scale factor needs high rates), so absence alone is not a disagreement.
 //!
 //! Findings of the same block and effect are paired in the order the diagnosis named them.
-//! Their sizes are compared figure by figure: every number of a finding's `parameters` that has
-//! a standard deviation entry (a number or `null`) in its `parameter_std`, named by its key and
-//! index (`k2[2]`, `G[0][1]`). A difference is significant as in [`super::Delta`]: beyond
+//! Their sizes are compared figure by figure: every number under the effect's size keys
+//! (`describe::size_keys`; all keys for effects located rather than sized) of a finding's
+//! `parameters` that has a standard deviation entry (a number or `null`) in its `parameter_std`,
+//! named by its key and index (`k2[2]`, `G[0][1]`), and a second-order lag's damping
+//! ([`shape_figures`]). Findings of other shapes (a band limit's, a lag's) are not compared by
+//! their time constants, which are other figures in each. A difference is significant as in [`super::Delta`]: beyond
 //! [`super::SIGNIFICANCE_SIGMAS`] combined standard deviations; `None` where one is unknown.
 
 use serde::{Deserialize, Serialize};
@@ -17,6 +20,7 @@ use serde_json::Value;
 use super::{Delta, SIGNIFICANCE_SIGMAS};
 use crate::block::Block;
 use crate::diagnose::Finding;
+use crate::diagnose::structure::LagShape;
 use crate::effect::Effect;
 use crate::model::band_limit::BandLimitShape;
 
@@ -113,13 +117,45 @@ pub fn figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
     out
 }
 
+/// A finding's figures of its shape where the shape has them: a second-order lag's damping
+/// (`(name, value, std)` as [`figures`]'). Not a size (a damping is never near zero, and
+/// `describe::size_within_noise` judges sizes only), but one property of the unit: two runs'
+/// second-order lags are the same filter only with the same damping.
+#[must_use]
+pub fn shape_figures(f: &Finding) -> Vec<(String, f64, Option<f64>)> {
+    let lag = matches!(f.effect, Effect::SensorLag | Effect::ReferenceLag);
+    if !(lag && LagShape::of_parameters(&f.parameters) == LagShape::SecondOrder) {
+        return Vec::new();
+    }
+    let Some(zeta) = f.parameters.get("damping").and_then(Value::as_f64) else {
+        return Vec::new();
+    };
+    let sd = f.parameter_std.get("damping").and_then(Value::as_f64);
+    vec![(
+        "damping".to_owned(),
+        zeta,
+        sd.filter(|s| s.is_finite() && *s > 0.0),
+    )]
+}
+
 /// Compares two findings of the same block and effect (or one finding's sizes on two stretches
 /// of a record: `diagnose::halves`), figure by figure.
 #[must_use]
 pub fn sizes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
-    let fb = figures(b);
-    figures(a)
-        .into_iter()
+    paired(figures(a), &figures(b))
+}
+
+/// Two runs' findings of the same block and effect compared: their sizes and their shapes'
+/// figures ([`shape_figures`]).
+fn sizes_and_shapes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
+    let mut out = sizes(a, b);
+    out.extend(paired(shape_figures(a), &shape_figures(b)));
+    out
+}
+
+/// The figures of `fa` paired by name with `fb`'s.
+fn paired(fa: Vec<(String, f64, Option<f64>)>, fb: &[(String, f64, Option<f64>)]) -> Vec<SizeDelta> {
+    fa.into_iter()
         .filter_map(|(name, va, sa)| {
             let (_, vb, sb) = fb.iter().find(|(n, _, _)| *n == name)?;
             Some(SizeDelta {
@@ -183,26 +219,38 @@ fn over_like_bands(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
         g
     };
     match (a.search_band.is_some(), b.search_band.is_some()) {
-        (true, false) => sizes(&searched(a), b),
-        (false, true) => sizes(a, &searched(b)),
-        _ => sizes(a, b),
+        (true, false) => sizes_and_shapes(&searched(a), b),
+        (false, true) => sizes_and_shapes(a, &searched(b)),
+        _ => sizes_and_shapes(a, b),
     }
 }
 
-/// Two band limits' shapes (`shape` and `order`) where they differ, in words: a time constant
-/// `T` is another figure in each shape (an interpolated reference's is its sample period, about
-/// `sqrt 6` times an order-1 shape's of the same rise; two Butterworth orders fitted to one
-/// stand's limit put their corners elsewhere), so their sizes are not compared. A report written
-/// before findings named their shape has `causal` and `order` only: `causal2` or `zero_phase`.
-fn band_limit_shapes_differ(a: &Finding, b: &Finding) -> Option<String> {
-    if a.effect != Effect::ReferenceBandLimit {
-        return None;
+/// Two findings' shapes where they differ, in words: a time constant `T` is another figure in
+/// each shape, so their sizes are not compared. Band limits by `shape` and `order` (an
+/// interpolated reference's `T` is its sample period, about `sqrt 6` times an order-1 shape's of
+/// the same rise; two Butterworth orders fitted to one stand's limit put their corners
+/// elsewhere; a report written before findings named their shape has `causal` and `order` only:
+/// `causal2` or `zero_phase`). Lags by [`LagShape`] (a second order's `T` is `1 / w_n`, its
+/// corner elsewhere by the damping).
+fn shapes_differ(a: &Finding, b: &Finding) -> Option<String> {
+    match a.effect {
+        Effect::ReferenceBandLimit => {
+            let shape = |f: &Finding| BandLimitShape::from_parameters(&f.parameters);
+            let label = |s: Option<BandLimitShape>| {
+                s.map_or_else(|| "an unnamed shape".to_owned(), BandLimitShape::label)
+            };
+            let (sa, sb) = (shape(a), shape(b));
+            (sa != sb).then(|| format!("{} against {}", label(sa), label(sb)))
+        }
+        Effect::SensorLag | Effect::ReferenceLag => {
+            let (sa, sb) = (
+                LagShape::of_parameters(&a.parameters),
+                LagShape::of_parameters(&b.parameters),
+            );
+            (sa != sb).then(|| format!("{} against {}", sa.what(), sb.what()))
+        }
+        _ => None,
     }
-    let shape = |f: &Finding| BandLimitShape::from_parameters(&f.parameters);
-    let label =
-        |s: Option<BandLimitShape>| s.map_or_else(|| "an unnamed shape".to_owned(), BandLimitShape::label);
-    let (sa, sb) = (shape(a), shape(b));
-    (sa != sb).then(|| format!("{} against {}", label(sa), label(sb)))
 }
 
 /// Every pair of runs `a < b`, every (block, effect) named on either, compared. `names` labels
@@ -233,7 +281,7 @@ pub fn compare_findings(findings: &[&[Finding]], names: &[String]) -> Vec<Findin
                         _ => Presence::OnlyB,
                     };
                     let other_shapes = match (fa.get(k), fb.get(k)) {
-                        (Some(x), Some(y)) => band_limit_shapes_differ(x, y),
+                        (Some(x), Some(y)) => shapes_differ(x, y),
                         _ => None,
                     };
                     let sizes = match (fa.get(k), fb.get(k)) {

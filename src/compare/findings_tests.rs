@@ -172,3 +172,53 @@ fn band_limits_of_other_shapes_are_not_compared_by_their_time_constants() {
     assert_eq!(out[0].sizes.len(), 1);
     assert_eq!(out[0].consistent, Some(true), "{}", out[0].words);
 }
+
+#[test]
+fn lags_of_other_shapes_are_not_compared_and_second_orders_by_their_damping_too() {
+    let first = |t: f64| finding(Effect::SensorLag, json!({ "T_s": t }), json!({ "T_s": 2e-5 }));
+    let second = |t: f64, zeta: f64| {
+        finding(
+            Effect::SensorLag,
+            json!({ "T_s": t, "damping": zeta, "shape": "second_order", "corner_hz": 20.0 }),
+            json!({ "T_s": 2e-5, "damping": 0.01, "corner_hz": 0.02 }),
+        )
+    };
+    // A 20 Hz section read on one run as a second order (T = 1 / w_n) and on another as a
+    // first-order lag: T is another figure in each shape, so not compared.
+    let a = [second(7.96e-3, 0.71)];
+    let b = [first(7.96e-3)];
+    let out = compare_findings(&[&a, &b], &names());
+    assert_eq!(out.len(), 1);
+    assert!(
+        out[0].sizes.is_empty() && out[0].consistent.is_none(),
+        "{:?}",
+        out[0]
+    );
+    assert!(
+        out[0]
+            .words
+            .contains("second-order low-pass against first-order lag"),
+        "{}",
+        out[0].words
+    );
+    // Two second orders of the same T: the damping tells a Butterworth (0.71) from a Bessel
+    // (0.87) section, 16 deviations apart.
+    let bessel = [second(7.96e-3, 0.87)];
+    let out = compare_findings(&[&a, &bessel], &names());
+    let names_compared: Vec<&str> = out[0].sizes.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names_compared, ["T_s", "damping"]);
+    assert_eq!(out[0].consistent, Some(false), "{}", out[0].words);
+    assert!(out[0].words.contains("damping"), "{}", out[0].words);
+    // Within their deviations: consistent.
+    let again = [second(7.97e-3, 0.72)];
+    let out = compare_findings(&[&a, &again], &names());
+    assert_eq!(out[0].consistent, Some(true), "{}", out[0].words);
+    // First-order lags are compared by T alone, as before.
+    let out = compare_findings(&[&b, &[first(8.5e-3)]], &names());
+    let names_compared: Vec<&str> = out[0].sizes.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names_compared, ["T_s"]);
+    assert_eq!(out[0].consistent, Some(false), "{}", out[0].words);
+    // A second order's damping is not a size: its T near zero is within noise whatever the
+    // damping (the diagnosis's `size_within_noise` reads sizes only).
+    assert!(crate::diagnose::describe::size_within_noise(&second(1e-5, 0.7)));
+}

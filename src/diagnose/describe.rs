@@ -4,6 +4,7 @@
 use serde_json::Value;
 
 use super::report::Finding;
+use super::structure::LagShape;
 use crate::effect::Effect;
 use crate::ident::signals::channel_names;
 use crate::model::band_limit::BandLimitShape;
@@ -123,7 +124,7 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
             out
         }),
         Effect::SensorLag => p.get("T_s").and_then(num).map(|t| {
-            if p.get("shape").and_then(Value::as_str) == Some("second_order") {
+            if LagShape::of_parameters(p) == LagShape::SecondOrder {
                 vec![format!(
                     "{}, T = {:.3}{} ms",
                     second_order_words(p, &sd1),
@@ -139,7 +140,7 @@ pub fn describe_size(block: crate::block::Block, effect: Effect, p: &Value, std:
             }
         }),
         Effect::ReferenceLag => p.get("T_s").and_then(num).map(|t| {
-            let form = if p.get("shape").and_then(Value::as_str) == Some("second_order") {
+            let form = if LagShape::of_parameters(p) == LagShape::SecondOrder {
                 format!(" ({})", second_order_words(p, &sd1))
             } else {
                 String::new()

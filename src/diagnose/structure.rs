@@ -99,6 +99,17 @@ impl LagShape {
         format!("{} {}", block.word(), self.what())
     }
 
+    /// The shape of a lag finding's `parameters` (a report's): second order where its `shape`
+    /// says so, else first order (a first-order lag's parameters hold `T_s` alone).
+    #[must_use]
+    pub fn of_parameters(parameters: &serde_json::Value) -> Self {
+        if parameters.get("shape").and_then(serde_json::Value::as_str) == Some(Self::SecondOrder.name()) {
+            Self::SecondOrder
+        } else {
+            Self::FirstOrder
+        }
+    }
+
     /// The name used in reports (`"first_order"`, `"second_order"`).
     #[must_use]
     pub fn name(self) -> &'static str {

@@ -4,7 +4,7 @@
 use serde_json::Value;
 
 use super::report::Finding;
-use super::structure::LagShape;
+use super::structure::{LAG_DAMPING, LagShape, lag_damping_held};
 use crate::effect::Effect;
 use crate::ident::signals::channel_names;
 use crate::model::band_limit::BandLimitShape;
@@ -41,8 +41,19 @@ fn second_order_words(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>) -> String {
         ),
         _ => String::new(),
     };
+    // Held at a bound of the range searched (a refit of an accepted lag on another band or
+    // record can end there): the damping is the range's, not the data's.
+    let held = if lag_damping_held(zeta) {
+        format!(
+            " (at a bound of the damping searched, {} to {}: not determined by the data; below, a \
+             mount resonance, above, a first-order lag and a little delay may describe it better)",
+            LAG_DAMPING[0], LAG_DAMPING[1]
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "second-order low-pass{frequencies}, damping {zeta:.3}{}",
+        "second-order low-pass{frequencies}, damping {zeta:.3}{}{held}",
         pm(sd1("damping"), 1.0, 3)
     )
 }
@@ -449,6 +460,19 @@ mod tests {
             describe(&f),
             vec!["second-order low-pass, damping 0.720, T = 0.000 ms"]
         );
+        // A damping held at a bound of the range searched is said not determined.
+        for zeta in [0.5, 4.0] {
+            let f = finding(
+                Block::Gyro,
+                Effect::SensorLag,
+                json!({"T_s": 0.002, "damping": zeta, "shape": "second_order"}),
+            );
+            let words = describe(&f).join(" ");
+            assert!(
+                words.contains("at a bound of the damping searched, 0.5 to 4: not determined"),
+                "{words}"
+            );
+        }
         let f = finding(
             Block::Accel,
             Effect::ClockDrift,

@@ -11,6 +11,10 @@
 //! The three channels are fitted together against their background's correlation (a random peak
 //! of motion every channel sees, above the reference's band limit, is one draw, not three), and
 //! a line must stand above its neighbourhood away from the edges of the searched range.
+//!
+//! No tone is named where the inputs carry a line of their own ([`INPUT_LINE`]: a stand
+//! programme's sine): a residual line there is coherent with the input, and a misfit of the model
+//! at that frequency and a vibration there cannot be told apart.
 
 use std::f64::consts::PI;
 
@@ -19,7 +23,7 @@ use num_complex::Complex64;
 
 use std::sync::Arc;
 
-use super::design::{Design, WINDOW_ENBW, band_spectrum, hann};
+use super::design::{Design, U, WINDOW_ENBW, band_spectrum, hann};
 use super::gate::{Gate, estimate_gate};
 use crate::fourier::RecordFft;
 
@@ -329,7 +333,11 @@ pub fn strongest_line(
         let frequency_hz = line_frequency(design, residual, peak, &range);
         let in_residual = explain(design, residual, frequency_hz, &range).2;
         let in_outputs = explain(design, outputs, frequency_hz, &range).2;
-        if in_outputs >= OUTPUT_SHARE * in_residual {
+        // A line of the inputs too (a stand programme's sine) leaves a line in the residual for
+        // any misfit of the model there, coherent with the input: a tone's regressor at that
+        // frequency is the input's own, and a vibration could not be told from that misfit (a
+        // sine programme's 7.2 Hz pitch sine on a weakly excited accelerometer: a false tone).
+        if in_outputs >= OUTPUT_SHARE * in_residual && !input_line(design, peak) {
             return Some(line_at(design, residual, peak, frequency_hz));
         }
     }
@@ -347,6 +355,66 @@ pub(super) fn searched_peaks(n: usize) -> Option<std::ops::Range<usize>> {
 const MAX_TRIES: usize = 5;
 /// Share of a residual line's power the outputs must carry for it to be the sensor's.
 const OUTPUT_SHARE: f64 = 0.5;
+
+/// How far above its local continuum an input axis's power must stand, over a line's three bins,
+/// for the inputs to carry a line there: 20 dB. The motion's broadband spectrum reaches it by
+/// chance with a probability of at most about `e^-69` at a given bin (three bins' power above 208
+/// times one bin's mean: even fully correlated, one exponential above 69 of its means); a stand
+/// programme's sine stands 40-80 dB above.
+const INPUT_LINE: f64 = 100.0;
+
+/// Whether an input axis carries a line at band bin `peak`: its power over the line's three
+/// bins at least [`INPUT_LINE`] times its median over a window centred on the peak (three bins'
+/// worth; up to [`MEDIAN_HALF`] bins each side, fewer near the band's ends, so that a steep
+/// spectrum's median is its level at the peak). `false` where the design holds no inputs.
+fn input_line(design: &Design, peak: usize) -> bool {
+    let n = design.n_bins();
+    if design.z.len() < U + 3 || peak == 0 || peak + 1 >= n {
+        return false;
+    }
+    let half = MEDIAN_HALF.min(peak).min(n - 1 - peak);
+    design.z[U..U + 3].iter().any(|u| {
+        let line: f64 = u[peak - 1..=peak + 1].iter().map(Complex64::norm_sqr).sum();
+        let mut around: Vec<f64> = u[peak - half..=peak + half]
+            .iter()
+            .map(Complex64::norm_sqr)
+            .collect();
+        line > INPUT_LINE * 3.0 * median(&mut around)
+    })
+}
+
+/// The frequencies, Hz, of the inputs' own lines among the bins the search looks at
+/// ([`searched_peaks`], [`input_line`]): where no tone is named. One per line (the bin of most
+/// input power within [`HALF_WINDOW`] bins), ascending.
+#[must_use]
+pub(super) fn input_lines_hz(design: &Design) -> Vec<f64> {
+    let n = design.n_bins();
+    let Some(peaks) = searched_peaks(n) else {
+        return Vec::new();
+    };
+    if design.z.len() < U + 3 {
+        return Vec::new();
+    }
+    let power: Vec<f64> = (0..n)
+        .map(|k| design.z[U..U + 3].iter().map(|u| u[k].norm_sqr()).sum())
+        .collect();
+    let mut lines: Vec<usize> = Vec::new();
+    // A line's bin is a local maximum of the inputs' power: only those are tested.
+    for k in peaks.filter(|&k| power[k] >= power[k - 1] && power[k] >= power[k + 1]) {
+        if !input_line(design, k) {
+            continue;
+        }
+        match lines.last_mut() {
+            Some(last) if k - *last <= HALF_WINDOW => {
+                if power[k] > power[*last] {
+                    *last = k;
+                }
+            }
+            _ => lines.push(k),
+        }
+    }
+    lines.into_iter().map(|k| design.frequency_hz[k]).collect()
+}
 
 /// The frequency of the line at band bin `peak`: where a sinusoid explains most of the
 /// residual over `range`, by golden-section search within 1.5 bins of the peak.
@@ -502,7 +570,7 @@ fn gated_basis(design: &Design, f: f64, gate: &Gate) -> [Vec<Complex64>; 2] {
 
 #[cfg(test)]
 mod tests {
-    use super::strongest_line;
+    use super::{input_line, input_lines_hz, strongest_line};
     use crate::block::Block;
     use crate::diagnose::design::Design;
     use crate::rng::Rng;
@@ -553,6 +621,55 @@ mod tests {
         );
         for (est, truth) in tone.amplitude().iter().zip([a; 3]) {
             assert!((est - truth).abs() < 0.15 * truth, "{est} vs {truth}");
+        }
+    }
+
+    /// Three input axes of unit white noise, with a sine of amplitude `a` at `f` Hz on the second.
+    fn inputs(seed: u64, n: usize, fs: f64, f: f64, a: f64) -> [Vec<f64>; 3] {
+        let mut rng = Rng::new(seed);
+        [0.0, a, 0.0].map(|amp| {
+            (0..n)
+                .map(|k| amp * (std::f64::consts::TAU * f * k as f64 / fs).sin() + rng.normal())
+                .collect()
+        })
+    }
+
+    #[test]
+    fn no_tone_is_named_at_a_line_of_the_inputs() {
+        let (fs, seconds, f, a) = (500.0, 120.0, 30.0, 0.12);
+        let out = record(fs, seconds, f, a, &|_| true);
+        let n = out[0].len();
+        let unit = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        for seed in 1..=4 {
+            // Broadband inputs: the outputs' tone is found, and no bin of the band is taken for
+            // an input line (about 57 000 bins per seed).
+            let broadband = inputs(seed, n, fs, f, 0.0);
+            let mut design =
+                Design::line_search(Block::Gyro, &out, &broadband, fs, [5.0, 100.0]).expect("design");
+            let flagged = (0..design.n_bins()).filter(|&k| input_line(&design, k)).count();
+            assert_eq!(flagged, 0, "seed {seed}");
+            assert!(input_lines_hz(&design).is_empty(), "seed {seed}");
+            let residual = design.set_line_level(unit, 0.0);
+            let tone = strongest_line(&design, &residual, &design.outputs()).expect("a line");
+            assert!((tone.frequency_hz - f).abs() < 1e-3, "{}", tone.frequency_hz);
+            // A sine of the inputs at the tone's frequency (a stand programme's, 26 dB above the
+            // continuum at 1/5 of the tone's amplitude): not named there.
+            let programme = inputs(seed, n, fs, f, 0.2);
+            let mut design =
+                Design::line_search(Block::Gyro, &out, &programme, fs, [5.0, 100.0]).expect("design");
+            let residual = design.set_line_level(unit, 0.0);
+            let at = design.frequency_hz.iter().position(|&h| h >= f).expect("bin");
+            assert!(input_line(&design, at), "seed {seed}");
+            // Listed once, at its frequency.
+            let lines = input_lines_hz(&design);
+            assert_eq!(lines.len(), 1, "seed {seed}: {lines:?}");
+            assert!((lines[0] - f).abs() < 0.02, "seed {seed}: {lines:?}");
+            let line = strongest_line(&design, &residual, &design.outputs());
+            assert!(
+                line.as_ref().is_none_or(|t| (t.frequency_hz - f).abs() > 1.0),
+                "seed {seed}: {:?}",
+                line.map(|t| t.frequency_hz)
+            );
         }
     }
 }

@@ -43,7 +43,9 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::design::{Design, WINDOW_ENBW};
-use super::tone::{HALF_WINDOW, channel_covariance, projections, searched_peaks, sinusoid_dft};
+use super::tone::{
+    HALF_WINDOW, channel_covariance, input_lines_hz, projections, searched_peaks, sinusoid_dft,
+};
 use crate::block::Block;
 
 /// Bins between two evaluations of the limit (the background's window is 120 bins wide, so the
@@ -60,6 +62,11 @@ pub struct ToneLimit {
     /// Per frequency, per output channel, the amplitude at which a tone's expected evidence
     /// reaches [`Self::chi2_needed`], output units.
     pub amplitude: Vec<[f64; 3]>,
+    /// Frequencies, Hz, where the inputs carry a line of their own (a stand programme's sine):
+    /// no tone is named there, whatever its size (`super::tone`: a misfit of the model there and
+    /// a tone cannot be told apart). Absent when there is none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub input_lines_hz: Vec<f64>,
 }
 
 impl ToneLimit {
@@ -101,11 +108,21 @@ impl ToneLimit {
             .max_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap_or((*first, median));
         let unit = block.output_unit();
+        let lines = if self.input_lines_hz.is_empty() {
+            String::new()
+        } else {
+            let list: Vec<String> = self.input_lines_hz.iter().map(|f| format!("{f:.2}")).collect();
+            format!(
+                "; none named at the inputs' own lines ({} Hz: the stand's programme), where a misfit of the \
+                 model and a tone cannot be told apart",
+                list.join(", ")
+            )
+        };
         format!(
             "{block} block: the tone search's limit (a constant tone in one output; chi2 {:.1} needed) is \
              {median:.2e} {unit} (the median over {first:.2}-{last:.2} Hz and the outputs), {worst:.2e} {unit} \
              at {worst_hz:.1} Hz ({:.0} times the median); none stated below {first:.2} Hz (the level a line \
-             is measured against follows the line there), no tone searched above {last:.1} Hz",
+             is measured against follows the line there), no tone searched above {last:.1} Hz{lines}",
             self.chi2_needed,
             worst / median
         )
@@ -145,6 +162,11 @@ pub(super) fn detection_limit(
             out.amplitude.push(amplitude);
         }
     }
+    out.input_lines_hz.extend(
+        input_lines_hz(design)
+            .into_iter()
+            .filter(|&f| f > after && f >= from_hz),
+    );
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@ fn limit() -> ToneLimit {
         chi2_needed: 70.0,
         frequency_hz: vec![1.0, 2.0, 3.0, 4.0],
         amplitude: vec![[1.0, 2.0, 3.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [9.0, 1.0, 1.0]],
+        input_lines_hz: Vec::new(),
     }
 }
 
@@ -38,5 +39,16 @@ fn the_words_give_the_median_the_largest_and_the_top() {
         "{w}"
     );
     assert!(w.contains("none stated below 1.00 Hz"), "{w}");
+    assert!(!w.contains("inputs' own lines"), "{w}");
+    // The inputs' own lines, where no tone is named, are listed.
+    let with_lines = ToneLimit {
+        input_lines_hz: vec![2.3, 7.2],
+        ..limit()
+    };
+    let w = with_lines.words(Block::Accel);
+    assert!(
+        w.contains("none named at the inputs' own lines (2.30, 7.20 Hz: the stand's programme)"),
+        "{w}"
+    );
     assert!(limit().words(Block::Gyro).contains("rad/s"));
 }

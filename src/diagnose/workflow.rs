@@ -408,6 +408,7 @@ fn tone_limit(state: &State, chi2_needed: f64, from_hz: f64) -> Option<ToneLimit
         chi2_needed,
         frequency_hz: Vec::new(),
         amplitude: Vec::new(),
+        input_lines_hz: Vec::new(),
     };
     detection_limit(&state.design, &state.residual, (chi2_needed, from_hz), &mut limit);
     if let Some(upper) = state.upper.as_deref() {

@@ -113,7 +113,7 @@ impl ToneLimit {
         } else {
             let list: Vec<String> = self.input_lines_hz.iter().map(|f| format!("{f:.2}")).collect();
             format!(
-                "; none named at the inputs' own lines ({} Hz: the stand's programme), where a misfit of the \
+                "; none named at the inputs' own lines ({} Hz: a stand programme's sines, their harmonics and sums), where a misfit of the \
                  model and a tone cannot be told apart",
                 list.join(", ")
             )

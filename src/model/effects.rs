@@ -258,6 +258,38 @@ impl ModelEffects {
         })
     }
 
+    /// The lag's gain `|L(j 2 pi f)|` at `f_hz` (1 without a lag).
+    #[must_use]
+    pub fn lag_gain(&self, f_hz: f64) -> f64 {
+        let Some(t) = self.lag_s else { return 1.0 };
+        let x = std::f64::consts::TAU * f_hz * t;
+        match self.lag_damping {
+            Some(zeta) => 1.0 / ((1.0 - x * x).powi(2) + (2.0 * zeta * x).powi(2)).sqrt(),
+            None => 1.0 / (1.0 + x * x).sqrt(),
+        }
+    }
+
+    /// Whether the accepted lag can hold an identified `gain_changes_across_band` warning `w`:
+    /// its gain changes across the warning's band the way the warning says (a first-order lag's
+    /// falls), or peaks inside it (a second-order lag damped below `1 / sqrt 2`, whose gain rises
+    /// to its peak and falls beyond), as a mode's does ([`Resonance::explains`]).
+    #[must_use]
+    pub fn lag_explains(&self, w: &crate::ident::warnings::IdentWarning) -> bool {
+        let crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, band_hz, .. } = w else {
+            return false;
+        };
+        let Some(t) = self.lag_s.filter(|t| *t > 0.0) else {
+            return false;
+        };
+        let [low, high] = *band_hz;
+        let peak_hz = self
+            .lag_damping
+            .filter(|z| 2.0 * z * z < 1.0)
+            .map(|z| (1.0 - 2.0 * z * z).sqrt() / (std::f64::consts::TAU * t));
+        peak_hz.is_some_and(|p| (low..=high).contains(&p))
+            || (self.lag_gain(high) - self.lag_gain(low)) * rise > 0.0
+    }
+
     /// The poles the effects give the response, `[re, im]` rad/s (the lag's, each resonance's
     /// upper one and its conjugate).
     #[must_use]

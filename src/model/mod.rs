@@ -389,7 +389,6 @@ impl BlockModel {
         // modelled: the gain's rise across the band is its own (no longer the model's misfit),
         // and a causal one takes the lag of the angles (their leading zeros) and its group delay.
         let band_limit = effects.reference_band_limit.filter(|b| b.t_s > 0.0);
-        let lag = effects.lag_s.is_some();
         self.fit.warnings.retain(|w| match w {
             // The identified fit's own: its poles, its fixed order, its delay beside its poles.
             IdentWarning::PolesOrEvenGain { .. }
@@ -399,7 +398,7 @@ impl BlockModel {
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
             w @ IdentWarning::GainChangesAcrossBand { rise, .. } => {
                 !((band_limit.is_some() && *rise >= 0.0)
-                    || (lag && *rise < 0.0)
+                    || effects.lag_explains(w)
                     || effects.resonances.iter().any(|r| r.explains(w)))
             }
             IdentWarning::ZerosLead { .. } => !band_limit.is_some_and(|b| b.shape.causal()),

@@ -540,6 +540,27 @@ fn an_extended_model_is_judged_on_its_own_fit_and_gain() {
     assert_eq!(m.fit.warnings, Vec::new());
     assert_eq!(with(lag(), -0.1), Vec::new());
     assert_eq!(with(lag(), 0.1), vec![change(0.1)]);
+    // A second-order lag damped below 1/sqrt(2) peaks at sqrt(1 - 2 zeta^2) / (2 pi T): inside
+    // the band (T = 10 ms, damping 0.5: 11.25 Hz) it takes a rise or a fall; damped at 0.8 it
+    // does not peak and takes a fall only; one peaking above the band (T = 4 ms: 28.1 Hz) rises
+    // across it and takes a rise only.
+    let second = |t: f64, zeta: f64| ModelEffects {
+        lag_s: Some(t),
+        lag_damping: Some(zeta),
+        ..no_effects(0.004, 0)
+    };
+    assert_eq!(with(second(0.010, 0.5), 0.1), Vec::new());
+    assert_eq!(with(second(0.010, 0.5), -0.1), Vec::new());
+    assert_eq!(with(second(0.010, 0.8), 0.1), vec![change(0.1)]);
+    assert_eq!(with(second(0.010, 0.8), -0.1), Vec::new());
+    assert_eq!(with(second(0.004, 0.5), 0.1), Vec::new());
+    assert_eq!(with(second(0.004, 0.5), -0.1), vec![change(-0.1)]);
+    // A lag that holds nothing (T = 0) takes nothing.
+    let nothing = ModelEffects {
+        lag_s: Some(0.0),
+        ..lag()
+    };
+    assert_eq!(with(nothing, -0.1), vec![change(-0.1)]);
     assert_eq!(with(no_effects(0.004, 0), -0.1), vec![change(-0.1)]);
 }
 

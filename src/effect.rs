@@ -195,14 +195,5 @@ mod tests {
         );
         assert_eq!(Effect::LeverArmError.blocks(), &[Block::Accel]);
         assert_eq!(Effect::ClockDrift.blocks(), &Block::BOTH);
-        // A sensor lag's two shapes: the first order's name is the effect's.
-        assert_eq!(
-            crate::diagnose::structure::LagShape::FirstOrder.name_on(Block::Gyro),
-            Effect::SensorLag.name_on(Block::Gyro)
-        );
-        assert_eq!(
-            crate::diagnose::structure::LagShape::SecondOrder.name_on(Block::Accel),
-            "accelerometer second-order low-pass"
-        );
     }
 }

@@ -142,6 +142,40 @@ fn bad_input_exits_2_with_one_line_and_writes_nothing() {
     ]));
     assert!(err.contains("bad.json"), "{err}");
 
+    // A model file whose accepted lag is no filter: a damping below zero (refused where it is
+    // read: file, line and column), a damping without its lag's time constant.
+    let model = dir.path().join("model.json");
+    let o = imu_attest(&["identify", run_s, "--out", model.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&model).unwrap()).unwrap();
+    for (lag, said) in [
+        (
+            r#""lag_s": 0.002, "lag_damping": -0.5,"#,
+            "lag_damping must be finite and positive",
+        ),
+        (
+            r#""lag_damping": 0.7,"#,
+            "damping without its time constant lag_s",
+        ),
+    ] {
+        let effects = format!(
+            r#"{{"accepted": [], {lag} "identified": {{"K": [[1,0,0],[0,1,0],[0,0,1]], "tau_s": 0.004,
+            "order": 0}}, "band_hz": [0.5, 40], "chi2_per_dof": [1, 1], "gap_db": [[0,0,0],[0,0,0]]}}"#
+        );
+        m["blocks"]["gyro"]["effects"] = serde_json::from_str(&effects).unwrap();
+        let edited = dir.path().join("edited.json");
+        std::fs::write(&edited, serde_json::to_string_pretty(&m).unwrap()).unwrap();
+        let err = one_line_error(&imu_attest(&[
+            "discrepancy",
+            run_s,
+            "--model",
+            edited.to_str().unwrap(),
+            "--out",
+            out_s,
+        ]));
+        assert!(err.contains("edited.json") && err.contains(said), "{err}");
+    }
+
     // A band the run cannot hold.
     let settings = dir.path().join("s.json");
     std::fs::write(&settings, r#"{"band_hz": [0.1, 400.0]}"#).unwrap();

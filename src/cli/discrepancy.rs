@@ -36,6 +36,13 @@ pub(super) fn read_model(path: &Path) -> Result<Model, CliError> {
             model.schema
         )));
     }
+    for (name, block) in &model.blocks {
+        if let Some(Err(e)) = block.effects.as_ref().map(crate::model::ModelEffects::check) {
+            return Err(CliError::Input(format!(
+                "{shown}: not a model file at 'blocks.{name}.effects': {e}"
+            )));
+        }
+    }
     model.settle_estimate(&bytes);
     Ok(model)
 }

@@ -194,9 +194,12 @@ fn words(presence: Presence, sizes: &[SizeDelta], names: [&str; 2]) -> String {
         }
         Presence::Both => match most_different(sizes) {
             Some((s, z)) => format!(
-                "named on both, but its size differs ({} {:.4e} against {:.4e}, {z:.1} standard deviations \
+                "named on both, but its {} differs ({} {:.4e} against {:.4e}, {z:.1} standard deviations \
                      apart): not one fixed property of the unit, the runs' motion or reference shape it",
-                s.name, s.a, s.b
+                if s.name == "damping" { "shape" } else { "size" },
+                s.name,
+                s.a,
+                s.b
             ),
             None if sizes.iter().any(|s| s.delta.significant.is_some()) => {
                 format!("named on both, sizes agree within {SIGNIFICANCE_SIGMAS} standard deviations")

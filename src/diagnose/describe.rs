@@ -43,7 +43,7 @@ fn second_order_words(p: &Value, sd1: &dyn Fn(&str) -> Option<f64>) -> String {
     };
     // Held at a bound of the range searched (a refit of an accepted lag on another band or
     // record can end there): the damping is the range's, not the data's.
-    let held = if lag_damping_held(zeta) {
+    let held = if zeta.is_finite() && lag_damping_held(zeta) {
         format!(
             " (at a bound of the damping searched, {} to {}: not determined by the data; below, a \
              mount resonance, above, a first-order lag and a little delay may describe it better)",

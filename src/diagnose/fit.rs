@@ -166,7 +166,9 @@ pub fn cost_at(design: &Design, grams: &[DMatrix<Complex64>], structure: &Struct
 }
 
 /// The point of `points` with the least [`cost_at`] (the first of equals; points whose cost is not
-/// finite are passed over): a search's start from a grid. `None` when no cost is finite.
+/// finite are passed over): a search's start from a grid. `None` when no cost is finite (the
+/// shape then gives no candidate; before this helper a resonance's or band limit's search could
+/// start from a point whose cost was not finite).
 #[must_use]
 pub fn cheapest(
     design: &Design,

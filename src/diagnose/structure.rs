@@ -345,3 +345,33 @@ impl Filters {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::LagShape;
+    use crate::block::Block;
+    use crate::effect::Effect;
+    use serde_json::json;
+
+    #[test]
+    fn a_lag_s_shapes_are_named_and_read_back() {
+        // The first order's name is the effect's.
+        assert_eq!(
+            LagShape::FirstOrder.name_on(Block::Gyro),
+            Effect::SensorLag.name_on(Block::Gyro)
+        );
+        assert_eq!(
+            LagShape::SecondOrder.name_on(Block::Accel),
+            "accelerometer second-order low-pass"
+        );
+        for shape in LagShape::SHAPES {
+            let p = json!({"T_s": 0.002, "shape": shape.name()});
+            assert_eq!(LagShape::of_parameters(&p), shape);
+        }
+        // A first-order lag's parameters hold T_s alone.
+        assert_eq!(
+            LagShape::of_parameters(&json!({"T_s": 0.002})),
+            LagShape::FirstOrder
+        );
+    }
+}

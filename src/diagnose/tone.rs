@@ -309,11 +309,26 @@ pub fn strongest_line(
     let mut order: Vec<usize> = peaks.collect();
     order.sort_by(|&a, &b| ratio(b).total_cmp(&ratio(a)));
     let mut tried: Vec<usize> = Vec::new();
+    // A line of the inputs too (a stand programme's sine) leaves a line in the residual for any
+    // misfit of the model there, coherent with the input: a tone's regressor at that frequency is
+    // the input's own, and a vibration could not be told from that misfit (a sine programme's
+    // 7.2 Hz pitch sine on a weakly excited accelerometer: a false tone). Such a peak is passed
+    // over, its neighbourhood with it, without counting as a try: a programme of many sines
+    // (and their harmonics and sums) would otherwise use every try up.
+    let mut input_lines: Vec<usize> = Vec::new();
     for peak in order {
         if tried.len() == MAX_TRIES {
             break;
         }
-        if tried.iter().any(|&t| t.abs_diff(peak) <= HALF_WINDOW) {
+        if tried
+            .iter()
+            .chain(&input_lines)
+            .any(|&t| t.abs_diff(peak) <= HALF_WINDOW)
+        {
+            continue;
+        }
+        if input_line(design, peak) {
+            input_lines.push(peak);
             continue;
         }
         tried.push(peak);
@@ -333,11 +348,7 @@ pub fn strongest_line(
         let frequency_hz = line_frequency(design, residual, peak, &range);
         let in_residual = explain(design, residual, frequency_hz, &range).2;
         let in_outputs = explain(design, outputs, frequency_hz, &range).2;
-        // A line of the inputs too (a stand programme's sine) leaves a line in the residual for
-        // any misfit of the model there, coherent with the input: a tone's regressor at that
-        // frequency is the input's own, and a vibration could not be told from that misfit (a
-        // sine programme's 7.2 Hz pitch sine on a weakly excited accelerometer: a false tone).
-        if in_outputs >= OUTPUT_SHARE * in_residual && !input_line(design, peak) {
+        if in_outputs >= OUTPUT_SHARE * in_residual {
             return Some(line_at(design, residual, peak, frequency_hz));
         }
     }
@@ -357,19 +368,23 @@ const MAX_TRIES: usize = 5;
 const OUTPUT_SHARE: f64 = 0.5;
 
 /// How far above its local continuum an input axis's power must stand, over a line's three bins,
-/// for the inputs to carry a line there: 20 dB. The motion's broadband spectrum reaches it by
-/// chance with a probability of at most about `e^-69` at a given bin (three bins' power above 208
-/// times one bin's mean: even fully correlated, one exponential above 69 of its means); a stand
-/// programme's sine stands 40-80 dB above.
+/// for the inputs to carry a line there: 20 dB. Where the window's median is the continuum's
+/// (`ln 2` of its mean), the motion's broadband spectrum reaches it by chance with a probability
+/// of about `e^-69` at a given bin (three bins' power above 208 times one bin's mean: even fully
+/// correlated, one exponential above 69 of its means); the median, itself estimated over at
+/// least `2 HALF_WINDOW + 1` bins, moves that little. A stand programme's sine stands 40-80 dB
+/// above.
 const INPUT_LINE: f64 = 100.0;
 
 /// Whether an input axis carries a line at band bin `peak`: its power over the line's three
 /// bins at least [`INPUT_LINE`] times its median over a window centred on the peak (three bins'
 /// worth; up to [`MEDIAN_HALF`] bins each side, fewer near the band's ends, so that a steep
-/// spectrum's median is its level at the peak). `false` where the design holds no inputs.
+/// spectrum's median is its level at the peak). `false` where the design holds no inputs, or
+/// within [`HALF_WINDOW`] bins of the band's ends (too few bins for a median: no line is looked
+/// for there either).
 fn input_line(design: &Design, peak: usize) -> bool {
     let n = design.n_bins();
-    if design.z.len() < U + 3 || peak == 0 || peak + 1 >= n {
+    if design.z.len() < U + 3 || peak < HALF_WINDOW || peak + HALF_WINDOW >= n {
         return false;
     }
     let half = MEDIAN_HALF.min(peak).min(n - 1 - peak);
@@ -569,107 +584,5 @@ fn gated_basis(design: &Design, f: f64, gate: &Gate) -> [Vec<Complex64>; 2] {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::{input_line, input_lines_hz, strongest_line};
-    use crate::block::Block;
-    use crate::diagnose::design::Design;
-    use crate::rng::Rng;
-
-    /// Three channels of unit white noise with a tone of amplitude `a` at `f` Hz where `on(t)`.
-    fn record(fs: f64, seconds: f64, f: f64, a: f64, on: &dyn Fn(f64) -> bool) -> [Vec<f64>; 3] {
-        let mut rng = Rng::new(7);
-        let n = (fs * seconds) as usize;
-        [0.3, 1.1, 2.0].map(|phase: f64| {
-            (0..n)
-                .map(|k| {
-                    let t = k as f64 / fs;
-                    let tone = if on(t) {
-                        a * (std::f64::consts::TAU * f * t + phase).sin()
-                    } else {
-                        0.0
-                    };
-                    tone + rng.normal()
-                })
-                .collect()
-        })
-    }
-
-    #[test]
-    fn a_pulsed_tone_is_found_with_its_gate_and_its_whole_evidence() {
-        let (fs, seconds, f, a) = (500.0, 120.0, 30.0, 0.12);
-        let pulsed = |t: f64| t.rem_euclid(5.0) < 2.0;
-        let out = record(fs, seconds, f, a, &pulsed);
-        let zero = [
-            vec![0.0; out[0].len()],
-            vec![0.0; out[0].len()],
-            vec![0.0; out[0].len()],
-        ];
-        let mut design = Design::line_search(Block::Gyro, &out, &zero, fs, [5.0, 100.0]).expect("design");
-        let residual = design.set_line_level([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 0.0);
-        let tone = strongest_line(&design, &residual, &design.outputs()).expect("a line");
-        assert!((tone.frequency_hz - f).abs() < 1e-3, "{}", tone.frequency_hz);
-        let gate = tone.gate.as_ref().expect("gated");
-        assert!((gate.on_fraction - 0.4).abs() < 0.06, "{}", gate.on_fraction);
-        // chi2 of the tone where on, in tapered units: N A^2 / (2 sigma^2) per channel, times
-        // the on-time's share of the tapered record's power (0.4), over the taper's bandwidth.
-        let n = fs * seconds;
-        let want = 3.0 * n * a * a / 2.0 * 0.4 / 1.5;
-        assert!(
-            tone.delta_chi2 > 0.7 * want && tone.delta_chi2 < 1.3 * want,
-            "{} vs {want}",
-            tone.delta_chi2
-        );
-        for (est, truth) in tone.amplitude().iter().zip([a; 3]) {
-            assert!((est - truth).abs() < 0.15 * truth, "{est} vs {truth}");
-        }
-    }
-
-    /// Three input axes of unit white noise, with a sine of amplitude `a` at `f` Hz on the second.
-    fn inputs(seed: u64, n: usize, fs: f64, f: f64, a: f64) -> [Vec<f64>; 3] {
-        let mut rng = Rng::new(seed);
-        [0.0, a, 0.0].map(|amp| {
-            (0..n)
-                .map(|k| amp * (std::f64::consts::TAU * f * k as f64 / fs).sin() + rng.normal())
-                .collect()
-        })
-    }
-
-    #[test]
-    fn no_tone_is_named_at_a_line_of_the_inputs() {
-        let (fs, seconds, f, a) = (500.0, 120.0, 30.0, 0.12);
-        let out = record(fs, seconds, f, a, &|_| true);
-        let n = out[0].len();
-        let unit = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        for seed in 1..=4 {
-            // Broadband inputs: the outputs' tone is found, and no bin of the band is taken for
-            // an input line (about 57 000 bins per seed).
-            let broadband = inputs(seed, n, fs, f, 0.0);
-            let mut design =
-                Design::line_search(Block::Gyro, &out, &broadband, fs, [5.0, 100.0]).expect("design");
-            let flagged = (0..design.n_bins()).filter(|&k| input_line(&design, k)).count();
-            assert_eq!(flagged, 0, "seed {seed}");
-            assert!(input_lines_hz(&design).is_empty(), "seed {seed}");
-            let residual = design.set_line_level(unit, 0.0);
-            let tone = strongest_line(&design, &residual, &design.outputs()).expect("a line");
-            assert!((tone.frequency_hz - f).abs() < 1e-3, "{}", tone.frequency_hz);
-            // A sine of the inputs at the tone's frequency (a stand programme's, 26 dB above the
-            // continuum at 1/5 of the tone's amplitude): not named there.
-            let programme = inputs(seed, n, fs, f, 0.2);
-            let mut design =
-                Design::line_search(Block::Gyro, &out, &programme, fs, [5.0, 100.0]).expect("design");
-            let residual = design.set_line_level(unit, 0.0);
-            let at = design.frequency_hz.iter().position(|&h| h >= f).expect("bin");
-            assert!(input_line(&design, at), "seed {seed}");
-            // Listed once, at its frequency.
-            let lines = input_lines_hz(&design);
-            assert_eq!(lines.len(), 1, "seed {seed}: {lines:?}");
-            assert!((lines[0] - f).abs() < 0.02, "seed {seed}: {lines:?}");
-            let line = strongest_line(&design, &residual, &design.outputs());
-            assert!(
-                line.as_ref().is_none_or(|t| (t.frequency_hz - f).abs() > 1.0),
-                "seed {seed}: {:?}",
-                line.map(|t| t.frequency_hz)
-            );
-        }
-    }
-}
+#[path = "tone_tests.rs"]
+mod tests;

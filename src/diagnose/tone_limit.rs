@@ -113,7 +113,7 @@ impl ToneLimit {
         } else {
             let list: Vec<String> = self.input_lines_hz.iter().map(|f| format!("{f:.2}")).collect();
             format!(
-                "; none named at the inputs' own lines ({} Hz: a stand programme's sines, their harmonics and sums), where a misfit of the \
+                "; none named at the inputs' own lines ({} Hz: e.g. a stand programme's sines, their harmonics and sums), where a misfit of the \
                  model and a tone cannot be told apart",
                 list.join(", ")
             )
@@ -162,11 +162,12 @@ pub(super) fn detection_limit(
             out.amplitude.push(amplitude);
         }
     }
-    out.input_lines_hz.extend(
-        input_lines_hz(design)
-            .into_iter()
-            .filter(|&f| f > after && f >= from_hz),
-    );
+    // A line the range below listed (the upper range starts below its top) is not listed again.
+    let df = design.sample_rate_hz / design.fft_len as f64;
+    let listed = out.input_lines_hz.last().copied();
+    let new = |f: f64| f > after && f >= from_hz && listed.is_none_or(|l| f - l > HALF_WINDOW as f64 * df);
+    out.input_lines_hz
+        .extend(input_lines_hz(design).into_iter().filter(|&f| new(f)));
 }
 
 #[cfg(test)]

@@ -444,7 +444,7 @@ pub(super) fn name_stand_side(findings: &mut [Finding]) {
             });
         let t = parameters.get("T_s")?.as_f64()?;
         let sd = std.get("T_s")?.as_f64()?;
-        let shape = parameters.get("shape").cloned();
+        let shape = super::structure::LagShape::of_parameters(parameters);
         let damping = match parameters.get("damping") {
             Some(z) => Some((z.as_f64()?, std.get("damping")?.as_f64()?)),
             None => None,

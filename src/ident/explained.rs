@@ -100,6 +100,9 @@ impl InputEigen {
         s_xx: &Matrix3<Complex64>,
         s_xu: &Matrix3<Complex64>,
     ) -> Option<Matrix3<Complex64>> {
+        if !finite(s_xx) {
+            return None;
+        }
         let r = s_xx - self.explained(s_xu)?;
         let mut r = (r + r.adjoint()) * Complex64::from(0.5);
         for i in 0..3 {
@@ -124,18 +127,6 @@ pub fn explained(
 ) -> Option<(Matrix3<Complex64>, bool)> {
     let eig = InputEigen::new(s_uu, floor)?;
     Some((eig.explained(s_xu)?, eig.floored()))
-}
-
-/// `S_psi = S_xx - S_xu S_uu^-1 S_ux` (exactly Hermitian, its diagonal at least [`RESOLUTION`]
-/// of `S_xx`'s), with `S_uu`'s eigenvalues floored at `floor`; `None` as for [`explained`].
-#[must_use]
-pub fn residual(
-    s_xx: &Matrix3<Complex64>,
-    s_uu: &Matrix3<Complex64>,
-    s_xu: &Matrix3<Complex64>,
-    floor: f64,
-) -> Option<Matrix3<Complex64>> {
-    InputEigen::new(s_uu, floor)?.residual(s_xx, s_xu)
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use super::FactorStageError::NonFiniteResidual;
+use super::FactorStageError::{NonFiniteInput, NonFiniteResidual};
 use super::causal_stage::{CausalStage, causal_stage};
 use super::explained::InputEigen;
 use super::settings::Estimate;
@@ -190,11 +190,10 @@ pub fn factorise_from(
     let mut s_uu_inv = Vec::with_capacity(spectra.s_uu.len());
     let mut noise_psd = Vec::with_capacity(spectra.s_uu.len());
     for (k, s) in spectra.s_uu.iter().enumerate() {
-        let residual = InputEigen::new(s, floor).and_then(|eig| {
-            floored_input_bins += usize::from(eig.floored());
-            s_uu_inv.push(eig.inverse());
-            eig.residual(&spectra.s_xx[k], &spectra.s_xu[k])
-        });
+        let eig = InputEigen::new(s, floor).ok_or_else(|| factor_error(NonFiniteInput { bin: k }))?;
+        floored_input_bins += usize::from(eig.floored());
+        s_uu_inv.push(eig.inverse());
+        let residual = eig.residual(&spectra.s_xx[k], &spectra.s_xu[k]);
         noise_psd.push(residual.ok_or_else(|| factor_error(NonFiniteResidual { bin: k }))?);
     }
     let h1: Vec<Matrix3<Complex64>> = spectra

@@ -164,10 +164,11 @@ pub enum FactorStageError {
         /// The bin, on the one-sided grid.
         bin: usize,
     },
-    /// The input spectrum is not finite at a bin of the causal stage's finer two-sided grid.
-    #[error("the input spectrum is not finite at bin {bin} of the causal stage's grid")]
+    /// The input spectrum is not finite at a bin (of the one-sided grid, or of the causal
+    /// stage's finer two-sided grid).
+    #[error("the input spectrum is not finite at bin {bin}")]
     NonFiniteInput {
-        /// The bin, on the finer two-sided grid.
+        /// The bin, on the grid where it was met.
         bin: usize,
     },
 }

@@ -29,6 +29,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::delay_step::DelayStep;
+use super::explained::InputEigen;
 
 use super::band::native_bins;
 use super::spectra::BlockSpectra;
@@ -453,7 +454,7 @@ pub(super) fn h1_estimate(s: &StretchSpectra, native: &[usize], step: usize) -> 
     for &k in native {
         let b = k / step;
         let s_uu = (s.s_uu.get(b)? + s.s_uu.get(b)?.adjoint()) * Complex64::from(0.5);
-        let eig = super::explained::InputEigen::new(&s_uu, 0.0)?;
+        let eig = InputEigen::new(&s_uu, 0.0)?;
         let residual = eig.residual(&s.s_xx[b], &s.s_xu[b])?;
         response.push(s.s_xu[b] * eig.inverse());
         weights.push(super::identify::row_weights(&s_uu, &residual, dof));

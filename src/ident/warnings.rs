@@ -664,7 +664,7 @@ pub fn block_warnings(
     };
     let floor = input_floor(&spectra.s_uu);
     // A residual vanishes below its loading, or at the rounding of the outputs' power where
-    // `explained::residual` floors its diagonal.
+    // `explained::InputEigen::residual` floors its diagonal.
     let loading = residual_loading(spectra, &fact.noise_psd, settings);
     let residual_floor = |k: usize| {
         let power = spectra

@@ -236,12 +236,7 @@ impl ModelEffects {
     #[must_use]
     pub fn response(&self, k: &[[f64; 3]; 3], tau_s: f64, f_hz: f64) -> nalgebra::Matrix3<Complex64> {
         let s = Complex64::new(0.0, std::f64::consts::TAU * f_hz);
-        let lag = self
-            .lag_s
-            .map_or(Complex64::from(1.0), |t| match self.lag_damping {
-                Some(zeta) => 1.0 / (1.0 + 2.0 * zeta * s * t + s * s * t * t),
-                None => 1.0 / (1.0 + s * t),
-            });
+        let lag = self.lag_at(f_hz);
         let skew = self.channel_skew_s.unwrap_or([0.0; 3]);
         let mut resonant = [Complex64::from(1.0); 3];
         for r in &self.resonances {
@@ -258,15 +253,40 @@ impl ModelEffects {
         })
     }
 
+    /// What a model file's effects hold that their fields alone cannot check: a damping needs a
+    /// lag (`lag_damping` without `lag_s` would be silently ignored). The offending field's name
+    /// in the error.
+    ///
+    /// # Errors
+    /// The field and what is wrong, in words.
+    pub fn check(&self) -> Result<(), String> {
+        if self.lag_damping.is_some() && self.lag_s.is_none() {
+            return Err(
+                "lag_damping: a second-order lag's damping without its time constant lag_s".to_owned(),
+            );
+        }
+        Ok(())
+    }
+
+    /// The lag's response `L(j 2 pi f)` at `f_hz` (1 without a lag): `1 / (T s + 1)`, or with
+    /// [`Self::lag_damping`] `1 / ((T s)^2 + 2 zeta T s + 1)` (as the diagnosis's
+    /// `LagShape::response`).
+    #[must_use]
+    pub fn lag_at(&self, f_hz: f64) -> Complex64 {
+        let Some(t) = self.lag_s else {
+            return Complex64::from(1.0);
+        };
+        let st = Complex64::new(0.0, std::f64::consts::TAU * f_hz * t);
+        match self.lag_damping {
+            Some(zeta) => 1.0 / (1.0 + 2.0 * zeta * st + st * st),
+            None => 1.0 / (1.0 + st),
+        }
+    }
+
     /// The lag's gain `|L(j 2 pi f)|` at `f_hz` (1 without a lag).
     #[must_use]
     pub fn lag_gain(&self, f_hz: f64) -> f64 {
-        let Some(t) = self.lag_s else { return 1.0 };
-        let x = std::f64::consts::TAU * f_hz * t;
-        match self.lag_damping {
-            Some(zeta) => 1.0 / ((1.0 - x * x).powi(2) + (2.0 * zeta * x).powi(2)).sqrt(),
-            None => 1.0 / (1.0 + x * x).sqrt(),
-        }
+        self.lag_at(f_hz).norm()
     }
 
     /// Whether the accepted lag can hold an identified `gain_changes_across_band` warning `w`:
@@ -319,48 +339,5 @@ impl ModelEffects {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The effects' JSON with `lag` spliced in among their fields.
-    fn effects_json(lag: &str) -> String {
-        format!(
-            r#"{{"accepted": [], {lag} "identified": {{"K": [[1,0,0],[0,1,0],[0,0,1]], "tau_s": 0.004,
-            "order": 0}}, "band_hz": [0.5, 40], "chi2_per_dof": [1, 1], "gap_db": [[0,0,0],[0,0,0]]}}"#
-        )
-    }
-
-    #[test]
-    fn sizes_that_are_no_filter_are_refused_when_read() {
-        let good = r#""lag_s": 0.002, "lag_damping": 0.7, "channel_skew_s": [0, 1e-4, -1e-4],
-            "resonances": [{"axis": 2, "frequency_hz": 30, "damping": 0.05}],"#;
-        let e: ModelEffects = serde_json::from_str(&effects_json(good)).expect("read");
-        assert_eq!((e.lag_s, e.lag_damping), (Some(0.002), Some(0.7)));
-        assert_eq!(e.resonances[0].axis, 2);
-        // Absent fields stay absent.
-        let e: ModelEffects = serde_json::from_str(&effects_json("")).expect("read");
-        assert_eq!((e.lag_s, e.lag_damping, e.channel_skew_s), (None, None, None));
-        for (bad, said) in [
-            (r#""lag_s": -0.002,"#, "lag_s"),
-            (r#""lag_s": 0.002, "lag_damping": 0,"#, "lag_damping"),
-            (r#""lag_s": 0.002, "lag_damping": -0.5,"#, "lag_damping"),
-            (
-                r#""resonances": [{"axis": 3, "frequency_hz": 30, "damping": 0.05}],"#,
-                "axis",
-            ),
-            (
-                r#""resonances": [{"axis": 0, "frequency_hz": 0, "damping": 0.05}],"#,
-                "frequency_hz",
-            ),
-            (
-                r#""resonances": [{"axis": 0, "frequency_hz": 30, "damping": -0.05}],"#,
-                "damping",
-            ),
-        ] {
-            let error = serde_json::from_str::<ModelEffects>(&effects_json(bad))
-                .expect_err(bad)
-                .to_string();
-            assert!(error.contains(said), "{bad}: {error}");
-        }
-    }
-}
+#[path = "effects_tests.rs"]
+mod tests;

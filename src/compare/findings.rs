@@ -145,9 +145,11 @@ pub fn sizes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
     paired(figures(a), &figures(b))
 }
 
-/// Two runs' findings of the same block and effect compared: their sizes and their shapes'
-/// figures ([`shape_figures`]).
-fn sizes_and_shapes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
+/// Two findings of the same block and effect compared (two runs', or one finding's on two
+/// stretches of a record: `diagnose::halves`): their sizes and their shapes' figures
+/// ([`shape_figures`]).
+#[must_use]
+pub fn sizes_and_shapes(a: &Finding, b: &Finding) -> Vec<SizeDelta> {
     let mut out = sizes(a, b);
     out.extend(paired(shape_figures(a), &shape_figures(b)));
     out

@@ -5,7 +5,9 @@
 //! deviations, each half's from its own fit, sandwich included). A sensor effect is the same in
 //! both halves; a misfit of the effect's form that the motion or the reference makes (a rate-shaped
 //! misfit the search calls a quadratic scale factor, on a real recording) need not be, and the
-//! finding's evidence then says so. The halves' figures are kept in the finding (`halves`).
+//! finding's evidence then says so. A second-order lag's damping is compared beside its `T`
+//! (`compare::findings::shape_figures`): a filter of the block keeps its shape. The halves'
+//! figures are kept in the finding (`halves`).
 //!
 //! Skipped (nothing said) for a block whose model holds a tone in its band or a clock
 //! correction (a tone's phase and the re-timing are fitted on the whole record), for tone and
@@ -22,7 +24,9 @@ use super::report::{Finding, parameters};
 use super::state::State;
 use super::uncertainty::{covariance, parameter_std};
 use crate::compare::Delta;
-use crate::compare::findings::{SizeDelta, figures as finding_figures, most_different, sizes};
+use crate::compare::findings::{
+    SizeDelta, figures as finding_figures, most_different, shape_figures, sizes_and_shapes,
+};
 use crate::effect::Effect;
 use crate::ident::identify::RunIdentification;
 use crate::run::Run;
@@ -113,7 +117,7 @@ pub fn compare_halves(
             f
         };
         let (first, second) = (on(0), on(1));
-        let compared = sizes(&first, &second);
+        let compared = sizes_and_shapes(&first, &second);
         if let Some((s, z)) = most_different(&compared) {
             let pm = |sd: Option<f64>| sd.map_or_else(String::new, |v| format!(" ± {v:.2e}"));
             let _ = write!(
@@ -152,7 +156,8 @@ pub fn compare_halves(
 /// Each figure of `finding` (the whole record's) against the inverse-variance combination of
 /// the halves' (`halves`, as [`sizes`] compared them): `a` the whole's, `b` the combination's.
 fn against_whole(finding: &Finding, halves: &[SizeDelta]) -> Vec<SizeDelta> {
-    let whole = finding_figures(finding);
+    let mut whole = finding_figures(finding);
+    whole.extend(shape_figures(finding));
     halves
         .iter()
         .filter_map(|h| {

@@ -14,7 +14,8 @@
 //!
 //! So where the usable band is narrower than the band searched, the final model (every finding
 //! of the block in it) is refitted there and each finding's sizes and deviations are that fit's;
-//! the band searched's figures are kept in the finding (`search_band`). Where the two differ
+//! the band searched's figures are kept in the finding (`search_band`; a second-order lag's
+//! damping compared beside its `T`, `compare::findings::shape_figures`). Where the two differ
 //! beyond [`crate::compare::SIGNIFICANCE_SIGMAS`] combined deviations (the fits share the usable
 //! band's bins, so treating them as independent is conservative), the evidence says the size
 //! depends on the band above it and is not certifiable as it stands. A finding whose size the
@@ -42,7 +43,7 @@ use super::halves::{HalvesSource, refit_over};
 use super::report::{Finding, parameters};
 use super::state::State;
 use super::uncertainty::{covariance, parameter_std};
-use crate::compare::findings::{figures, most_different, sizes};
+use crate::compare::findings::{figures, most_different, sizes_and_shapes};
 use crate::effect::Effect;
 
 /// How far below the band searched the usable band's top must lie for the sizes to be fitted
@@ -145,7 +146,7 @@ pub fn size_over_usable_band(
              inputs (as an accepted effect is)",
             usable[0], usable[1]
         );
-        if let Some((s, z)) = most_different(&sizes(finding, &there)) {
+        if let Some((s, z)) = most_different(&sizes_and_shapes(finding, &there)) {
             let pm = |sd: Option<f64>| sd.map_or_else(String::new, |v| format!(" ± {v:.2e}"));
             let _ = write!(
                 finding.evidence,

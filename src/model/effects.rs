@@ -130,12 +130,24 @@ impl Resonance {
     /// other warning.
     #[must_use]
     pub fn explains(&self, w: &crate::ident::warnings::IdentWarning) -> bool {
-        let crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, band_hz, .. } = w else {
-            return false;
-        };
-        let [low, high] = *band_hz;
-        (low..=high).contains(&self.frequency_hz) || (self.gain(high) - self.gain(low)) * rise > 0.0
+        explains_gain_change(w, Some(self.frequency_hz), |f| self.gain(f))
     }
+}
+
+/// Whether a filter of gain `gain(f)` peaking at `peak_hz` (if it peaks) can hold a
+/// `gain_changes_across_band` warning `w`: it peaks inside the warning's band (its gain rises to
+/// the peak and falls beyond: either sign), or its gain changes across the band the way the
+/// warning says. False for any other warning.
+fn explains_gain_change(
+    w: &crate::ident::warnings::IdentWarning,
+    peak_hz: Option<f64>,
+    gain: impl Fn(f64) -> f64,
+) -> bool {
+    let crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, band_hz, .. } = w else {
+        return false;
+    };
+    let [low, high] = *band_hz;
+    peak_hz.is_some_and(|p| (low..=high).contains(&p)) || (gain(high) - gain(low)) * rise > 0.0
 }
 
 impl Identified {
@@ -295,19 +307,14 @@ impl ModelEffects {
     /// to its peak and falls beyond), as a mode's does ([`Resonance::explains`]).
     #[must_use]
     pub fn lag_explains(&self, w: &crate::ident::warnings::IdentWarning) -> bool {
-        let crate::ident::warnings::IdentWarning::GainChangesAcrossBand { rise, band_hz, .. } = w else {
-            return false;
-        };
         let Some(t) = self.lag_s.filter(|t| *t > 0.0) else {
             return false;
         };
-        let [low, high] = *band_hz;
         let peak_hz = self
             .lag_damping
             .filter(|z| 2.0 * z * z < 1.0)
             .map(|z| (1.0 - 2.0 * z * z).sqrt() / (std::f64::consts::TAU * t));
-        peak_hz.is_some_and(|p| (low..=high).contains(&p))
-            || (self.lag_gain(high) - self.lag_gain(low)) * rise > 0.0
+        explains_gain_change(w, peak_hz, |f| self.lag_gain(f))
     }
 
     /// The poles the effects give the response, `[re, im]` rad/s (the lag's, each resonance's

@@ -33,6 +33,18 @@ fn diagnose(harness: &mut Harness<'static, App>) {
     harness.run_steps(4);
 }
 
+/// The identification the app shows for its selected run.
+fn shown(harness: &Harness<'_, App>) -> Arc<imu_attest::gui::pipeline::Identification> {
+    harness
+        .state()
+        .selected()
+        .expect("a run")
+        .identification
+        .as_ref()
+        .expect("identified")
+        .clone()
+}
+
 /// Asserts that no label of the app contains `text` (`why` says what it would mean).
 fn assert_not_shown(harness: &Harness<'_, App>, text: &str, why: &str) {
     assert!(
@@ -190,28 +202,14 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
     diagnose(&mut harness);
     harness.get_by_label("verdict: effect found");
     harness.get_by_label("gyro first-order lag");
-    let identified = harness
-        .state()
-        .selected()
-        .unwrap()
-        .identification
-        .as_ref()
-        .unwrap()
-        .clone();
+    let identified = shown(&harness);
     assert!(identified.model.blocks["gyro"].effects.is_none());
     harness.get_by_label("Accept").click();
     harness.run_steps(3);
     harness.get_by_label("accepted");
     assert_eq!(harness.state().selected().unwrap().accepted.len(), 1);
     // Accept means accept: the model shown (Results), plotted (Bode) and exported is extended.
-    let extended = harness
-        .state()
-        .selected()
-        .unwrap()
-        .identification
-        .as_ref()
-        .unwrap()
-        .clone();
+    let extended = shown(&harness);
     let gyro = &extended.model.blocks["gyro"];
     let effects = gyro.effects.as_ref().expect("the lag is in the gyro's model");
     assert_eq!(effects.accepted[0].effect, Effect::SensorLag);
@@ -280,14 +278,7 @@ fn a_hidden_lag_is_named_and_a_rejection_diagnoses_again_without_it() {
     );
     harness.get_by_label("Reject").click();
     harness.run_steps(4);
-    let after = harness
-        .state()
-        .selected()
-        .unwrap()
-        .identification
-        .as_ref()
-        .unwrap()
-        .clone();
+    let after = shown(&harness);
     assert!(
         after.model.blocks["gyro"].effects.is_none(),
         "a rejected effect leaves the model"
@@ -387,5 +378,39 @@ fn compare_shows_each_run_s_findings_side_by_side() {
         harness
             .query_by_label(imu_attest::gui::view::compare::FINDINGS_NOT_COMPARED)
             .is_none()
+    );
+}
+
+/// A gyro's g-sensitivity, which the paper's model takes into `K` and the delay without a
+/// misfit, is said in Results (`effect_suspected`); accepted from the diagnosis, it is the
+/// model's and no longer said.
+#[test]
+fn a_suspected_g_sensitivity_is_said_in_results_until_accepted() {
+    let mut config = SimConfig::new(Regime::Approach);
+    config.duration_s = 120.0;
+    config.seed = 31;
+    config.effects = vec!["g_sensitivity:gyro".parse().unwrap()];
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("g_sensitive.csv");
+    write_run(&simulate(&config).unwrap(), &path).unwrap();
+    let mut harness = app(vec![path]);
+    let identified = shown(&harness);
+    let warning = identified.model.blocks["gyro"]
+        .fit
+        .warnings
+        .iter()
+        .find(|w| w.to_string().contains("as a g-sensitive gyro's do"))
+        .expect("the suspicion on the settled model")
+        .to_string();
+    harness.get_by_label(&format!("warning: {warning}"));
+    diagnose(&mut harness);
+    harness.get_by_label("gyro g-sensitivity");
+    harness.get_by_label("Accept").click();
+    harness.run_steps(3);
+    harness.get_by_label("accepted: gyro g-sensitivity");
+    assert_not_shown(
+        &harness,
+        "as a g-sensitive gyro's do",
+        "an accepted effect is no longer suspected",
     );
 }

@@ -41,6 +41,7 @@ pub mod size_limit;
 pub mod state;
 pub mod step_caveat;
 pub mod structure;
+pub mod suspect;
 pub mod tone;
 pub mod tone_limit;
 pub mod uncertainty;

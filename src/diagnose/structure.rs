@@ -321,7 +321,17 @@ impl Filters {
         let reference = structure
             .band_limit
             .map_or(Complex64::from(1.0), |r| r.inverse_at(theta.band_limit_t_s, f));
-        let channel = skew.map(|d| (-s * (theta.tau_s + d)).exp() * lag * reference);
+        // One complex exponential where the channels share the delay (`tau + 0.0` is `tau`: the
+        // same value as each channel's own).
+        let common = (-s * theta.tau_s).exp();
+        let channel = skew.map(|d| {
+            let own = if d == 0.0 {
+                common
+            } else {
+                (-s * (theta.tau_s + d)).exp()
+            };
+            own * lag * reference
+        });
         let mut resonant = [Complex64::from(1.0); 3];
         for (&axis, &(f_r, zeta)) in structure.resonance_axes.iter().zip(&theta.resonances) {
             let w = 2.0 * PI * f_r;
@@ -331,7 +341,7 @@ impl Filters {
             channel,
             resonant,
             // The specific force the g-sensitivity reads is computed from the angles too.
-            delay: (-s * theta.tau_s).exp() * reference,
+            delay: common * reference,
         }
     }
 

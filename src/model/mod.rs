@@ -396,6 +396,10 @@ impl BlockModel {
             | IdentWarning::DelayAbsorbedByPoles { .. }
             | IdentWarning::InadmissibleOrder { .. } => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
+            // An effect suspected and accepted is the model's now.
+            IdentWarning::EffectSuspected { effect, .. } => {
+                !effects.accepted.iter().any(|a| a.effect == *effect)
+            }
             w @ IdentWarning::GainChangesAcrossBand { rise, .. } => {
                 !((band_limit.is_some() && *rise >= 0.0)
                     || effects.lag_explains(w)

@@ -85,7 +85,10 @@ pub fn bare_model(
     let run = session.run().clone();
     let id = session.identify(settings, Start::Cold, progress)?;
     // The echo is the settings as used (a caller's unresolved ones would name another segment).
-    Ok(Model::from_identification(&run, &settings.for_run(&run), &id))
+    let settings = settings.for_run(&run);
+    let mut model = Model::from_identification(&run, &settings, &id);
+    crate::diagnose::suspect::attach(&mut model, session, &settings, &id);
+    Ok(model)
 }
 
 /// Fills `noise` of every block of `model` (identified from `session`'s run under `settings`).

@@ -175,7 +175,12 @@ impl Analysis<'_> {
                 return;
             };
             let settings = settings.clone();
-            let model = Model::from_identification(cache.session.run(), &settings, core);
+            let mut model = Model::from_identification(cache.session.run(), &settings, core);
+            // Tested on a settled identification only: a retune's is shown at once, and its
+            // settled refit follows within the second (`polish`).
+            if !core.provisional() {
+                crate::diagnose::suspect::attach(&mut model, &cache.session, &settings, core);
+            }
             let prepared = if cache.accepted.is_empty() {
                 None
             } else {

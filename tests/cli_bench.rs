@@ -42,6 +42,7 @@ fn tiny_run_gives_one_json_line_with_every_key() {
         "rewelch",
         "diagnose",
         "noise",
+        "suspect",
         "open_to_model",
     ] {
         let t = stages.get(name).and_then(serde_json::Value::as_f64);

@@ -404,6 +404,8 @@ fn a_suspected_g_sensitivity_is_said_in_results_until_accepted() {
         .to_string();
     harness.get_by_label(&format!("warning: {warning}"));
     diagnose(&mut harness);
+    // The diagnosis's stricter rule (with its look-elsewhere term) names it on this seed too:
+    // chi2 357 against 94 needed, measured on 1 Dec.
     harness.get_by_label("gyro g-sensitivity");
     harness.get_by_label("Accept").click();
     harness.run_steps(3);

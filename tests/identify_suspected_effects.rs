@@ -1,8 +1,9 @@
 //! Issue 13, never silently wrong: an effect the paper's model takes into `K` and the delay
-//! without a misfit (a gyro's g-sensitivity) is said on the identified model
-//! (`effect_suspected`, `imu_attest::diagnose::suspect`), and only there: not on clean runs of a
-//! perfect or a real-like stand, not for a gyro's lag (a rival that the test fits first), and not
-//! once the effect is accepted. The truth is read by this test alone.
+//! without a misfit (a gyro's g-sensitivity, an accelerometer's lever-arm error) is said on the
+//! identified model (`effect_suspected`, `imu_attest::diagnose::suspect`), and only there: not on
+//! clean runs of a perfect or a real-like stand, not for a gyro's lag (a rival that the test fits
+//! first), not on a model that already says it misfits, and not once the effect is accepted. The
+//! truth is read by this test alone.
 
 #[path = "common/sim.rs"]
 mod sim_common;
@@ -14,6 +15,7 @@ use imu_attest::diagnose::extend::extended_model;
 use imu_attest::effect::Effect;
 use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
+use imu_attest::ident::suspicion::Suspicion;
 use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::model::{BlockModel, Model};
 use imu_attest::noise::of_model::identified_model;
@@ -32,17 +34,13 @@ fn identify(run: Run) -> Model {
     .expect("identified")
 }
 
-/// The effects `m` is suspected of, with the delay shift each names.
-fn suspected(m: &BlockModel) -> Vec<(Effect, f64)> {
+/// The effects `m` is suspected of.
+fn suspected(m: &BlockModel) -> Vec<&Suspicion> {
     m.fit
         .warnings
         .iter()
         .filter_map(|w| match w {
-            IdentWarning::EffectSuspected {
-                effect,
-                delay_shift_s,
-                ..
-            } => Some((*effect, *delay_shift_s)),
+            IdentWarning::EffectSuspected(s) => Some(s),
             _ => None,
         })
         .collect()
@@ -65,8 +63,10 @@ fn a_g_sensitive_gyro_is_said_and_the_shift_it_names_is_towards_the_truth() {
         let gyro = &model.blocks["gyro"];
         let said = suspected(gyro);
         assert_eq!(said.len(), 1, "{regime:?} {seed}: {:?}", gyro.fit.warnings);
-        let (effect, shift) = said[0];
-        assert_eq!(effect, Effect::GSensitivity);
+        assert_eq!(said[0].effect, Effect::GSensitivity);
+        // The shift is of the whole-record refit of the paper's model, which stays within a
+        // deviation of the identified delay it is added to here.
+        let shift = said[0].delay_shift_s;
         let before = (gyro.tau_s - truth_tau).abs();
         let after = (gyro.tau_s + shift - truth_tau).abs();
         assert!(
@@ -136,4 +136,67 @@ fn a_lag_is_not_suspected_as_g_sensitivity() {
             gyro.fit.warnings
         );
     }
+}
+
+/// A g-sensitivity beside a gyro lag that gains more: the lag is fitted first, the
+/// g-sensitivity beside it still gains and is said with the lag named, and the shift it names
+/// moves the order-1 model's delay towards the truth (+23 us off before, 1.2-2.5 of its
+/// deviations on four such runs; within 1.2 after).
+#[test]
+fn a_g_sensitivity_beside_a_lag_is_said_with_the_lag_fitted_first() {
+    let (sim, run) = simulated_run_of(
+        120.0,
+        Regime::Approach,
+        52,
+        &["g_sensitivity:gyro", "sensor_lag:gyro"],
+    );
+    let truth_tau = sim.sidecar.truth.gyro.as_ref().expect("gyro truth").tau_s;
+    let model = identify(run);
+    let gyro = &model.blocks["gyro"];
+    let said = suspected(gyro);
+    assert_eq!(said.len(), 1, "{:?}", gyro.fit.warnings);
+    assert_eq!(
+        (said[0].effect, said[0].beside),
+        (Effect::GSensitivity, Some(Effect::SensorLag))
+    );
+    let shift = said[0].delay_shift_s;
+    assert!(
+        (gyro.tau_s + shift - truth_tau).abs() < (gyro.tau_s - truth_tau).abs(),
+        "delay {} (truth {truth_tau}), shift {shift}",
+        gyro.tau_s
+    );
+}
+
+/// An accelerometer's lever arm a little off the sidecar's (a tenth of the catalogue's error):
+/// the plain model's `K[ax][fz]` was 21-28 of its deviations off on four runs with no other
+/// warning; now the lever-arm error is said, naming that element. At four tenths the model says
+/// it does not explain the data, and is not tested (that warning already sends the reader to the
+/// diagnosis).
+#[test]
+fn a_lever_arm_error_is_said_and_a_model_that_misfits_is_not_tested() {
+    let (sim, run) = simulated_run_of(120.0, Regime::Cruise, 71, &["lever_arm_error:accel@0.1"]);
+    let truth = sim.sidecar.truth.accel.as_ref().expect("accel truth");
+    let model = identify(run);
+    let accel = &model.blocks["accel"];
+    let said = suspected(accel);
+    assert_eq!(said.len(), 1, "{:?}", accel.fit.warnings);
+    assert_eq!(said[0].effect, Effect::LeverArmError);
+    let element = said[0].k_shift.as_ref().expect("K's deviations");
+    let z = (accel.k[0][2] - truth.k[0][2]) / accel.fit.k_std[0][2].expect("deviation");
+    assert!(z.abs() > 10.0, "K[ax][fz] {z} deviations off");
+    assert_eq!((element.output.as_str(), element.input.as_str()), ("ax", "fz"));
+    assert!(element.sigmas > 10.0, "{}", element.sigmas);
+
+    let (_, run) = simulated_run_of(120.0, Regime::Approach, 71, &["lever_arm_error:accel@0.4"]);
+    let accel = &identify(run).blocks["accel"];
+    assert!(
+        accel
+            .fit
+            .warnings
+            .iter()
+            .any(|w| matches!(w, IdentWarning::PoorFit { .. })),
+        "{:?}",
+        accel.fit.warnings
+    );
+    assert!(suspected(accel).is_empty());
 }

@@ -15,6 +15,7 @@
 //! | `retune_cold` | `retune` with the structural fit from scratch (what `identify` does) |
 //! | `retune_order0` | `retune_cold` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
 //! | `noise` | the noise terms of every block of the latest identification ([`crate::noise::of_model::attach_noise`]: residual of the model over the record, Allan deviations, term fits), as `identify` and the app's model export add them |
+//! | `suspect` | the test of the latest identification's model for effects it takes in without a misfit ([`crate::diagnose::suspect::suspicions`]: the whole-record design over each block's band and the tested effect's fit, the blocks in parallel; the rivals only where it gains), as `identify` adds it |
 //! | `diagnose` | the missing-effect workflow on the session ([`crate::diagnose::diagnose_session`]): the observer, spectra and factorisations are the session's; its order-0 fit over the search band is timed |
 //! | `rewelch` | a change of the Welch settings (overlap 0.5 -> 0.6), as the app shows it at once: spectra, factorisation (Wilson started from the previous factors), Wiener and structural fit (from the previous fit) of every block from the cached observer inputs |
 //! | `spectra_bare` | the lower bound of `spectra`: [`super::bare`]'s loop of the same FFTs and cross products |
@@ -285,6 +286,27 @@ fn noise_stage(state: &mut BenchState) -> Result<(), BenchError> {
     Ok(())
 }
 
+/// The effects the latest identification's model may take in without a misfit, tested as
+/// `identify` tests them ([`crate::diagnose::suspect`]).
+fn suspect_stage(state: &mut BenchState) -> Result<(), BenchError> {
+    let session = state.session("suspect")?;
+    let Some((settings, id)) = session.identification().map(|(s, i)| (s.clone(), i.clone())) else {
+        return Err(BenchError::Missing {
+            stage: "suspect",
+            needs: "retune_cold",
+        });
+    };
+    let model = crate::model::Model::from_identification(session.run(), &settings, &id);
+    std::hint::black_box(crate::diagnose::suspect::suspicions(
+        &model,
+        session,
+        &settings,
+        &id,
+        &[],
+    ));
+    Ok(())
+}
+
 /// The whole missing-effect workflow on the session.
 fn diagnose_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let settings = state.settings.clone();
@@ -331,6 +353,7 @@ pub fn standard_stages() -> Vec<Stage<'static>> {
         Stage::repeated("retune_cold", RETUNES, retune_cold_stage),
         Stage::repeated("retune_order0", RETUNES, retune_order0_stage),
         Stage::once("noise", noise_stage),
+        Stage::once("suspect", suspect_stage),
         Stage::once("diagnose", diagnose_stage),
         Stage::once("rewelch", rewelch_stage),
         Stage::once("spectra_bare", bare_stage),

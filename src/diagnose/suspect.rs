@@ -1,5 +1,5 @@
 //! Effects the paper's model takes in without a word (issue 13): tested on every identified
-//! model, said as [`IdentWarning::EffectSuspected`].
+//! model, said as [`IdentWarning::EffectSuspected`] ([`Suspicion`]).
 //!
 //! A gyro's g-sensitivity `G f` follows the specific force, whose gravity part the attitude ties
 //! to the angles: a linear filter of the rate (about `g / (j w)` across axes). Bin by bin it is
@@ -35,6 +35,7 @@ use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
+use crate::ident::suspicion::Suspicion;
 use crate::ident::warnings::{ElementChange, IdentWarning};
 use crate::model::{BlockModel, Model};
 use crate::run::Run;
@@ -48,26 +49,41 @@ pub fn tested(block: Block) -> Effect {
     }
 }
 
-/// Adds [`IdentWarning::EffectSuspected`] to each block of `model` (made from `id`, the
-/// identification of `session`'s run under `settings`) whose outputs hold [`tested`]'s effect;
-/// a block whose model already holds the effect (accepted: `model.effects`) or says it does not
-/// explain the data (`poor_fit`, `band_top_misfit`) is not tested.
-pub fn attach(model: &mut Model, session: &Session, settings: &Settings, id: &RunIdentification) {
+/// The [`IdentWarning::EffectSuspected`] of each block of `model` (made from `id`, the
+/// identification of `session`'s run under `settings`) whose outputs hold [`tested`]'s effect.
+/// Not tested: a block with the effect among `accepted` (it is the model's), or whose model says
+/// it does not explain the data ([`says_misfit`]).
+#[must_use]
+pub fn suspicions(
+    model: &Model,
+    session: &Session,
+    settings: &Settings,
+    id: &RunIdentification,
+    accepted: &[(Block, Effect)],
+) -> Vec<(Block, IdentWarning)> {
     let Ok(span) = session.span(settings) else {
-        return;
+        return Vec::new();
     };
     let run = session.run();
     let tests: Vec<(&BlockIdentification, &BlockModel)> = id
         .blocks
         .iter()
+        .filter(|b| !accepted.contains(&(b.block, tested(b.block))))
         .filter_map(|b| Some((b, model.blocks.get(b.block.name())?)))
-        .filter(|(b, entry)| !holds(entry, tested(b.block)) && !says_misfit(entry))
+        .filter(|(_, entry)| !says_misfit(entry))
         .collect();
     // The blocks in parallel: each is a whole-record design and a few fits.
-    let found: Vec<(Block, IdentWarning)> = tests
+    tests
         .par_iter()
-        .filter_map(|(b, entry)| Some((b.block, suspicion(run, id, b, &span, entry)?)))
-        .collect();
+        .filter_map(|(b, entry)| {
+            let s = suspicion(run, id, b, &span, entry)?;
+            Some((b.block, IdentWarning::EffectSuspected(s)))
+        })
+        .collect()
+}
+
+/// Adds `found` ([`suspicions`]) to the fit warnings of `model`'s blocks.
+pub fn attach(model: &mut Model, found: Vec<(Block, IdentWarning)>) {
     for (block, w) in found {
         if let Some(entry) = model.blocks.get_mut(block.name()) {
             entry.fit.warnings.push(w);
@@ -75,24 +91,19 @@ pub fn attach(model: &mut Model, session: &Session, settings: &Settings, id: &Ru
     }
 }
 
-/// Whether `entry`'s model holds `effect` (accepted into it).
-fn holds(entry: &BlockModel, effect: Effect) -> bool {
-    entry
-        .effects
-        .as_ref()
-        .is_some_and(|e| e.accepted.iter().any(|a| a.effect == effect))
-}
-
-/// Whether `entry` says it does not explain the data. Such a model already sends the reader to
-/// the diagnosis, which searches the whole band: over the model's band a misfit from above it
-/// may take any shape (an accelerometer's mount mode at 27 Hz beyond a band ended at 20 Hz, its
-/// resonance out of the rivals' reach there, was suspected as a lever-arm error moving `K` by
-/// 18 %; the diagnosis names the mode).
+/// Whether `entry` says it does not explain the data, or that its inputs cannot be trusted in
+/// part of its band (a user's band). Such a model already sends the reader to the diagnosis,
+/// which searches the whole band: over the model's band a misfit from above it may take any
+/// shape (an accelerometer's mount mode at 27 Hz beyond a band ended at 20 Hz, its resonance out
+/// of the rivals' reach there, was suspected as a lever-arm error moving `K` by 18 %; the
+/// diagnosis names the mode), and inputs that are not the motion misfit in any shape too.
 fn says_misfit(entry: &BlockModel) -> bool {
     entry.fit.warnings.iter().any(|w| {
         matches!(
             w,
-            IdentWarning::PoorFit { .. } | IdentWarning::BandTopMisfit { .. }
+            IdentWarning::PoorFit { .. }
+                | IdentWarning::BandTopMisfit { .. }
+                | IdentWarning::UntrustedBand { .. }
         )
     })
 }
@@ -109,16 +120,19 @@ const RIVALS: [Effect; 5] = [
     Effect::ScaleNonlinearity,
 ];
 
-/// The warning for one block, if its outputs hold [`tested`]'s effect over the model's band:
+/// The suspicion for one block, if its outputs hold [`tested`]'s effect over the model's band:
 /// the effect removes more `chi2` than its parameters cost, fitted beside the paper's model and,
-/// where a rival gains more, beside the paper's model with that rival too.
+/// where a rival gains on its own too, beside the paper's model with the rival that gains most.
+/// The shifts are of the paper's model (with that rival where it gains more than the effect)
+/// fitted on the whole record over the band (within a deviation of the identified model's `K`
+/// and delay).
 fn suspicion(
     run: &Run,
     id: &RunIdentification,
     b: &BlockIdentification,
     span: &Range<usize>,
     entry: &BlockModel,
-) -> Option<IdentWarning> {
+) -> Option<Suspicion> {
     let band = b.band_hz;
     let (design, _) = block_design(run, &id.motion.euler, b, (band, false), span)?;
     let per_parameter = (3.0 * design.dof_per_channel()).ln();
@@ -132,17 +146,26 @@ fn suspicion(
     (gain(&alone) > 0.0).then_some(())?;
     let rival = candidates_among(&base, band, &|e| RIVALS.contains(&e))
         .into_iter()
-        .max_by(|x, y| gain(x).total_cmp(&gain(y)))
-        .filter(|r| gain(r) > gain(&alone));
-    let (from, candidate) = match rival {
-        None => (base, alone),
+        .filter(|r| gain(r) > 0.0)
+        .max_by(|x, y| gain(x).total_cmp(&gain(y)));
+    // Beside the rival that gains most it must gain too; its figures are of the model beside
+    // the rival only where the rival gains more than it does alone (a gyro's lag beside its
+    // g-sensitivity), else of the paper's model alone, which the identified model is (fitted
+    // beside channel delays that gained a little, a g-sensitivity moved a delay 5.4 us early
+    // by a further 5.2 us: the channel delays' mean is another delay).
+    let (from, candidate, beside) = match rival {
+        None => (base, alone, None),
         Some(r) => {
             let next = base.with(&r, band)?;
             let c = candidates_among(&next, band, &|e| e == effect)
                 .into_iter()
                 .next()?;
             (gain(&c) > 0.0).then_some(())?;
-            (next, c)
+            if gain(&r) > gain(&alone) {
+                (next, c, Some(r.effect))
+            } else {
+                (base, alone, None)
+            }
         }
     };
     let Extension::Structural(fitted) = &candidate.extension else {
@@ -154,15 +177,17 @@ fn suspicion(
         [0, 1, 2].map(|i| [0, 1, 2].map(|j| beta[3 * i + j]))
     };
     let shift = fitted.theta.tau_s - from.fitted.theta.tau_s;
-    Some(IdentWarning::EffectSuspected {
+    Some(Suspicion {
         effect,
         delta_chi2: candidate.delta_chi2,
         threshold: candidate.added_params as f64 * per_parameter,
         band_hz: band,
+        beside,
         delay_shift_s: shift,
         delay_shift_sigmas: entry.fit.tau_std_s.filter(|s| *s > 0.0).map(|s| shift.abs() / s),
         k_shift: furthest_element(b.block, &k_before, &k_after, &entry.fit.k_std),
         k_shift_relative: largest_relative_move(&k_before, &k_after),
+        before_accepted: false,
     })
 }
 

@@ -31,6 +31,7 @@ pub mod signals;
 pub mod spectra;
 pub mod stretches;
 pub mod structural;
+pub mod suspicion;
 mod warning_words;
 pub mod warnings;
 pub mod wiener;

@@ -12,52 +12,6 @@ fn relative(x: f64) -> String {
     }
 }
 
-/// The words of [`super::warnings::IdentWarning::EffectSuspected`] (anything else: nothing).
-pub(super) fn effect_suspected_words(
-    f: &mut fmt::Formatter<'_>,
-    w: &super::warnings::IdentWarning,
-) -> fmt::Result {
-    use crate::effect::Effect;
-    let super::warnings::IdentWarning::EffectSuspected {
-        effect,
-        delta_chi2,
-        threshold,
-        band_hz,
-        delay_shift_s,
-        delay_shift_sigmas,
-        k_shift,
-        k_shift_relative,
-    } = w
-    else {
-        return Ok(());
-    };
-    let what = match effect {
-        Effect::GSensitivity => "the outputs follow the specific force, as a g-sensitive gyro's do",
-        Effect::LeverArmError => "the outputs follow the motion as from a lever arm other than the sidecar's",
-        _ => "the outputs hold a catalogue effect the model does not",
-    };
-    let sigmas = |s: Option<f64>| s.map_or_else(String::new, |s| format!(" ({s:.1} of its deviations)"));
-    let element = k_shift.as_ref().map_or_else(String::new, |e| {
-        format!(
-            " (its {}/{} element by {:.1} of its deviations)",
-            e.output, e.input, e.sigmas
-        )
-    });
-    write!(
-        f,
-        "{what} ({effect} over {:.2}-{:.1} Hz removes chi2 {delta_chi2:.1}, its parameters cost \
-         {threshold:.1}): the paper's model takes it into K and the delay, where neither its chi2 \
-         nor its deviations show it; fitted beside them, the delay moves by {:+.1} us{} and K by \
-         up to {}{element}. `imu-attest discrepancy` sizes it and `identify --effects` fits it \
-         beside K (in the app: Missing effects, Accept)",
-        band_hz[0],
-        band_hz[1],
-        delay_shift_s * 1e6,
-        sigmas(*delay_shift_sigmas),
-        relative(*k_shift_relative),
-    )
-}
-
 /// The words of [`super::warnings::IdentWarning::GainDependsOnAmplitude`].
 pub(super) fn gain_depends_on_amplitude_words(
     f: &mut fmt::Formatter<'_>,
@@ -586,51 +540,6 @@ mod tests {
         assert!(
             old.contains("more than K's deviation (0.15 %)") && !old.contains("moves by"),
             "{old}"
-        );
-    }
-
-    #[test]
-    fn a_suspected_effect_says_what_it_is_its_evidence_and_what_it_moves() {
-        let w = IdentWarning::EffectSuspected {
-            effect: crate::effect::Effect::GSensitivity,
-            delta_chi2: 348.04,
-            threshold: 88.66,
-            band_hz: [0.12, 39.9],
-            delay_shift_s: 25.5e-6,
-            delay_shift_sigmas: Some(14.04),
-            k_shift: Some(ElementChange {
-                output: "gy".to_owned(),
-                input: "wz".to_owned(),
-                sigmas: 2.64,
-            }),
-            k_shift_relative: 1.1e-3,
-        };
-        let text = w.to_string();
-        for part in [
-            "the outputs follow the specific force, as a g-sensitive gyro's do",
-            "g_sensitivity over 0.12-39.9 Hz removes chi2 348.0, its parameters cost 88.7",
-            "the delay moves by +25.5 us (14.0 of its deviations)",
-            "K by up to 0.11 % (its gy/wz element by 2.6 of its deviations)",
-            "`identify --effects`",
-        ] {
-            assert!(text.contains(part), "{part:?} not in: {text}");
-        }
-        // Without deviations the figures stand alone.
-        let bare = IdentWarning::EffectSuspected {
-            effect: crate::effect::Effect::LeverArmError,
-            delta_chi2: 50.0,
-            threshold: 27.5,
-            band_hz: [0.12, 20.1],
-            delay_shift_s: -6.0e-6,
-            delay_shift_sigmas: None,
-            k_shift: None,
-            k_shift_relative: 5e-5,
-        }
-        .to_string();
-        assert!(
-            bare.contains("lever arm other than the sidecar's")
-                && bare.contains("moves by -6.0 us and K by up to 50 ppm."),
-            "{bare}"
         );
     }
 }

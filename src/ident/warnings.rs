@@ -25,9 +25,8 @@ use super::settings::Estimate;
 use super::spectra::BlockSpectra;
 use super::warning_words::{
     angle_noise_colour_unknown_words, angle_noise_overstated_words, delay_absorbed_words,
-    delay_outside_words, delay_step_words, effect_suspected_words, gain_change_words,
-    gain_depends_on_amplitude_words, poles_or_even_gain_words, write_stretches_without_delay,
-    zeros_lag_words, zeros_lead_words,
+    delay_outside_words, delay_step_words, gain_change_words, gain_depends_on_amplitude_words,
+    poles_or_even_gain_words, write_stretches_without_delay, zeros_lag_words, zeros_lead_words,
 };
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
@@ -443,25 +442,7 @@ pub enum IdentWarning {
     /// without a misfit (`crate::diagnose::suspect`: a gyro's g-sensitivity, an accelerometer's
     /// lever-arm error): fitted beside `K e^(-tau s)` over the model's band it removes more
     /// `chi2` than BIC's cost of its parameters, and `K` and the delay move.
-    EffectSuspected {
-        /// The effect.
-        effect: crate::effect::Effect,
-        /// The `chi2` it removes.
-        delta_chi2: f64,
-        /// The `chi2` its parameters cost (BIC: `ln n` each).
-        threshold: f64,
-        /// The band tested (the model's), Hz.
-        band_hz: [f64; 2],
-        /// How far the delay moves with the effect fitted beside `K`, s.
-        delay_shift_s: f64,
-        /// The same over the model's delay deviation (`None`: no deviation).
-        delay_shift_sigmas: Option<f64>,
-        /// The element of `K` that moves furthest against its own deviation (`None`: no
-        /// deviations).
-        k_shift: Option<ElementChange>,
-        /// The largest move of an element of `K`, relative to the largest element of `K`.
-        k_shift_relative: f64,
-    },
+    EffectSuspected(super::suspicion::Suspicion),
 }
 
 impl fmt::Display for IdentWarning {
@@ -643,7 +624,7 @@ impl fmt::Display for IdentWarning {
             IdentWarning::GainDependsOnAmplitude { outputs, band_hz } => {
                 gain_depends_on_amplitude_words(f, outputs, *band_hz)
             }
-            IdentWarning::EffectSuspected { .. } => effect_suspected_words(f, self),
+            IdentWarning::EffectSuspected(s) => s.fmt(f),
             IdentWarning::FactorNotCausal {
                 negative_lags,
                 refinement,

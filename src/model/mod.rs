@@ -397,9 +397,7 @@ impl BlockModel {
             | IdentWarning::InadmissibleOrder { .. } => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
             // An effect suspected and accepted is the model's now.
-            IdentWarning::EffectSuspected { effect, .. } => {
-                !effects.accepted.iter().any(|a| a.effect == *effect)
-            }
+            IdentWarning::EffectSuspected(s) => !effects.accepted.iter().any(|a| a.effect == s.effect),
             w @ IdentWarning::GainChangesAcrossBand { rise, .. } => {
                 !((band_limit.is_some() && *rise >= 0.0)
                     || effects.lag_explains(w)
@@ -412,6 +410,10 @@ impl BlockModel {
         for w in &mut self.fit.warnings {
             if let IdentWarning::DelayOutsideUsualRange { model_tau_s, .. } = w {
                 *model_tau_s = None;
+            }
+            // Another effect suspected: its figures are of the model without the accepted ones.
+            if let IdentWarning::EffectSuspected(s) = w {
+                s.before_accepted = true;
             }
             if let IdentWarning::GainChangesAcrossBand {
                 k_at_low_frequency, ..

@@ -595,3 +595,47 @@ fn the_cut_band_taken_back_takes_the_band_top_misfit() {
     m.take_back_the_cut_band([0.1, 39.9]);
     assert_eq!((m.band_hz, m.fit.warnings), ([0.1, 39.9], vec![negative]));
 }
+
+/// An effect suspected and then accepted is the model's: no longer said. Another effect's
+/// suspicion stays, its figures said to be of the model identified without the accepted ones.
+#[test]
+fn an_accepted_suspected_effect_is_not_said_and_another_s_figures_are_marked() {
+    use crate::effect::Effect;
+    use crate::ident::suspicion::Suspicion;
+    use crate::ident::warnings::IdentWarning;
+    let suspicion = |effect| Suspicion {
+        effect,
+        delta_chi2: 300.0,
+        threshold: 90.0,
+        band_hz: [0.1, 20.0],
+        beside: None,
+        delay_shift_s: 2e-5,
+        delay_shift_sigmas: Some(8.0),
+        k_shift: None,
+        k_shift_relative: 1e-3,
+        before_accepted: false,
+    };
+    let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+    m.fit.warnings = vec![
+        IdentWarning::EffectSuspected(suspicion(Effect::GSensitivity)),
+        IdentWarning::EffectSuspected(suspicion(Effect::LeverArmError)),
+    ];
+    let mut effects = no_effects(0.004, 0);
+    effects.accepted.push(crate::model::effects::AcceptedEffect {
+        effect: Effect::GSensitivity,
+        name: "gyro g-sensitivity".to_owned(),
+        parameters: serde_json::Value::Null,
+        parameter_std: serde_json::Value::Null,
+    });
+    m.set_effects(effects, K, [[Some(1e-3); 3]; 3], 0.004, Some(1e-5), true);
+    let marked = Suspicion {
+        before_accepted: true,
+        ..suspicion(Effect::LeverArmError)
+    };
+    assert_eq!(m.fit.warnings, vec![IdentWarning::EffectSuspected(marked)]);
+    assert!(
+        m.fit.warnings[0]
+            .to_string()
+            .contains("without the effects accepted")
+    );
+}

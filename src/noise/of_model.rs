@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::{BlockNoise, NoiseWarning, block_noise};
 use crate::block::Block;
+use crate::effect::Effect;
 use crate::ident::IdentError;
 use crate::ident::identify::IdentStep;
 use crate::ident::session::{Session, Start};
@@ -68,18 +69,21 @@ pub fn identified_model(
     settings: &Settings,
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, IdentError> {
-    let mut model = bare_model(session, settings, progress)?;
+    let mut model = bare_model(session, settings, &[], progress)?;
     attach_noise(&mut model, session, settings)?;
     Ok(model)
 }
 
-/// [`identified_model`] before its noise terms are attached.
+/// [`identified_model`] before its noise terms are attached, with the effects the model may take
+/// in without a misfit said ([`crate::diagnose::suspect`]; not those of `accepted`, which the
+/// caller adds to the model).
 ///
 /// # Errors
 /// The identification's errors.
 pub fn bare_model(
     session: &mut Session,
     settings: &Settings,
+    accepted: &[(Block, Effect)],
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, IdentError> {
     let run = session.run().clone();
@@ -87,7 +91,14 @@ pub fn bare_model(
     // The echo is the settings as used (a caller's unresolved ones would name another segment).
     let settings = settings.for_run(&run);
     let mut model = Model::from_identification(&run, &settings, &id);
-    crate::diagnose::suspect::attach(&mut model, session, &settings, &id);
+    progress(IdentStep {
+        block: None,
+        stage: "effects suspected",
+        done: 0,
+        total: 1,
+    });
+    let found = crate::diagnose::suspect::suspicions(&model, session, &settings, &id, accepted);
+    crate::diagnose::suspect::attach(&mut model, found);
     Ok(model)
 }
 

@@ -12,17 +12,22 @@ use super::stages::{self, Measured, Motion};
 use super::{Event, FailureKind, RunId, RunSummary, Stage};
 use crate::block::Block;
 use crate::diagnose::extend::{prepare_for_effects, starts_match};
+use crate::diagnose::suspect::{attach, suspicions};
 use crate::diagnose::{DiagnoseError, Prepared, prepare};
 use crate::effect::Effect;
 use crate::ident::IdentError;
 use crate::ident::identify::RunIdentification;
 use crate::ident::session::{Session, Start};
 use crate::ident::settings::Settings;
+use crate::ident::warnings::IdentWarning;
 use crate::model::Model;
 use crate::noise::reference::AccelGeometry;
 
 /// The accepted effects' starting points with the settings and effects they were made for.
 pub(super) type EffectStart = (Settings, Vec<(Block, Effect)>, Arc<Vec<Prepared>>);
+
+/// The effects suspected of an identification (`crate::diagnose::suspect::suspicions`).
+pub(super) type Suspected = (Arc<RunIdentification>, Vec<(Block, IdentWarning)>);
 
 /// A loaded run: the core's session and the display snapshots of its stages.
 pub(super) struct RunCache {
@@ -44,6 +49,9 @@ pub(super) struct RunCache {
     /// effects they were made for: a retune or a refit from scratch with the same settings and
     /// effects reuses them where they start from the model's bands (`starts_match`).
     pub effect_prepared: Option<EffectStart>,
+    /// The effects suspected of the identification they were tested on
+    /// (`crate::diagnose::suspect`): an Accept or a Reject does not test them again.
+    pub suspected: Option<Suspected>,
 }
 
 impl RunCache {
@@ -59,6 +67,7 @@ impl RunCache {
             accepted: Vec::new(),
             prepared: None,
             effect_prepared: None,
+            suspected: None,
         }
     }
 
@@ -176,10 +185,19 @@ impl Analysis<'_> {
             };
             let settings = settings.clone();
             let mut model = Model::from_identification(cache.session.run(), &settings, core);
-            // Tested on a settled identification only: a retune's is shown at once, and its
-            // settled refit follows within the second (`polish`).
+            // Tested on a settled identification only (a retune's is shown at once, and its
+            // settled refit follows within the second: `polish`), once per identification
+            // (an accepted effect's suspicion is dropped by the model: `Model::set_effects`).
             if !core.provisional() {
-                crate::diagnose::suspect::attach(&mut model, &cache.session, &settings, core);
+                let found = match &cache.suspected {
+                    Some((id, found)) if Arc::ptr_eq(id, core) => found.clone(),
+                    _ => {
+                        let found = suspicions(&model, &cache.session, &settings, core, &[]);
+                        cache.suspected = Some((core.clone(), found.clone()));
+                        found
+                    }
+                };
+                attach(&mut model, found);
             }
             let prepared = if cache.accepted.is_empty() {
                 None

@@ -1,0 +1,186 @@
+//! What [`super::warnings::IdentWarning::EffectSuspected`] carries and says: a catalogue effect
+//! that the paper's model takes into `K` and the delay without a misfit, found by
+//! `crate::diagnose::suspect` (the evidence, and how far `K` and the delay move once it is
+//! fitted beside them).
+//!
+//! Units: chi2 in units of the expected disturbance, shifts in s and relative to `K`'s largest
+//! element, deviations as counts. A figure without a deviation is `None` and left out of the
+//! file (the model file holds no `null` outside `*_std` fields).
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use super::warnings::ElementChange;
+use crate::effect::Effect;
+
+/// A suspected effect's evidence and what it moves.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Suspicion {
+    /// The effect.
+    pub effect: Effect,
+    /// The `chi2` it removes.
+    pub delta_chi2: f64,
+    /// The `chi2` its parameters cost (BIC: `ln n` each).
+    pub threshold: f64,
+    /// The band tested (the model's), Hz.
+    pub band_hz: [f64; 2],
+    /// The rival effect it was fitted beside, one that gains on its own too (a lag, channel
+    /// delays, ...: `crate::diagnose::suspect`); `None`: beside the paper's model alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beside: Option<Effect>,
+    /// How far the delay moves with the effect fitted, s: of the paper's model (with `beside`)
+    /// fitted on the whole record over the band, within a deviation of the model's delay.
+    pub delay_shift_s: f64,
+    /// The same over the model's delay deviation (`None`: no deviation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay_shift_sigmas: Option<f64>,
+    /// The element of `K` that moves furthest against its own deviation (`None`: no deviations).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_shift: Option<ElementChange>,
+    /// The largest move of an element of `K`, relative to the largest element of `K`.
+    pub k_shift_relative: f64,
+    /// Whether the figures are of the model identified without effects accepted since (their
+    /// `K` and delay are refitted; this effect was not among them).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub before_accepted: bool,
+}
+
+/// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
+fn relative(x: f64) -> String {
+    if x.abs() >= 1e-4 {
+        format!("{:.2} %", x * 100.0)
+    } else {
+        format!("{:.0} ppm", x * 1e6)
+    }
+}
+
+impl fmt::Display for Suspicion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = match self.effect {
+            Effect::GSensitivity => "the outputs follow the specific force, as a g-sensitive gyro's do",
+            Effect::LeverArmError => {
+                "the outputs follow the motion as from a lever arm other than the sidecar's"
+            }
+            _ => "the outputs hold a catalogue effect the model does not",
+        };
+        let beside = self
+            .beside
+            .map_or_else(String::new, |r| format!(" with {r} fitted first"));
+        let sigmas = self
+            .delay_shift_sigmas
+            .map_or_else(String::new, |s| format!(" ({s:.1} of its deviations)"));
+        let element = self.k_shift.as_ref().map_or_else(String::new, |e| {
+            format!(
+                " (its {}/{} element by {:.1} of its deviations)",
+                e.output, e.input, e.sigmas
+            )
+        });
+        write!(
+            f,
+            "{what} ({} over {:.2}-{:.1} Hz removes chi2 {:.1}{beside}, its parameters cost {:.1}): \
+             the paper's model takes it into K and the delay, where neither its chi2 nor its \
+             deviations show it; fitted beside K and the delay, it moves the delay by {:+.1} \
+             us{sigmas} and K by up to {}{element}",
+            self.effect,
+            self.band_hz[0],
+            self.band_hz[1],
+            self.delta_chi2,
+            self.threshold,
+            self.delay_shift_s * 1e6,
+            relative(self.k_shift_relative),
+        )?;
+        if self.before_accepted {
+            write!(
+                f,
+                " (figures of the model identified without the effects accepted)"
+            )?;
+        }
+        write!(
+            f,
+            ". `imu-attest discrepancy` sizes it and `identify --effects` fits it beside K (in the \
+             app: Missing effects, Accept)"
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Suspicion;
+    use crate::effect::Effect;
+    use crate::ident::warnings::{ElementChange, IdentWarning};
+
+    fn g_sensitivity() -> Suspicion {
+        Suspicion {
+            effect: Effect::GSensitivity,
+            delta_chi2: 348.04,
+            threshold: 88.66,
+            band_hz: [0.12, 39.9],
+            beside: None,
+            delay_shift_s: 25.5e-6,
+            delay_shift_sigmas: Some(14.04),
+            k_shift: Some(ElementChange {
+                output: "gy".to_owned(),
+                input: "wz".to_owned(),
+                sigmas: 2.64,
+            }),
+            k_shift_relative: 1.1e-3,
+            before_accepted: false,
+        }
+    }
+
+    #[test]
+    fn a_suspected_effect_says_what_it_is_its_evidence_and_what_it_moves() {
+        let text = IdentWarning::EffectSuspected(g_sensitivity()).to_string();
+        for part in [
+            "the outputs follow the specific force, as a g-sensitive gyro's do",
+            "g_sensitivity over 0.12-39.9 Hz removes chi2 348.0, its parameters cost 88.7",
+            "it moves the delay by +25.5 us (14.0 of its deviations)",
+            "K by up to 0.11 % (its gy/wz element by 2.6 of its deviations)",
+            "`identify --effects`",
+        ] {
+            assert!(text.contains(part), "{part:?} not in: {text}");
+        }
+        assert!(!text.contains("fitted first") && !text.contains("without the effects accepted"));
+        // Beside a rival, without deviations, after other effects were accepted.
+        let bare = Suspicion {
+            effect: Effect::LeverArmError,
+            beside: Some(Effect::SensorLag),
+            delay_shift_s: -6.0e-6,
+            delay_shift_sigmas: None,
+            k_shift: None,
+            k_shift_relative: 5e-5,
+            before_accepted: true,
+            ..g_sensitivity()
+        }
+        .to_string();
+        for part in [
+            "lever arm other than the sidecar's",
+            "removes chi2 348.0 with sensor_lag fitted first",
+            "moves the delay by -6.0 us and K by up to 50 ppm (figures of the model identified",
+        ] {
+            assert!(bare.contains(part), "{part:?} not in: {bare}");
+        }
+    }
+
+    /// Figures without deviations are left out of the file, not written as `null` (which the
+    /// model file's finiteness check refuses outside `*_std` fields), and read back the same.
+    #[test]
+    fn figures_without_deviations_are_left_out_of_the_file_and_read_back() {
+        let s = Suspicion {
+            delay_shift_sigmas: None,
+            k_shift: None,
+            ..g_sensitivity()
+        };
+        let w = IdentWarning::EffectSuspected(s);
+        let json = serde_json::to_value(&w).expect("serialised");
+        assert_eq!(json["kind"], "effect_suspected");
+        assert_eq!(json["effect"], "g_sensitivity");
+        for absent in ["delay_shift_sigmas", "k_shift", "beside", "before_accepted"] {
+            assert!(json.get(absent).is_none(), "{absent}: {json}");
+        }
+        assert!(!json.to_string().contains("null"), "{json}");
+        let back: IdentWarning = serde_json::from_value(json).expect("read back");
+        assert_eq!(back, w);
+    }
+}

@@ -79,11 +79,11 @@ pub struct DesignSignals<'a> {
     /// Which block.
     pub block: Block,
     /// Measured outputs.
-    pub output: &'a [Vec<f64>; 3],
+    pub output: [&'a [f64]; 3],
     /// Inputs computed from the measured angles.
-    pub input: &'a [Vec<f64>; 3],
+    pub input: [&'a [f64]; 3],
     /// Auxiliary regressors (3 for the gyro block, 9 for the accelerometer block).
-    pub auxiliary: &'a [Vec<f64>],
+    pub auxiliary: &'a [&'a [f64]],
     /// Sample rate, Hz.
     pub sample_rate_hz: f64,
 }
@@ -146,7 +146,7 @@ impl Design {
             groups,
             group_hz,
             group_expected,
-            record: Arc::new(signals.output.clone()),
+            record: Arc::new(signals.output.map(<[f64]>::to_vec)),
         })
     }
 
@@ -229,8 +229,8 @@ impl Design {
     #[must_use]
     pub fn line_search(
         block: Block,
-        output: &[Vec<f64>; 3],
-        input: &[Vec<f64>; 3],
+        output: [&[f64]; 3],
+        input: [&[f64]; 3],
         sample_rate_hz: f64,
         band_hz: [f64; 2],
     ) -> Option<Self> {
@@ -240,7 +240,7 @@ impl Design {
         let (fft_len, first_bin, df) = (fft.len(), *band.start(), fs / fft.len() as f64);
         let taper = hann(n);
         let z: Vec<Vec<Complex64>> = output
-            .iter()
+            .into_iter()
             .chain(input)
             .map(|x| band_spectrum(&mut fft, &taper, x, band.clone()))
             .collect();
@@ -257,7 +257,7 @@ impl Design {
             groups: Vec::new(),
             group_hz: Vec::new(),
             group_expected: [Vec::new(), Vec::new(), Vec::new()],
-            record: Arc::new(output.clone()),
+            record: Arc::new(output.map(<[f64]>::to_vec)),
         })
     }
 

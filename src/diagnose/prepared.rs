@@ -290,7 +290,6 @@ pub(super) fn block_design(
     span: &std::ops::Range<usize>,
 ) -> Option<(Design, Option<Design>)> {
     let signals = block_signals(run, motion, b.block)?;
-    let cut = |x: &[f64]| x[span.clone()].to_vec();
     let g = run.sidecar.g_mps2;
     let auxiliary: Vec<Vec<f64>> = match b.block {
         Block::Gyro => motion
@@ -300,20 +299,21 @@ pub(super) fn block_design(
         Block::Accel => {
             let r = run.sidecar.accel_lever_arm_m;
             let at = motion.specific_forces(r, g);
-            let shifted: Vec<[Vec<f64>; 3]> = (0..3)
-                .map(|l| {
-                    let mut rl = r;
-                    rl[l] += 1.0;
-                    motion.specific_forces(rl, g)
-                })
-                .collect();
-            // d f_i / d r_l at AUX + 3 i + l (f is affine in the lever arm: the difference is exact).
-            (0..3)
-                .flat_map(|i| (0..3).map(move |l| (i, l)))
-                .map(|(i, l)| shifted[l][i].iter().zip(&at[i]).map(|(a, b)| a - b).collect())
-                .collect()
+            // d f_i / d r_l at AUX + 3 i + l (f is affine in the lever arm: the difference is
+            // exact), one shifted arm at a time (a whole record's forces each).
+            let mut d = vec![Vec::new(); 9];
+            for l in 0..3 {
+                let mut rl = r;
+                rl[l] += 1.0;
+                let shifted = motion.specific_forces(rl, g);
+                for (i, (s, a)) in shifted.iter().zip(&at).enumerate() {
+                    d[3 * i + l] = s.iter().zip(a).map(|(s, a)| s - a).collect();
+                }
+            }
+            d
         }
     };
+    // Views of the span: no copies of whole records.
     let expected = smoothed_noise_psd(b);
     let freq = &b.spectra.frequency_hz;
     let lookup = |i: usize, f: f64| {
@@ -321,14 +321,15 @@ pub(super) fn block_design(
         let t = ((f - freq[k - 1]) / (freq[k] - freq[k - 1])).clamp(0.0, 1.0);
         expected[i][k - 1] * (1.0 - t) + expected[i][k] * t
     };
-    let output = signals.output.each_ref().map(|x| cut(x));
-    let input = signals.input.each_ref().map(|x| cut(x));
+    let output = signals.output.each_ref().map(|x| &x[span.clone()]);
+    let input = signals.input.each_ref().map(|x| &x[span.clone()]);
+    let auxiliary: Vec<&[f64]> = auxiliary.iter().map(|x| &x[span.clone()]).collect();
     let design = Design::new(
         &DesignSignals {
             block: b.block,
-            output: &output,
-            input: &input,
-            auxiliary: &auxiliary.iter().map(|x| cut(x)).collect::<Vec<_>>(),
+            output,
+            input,
+            auxiliary: &auxiliary,
             sample_rate_hz: run.sample_rate_hz,
         },
         band,
@@ -346,7 +347,7 @@ pub(super) fn block_design(
     // run with a mount resonance, two to four "tones" at 27-38 Hz above a band ended at 26-28
     // Hz, against none over the whole band).
     let upper = lines_above
-        .then(|| Design::line_search(b.block, &output, &input, run.sample_rate_hz, [from, top]))
+        .then(|| Design::line_search(b.block, output, input, run.sample_rate_hz, [from, top]))
         .flatten();
     Some((design, upper))
 }

@@ -46,9 +46,9 @@ fn design(x: &[Vec<f64>; 3], u: &[Vec<f64>; 3], fs: f64, noise: f64, aux: &[Vec<
     Design::new(
         &DesignSignals {
             block: Block::Gyro,
-            output: x,
-            input: u,
-            auxiliary: aux,
+            output: x.each_ref().map(Vec::as_slice),
+            input: u.each_ref().map(Vec::as_slice),
+            auxiliary: &aux.iter().map(Vec::as_slice).collect::<Vec<_>>(),
             sample_rate_hz: fs,
         },
         [0.5, 40.0],

@@ -3,6 +3,11 @@ use crate::block::Block;
 use crate::diagnose::design::Design;
 use crate::rng::Rng;
 
+/// Slices of three owned channels.
+fn views(x: &[Vec<f64>; 3]) -> [&[f64]; 3] {
+    x.each_ref().map(Vec::as_slice)
+}
+
 /// Three channels of unit white noise with a tone of amplitude `a` at `f` Hz where `on(t)`.
 fn record(fs: f64, seconds: f64, f: f64, a: f64, on: &dyn Fn(f64) -> bool) -> [Vec<f64>; 3] {
     let mut rng = Rng::new(7);
@@ -32,7 +37,8 @@ fn a_pulsed_tone_is_found_with_its_gate_and_its_whole_evidence() {
         vec![0.0; out[0].len()],
         vec![0.0; out[0].len()],
     ];
-    let mut design = Design::line_search(Block::Gyro, &out, &zero, fs, [5.0, 100.0]).expect("design");
+    let mut design =
+        Design::line_search(Block::Gyro, views(&out), views(&zero), fs, [5.0, 100.0]).expect("design");
     let residual = design.set_line_level([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 0.0);
     let tone = strongest_line(&design, &residual, &design.outputs()).expect("a line");
     assert!((tone.frequency_hz - f).abs() < 1e-3, "{}", tone.frequency_hz);
@@ -72,8 +78,8 @@ fn no_tone_is_named_at_a_line_of_the_inputs() {
         // Broadband inputs: the outputs' tone is found, and no bin of the band is taken for
         // an input line (about 57 000 bins per seed).
         let broadband = inputs(seed, n, fs, f, 0.0);
-        let mut design =
-            Design::line_search(Block::Gyro, &out, &broadband, fs, [5.0, 100.0]).expect("design");
+        let mut design = Design::line_search(Block::Gyro, views(&out), views(&broadband), fs, [5.0, 100.0])
+            .expect("design");
         let flagged = (0..design.n_bins()).filter(|&k| input_line(&design, k)).count();
         assert_eq!(flagged, 0, "seed {seed}");
         assert!(input_lines_hz(&design).is_empty(), "seed {seed}");
@@ -83,8 +89,8 @@ fn no_tone_is_named_at_a_line_of_the_inputs() {
         // A sine of the inputs at the tone's frequency (a stand programme's, 26 dB above the
         // continuum at 1/5 of the tone's amplitude): not named there.
         let programme = inputs(seed, n, fs, f, 0.2);
-        let mut design =
-            Design::line_search(Block::Gyro, &out, &programme, fs, [5.0, 100.0]).expect("design");
+        let mut design = Design::line_search(Block::Gyro, views(&out), views(&programme), fs, [5.0, 100.0])
+            .expect("design");
         let residual = design.set_line_level(unit, 0.0);
         let at = design.frequency_hz.iter().position(|&h| h >= f).expect("bin");
         assert!(input_line(&design, at), "seed {seed}");
@@ -119,7 +125,8 @@ fn input_lines_do_not_use_up_the_search_s_tries() {
         *u += 0.5 * sines;
         *x += 0.3 * sines;
     }
-    let mut design = Design::line_search(Block::Gyro, &out, &input, fs, [5.0, 100.0]).expect("design");
+    let mut design =
+        Design::line_search(Block::Gyro, views(&out), views(&input), fs, [5.0, 100.0]).expect("design");
     let residual = design.set_line_level([[0.0; 3]; 3], 0.0);
     assert_eq!(
         input_lines_hz(&design).len(),

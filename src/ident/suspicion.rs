@@ -40,10 +40,6 @@ pub struct Suspicion {
     pub k_shift: Option<ElementChange>,
     /// The largest move of an element of `K`, relative to the largest element of `K`.
     pub k_shift_relative: f64,
-    /// Whether the figures are of the model identified without effects accepted since (their
-    /// `K` and delay are refitted; this effect was not among them).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub before_accepted: bool,
 }
 
 /// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
@@ -61,6 +57,10 @@ impl fmt::Display for Suspicion {
             Effect::GSensitivity => "the outputs follow the specific force, as a g-sensitive gyro's do",
             Effect::LeverArmError => {
                 "the outputs follow the motion as from a lever arm other than the sidecar's"
+            }
+            Effect::AxisTimeSkew => "the output channels are delayed apart",
+            Effect::ScaleNonlinearity => {
+                "the outputs hold a part quadratic in their inputs (a quadratic scale factor)"
             }
             _ => "the outputs hold a catalogue effect the model does not",
         };
@@ -90,12 +90,6 @@ impl fmt::Display for Suspicion {
             self.delay_shift_s * 1e6,
             relative(self.k_shift_relative),
         )?;
-        if self.before_accepted {
-            write!(
-                f,
-                " (figures of the model identified without the effects accepted)"
-            )?;
-        }
         write!(
             f,
             ". `imu-attest discrepancy` sizes it and `identify --effects` fits it beside K (in the \
@@ -125,7 +119,6 @@ mod tests {
                 sigmas: 2.64,
             }),
             k_shift_relative: 1.1e-3,
-            before_accepted: false,
         }
     }
 
@@ -141,8 +134,17 @@ mod tests {
         ] {
             assert!(text.contains(part), "{part:?} not in: {text}");
         }
-        assert!(!text.contains("fitted first") && !text.contains("without the effects accepted"));
-        // Beside a rival, without deviations, after other effects were accepted.
+        assert!(!text.contains("fitted first"));
+        let skew = Suspicion {
+            effect: Effect::AxisTimeSkew,
+            ..g_sensitivity()
+        }
+        .to_string();
+        assert!(
+            skew.starts_with("the output channels are delayed apart (axis_time_skew over"),
+            "{skew}"
+        );
+        // Beside a rival, without deviations.
         let bare = Suspicion {
             effect: Effect::LeverArmError,
             beside: Some(Effect::SensorLag),
@@ -150,14 +152,13 @@ mod tests {
             delay_shift_sigmas: None,
             k_shift: None,
             k_shift_relative: 5e-5,
-            before_accepted: true,
             ..g_sensitivity()
         }
         .to_string();
         for part in [
             "lever arm other than the sidecar's",
             "removes chi2 348.0 with sensor_lag fitted first",
-            "moves the delay by -6.0 us and K by up to 50 ppm (figures of the model identified",
+            "moves the delay by -6.0 us and K by up to 50 ppm. `imu-attest discrepancy`",
         ] {
             assert!(bare.contains(part), "{part:?} not in: {bare}");
         }
@@ -176,7 +177,7 @@ mod tests {
         let json = serde_json::to_value(&w).expect("serialised");
         assert_eq!(json["kind"], "effect_suspected");
         assert_eq!(json["effect"], "g_sensitivity");
-        for absent in ["delay_shift_sigmas", "k_shift", "beside", "before_accepted"] {
+        for absent in ["delay_shift_sigmas", "k_shift", "beside"] {
             assert!(json.get(absent).is_none(), "{absent}: {json}");
         }
         assert!(!json.to_string().contains("null"), "{json}");

@@ -390,14 +390,16 @@ impl BlockModel {
         // and a causal one takes the lag of the angles (their leading zeros) and its group delay.
         let band_limit = effects.reference_band_limit.filter(|b| b.t_s > 0.0);
         self.fit.warnings.retain(|w| match w {
-            // The identified fit's own: its poles, its fixed order, its delay beside its poles.
+            // The identified fit's own: its poles, its fixed order, its delay beside its poles;
+            // and its suspected effects (the extended model is the diagnosis's, whose rounds
+            // test every effect beside the accepted ones: `crate::diagnose::suspect` tests
+            // beside the paper's model alone).
             IdentWarning::PolesOrEvenGain { .. }
             | IdentWarning::ZerosLag { .. }
             | IdentWarning::DelayAbsorbedByPoles { .. }
-            | IdentWarning::InadmissibleOrder { .. } => false,
+            | IdentWarning::InadmissibleOrder { .. }
+            | IdentWarning::EffectSuspected(_) => false,
             IdentWarning::GainDependsOnAmplitude { .. } => !odd_fitted,
-            // An effect suspected and accepted is the model's now.
-            IdentWarning::EffectSuspected(s) => !effects.accepted.iter().any(|a| a.effect == s.effect),
             w @ IdentWarning::GainChangesAcrossBand { rise, .. } => {
                 !((band_limit.is_some() && *rise >= 0.0)
                     || effects.lag_explains(w)
@@ -410,10 +412,6 @@ impl BlockModel {
         for w in &mut self.fit.warnings {
             if let IdentWarning::DelayOutsideUsualRange { model_tau_s, .. } = w {
                 *model_tau_s = None;
-            }
-            // Another effect suspected: its figures are of the model without the accepted ones.
-            if let IdentWarning::EffectSuspected(s) = w {
-                s.before_accepted = true;
             }
             if let IdentWarning::GainChangesAcrossBand {
                 k_at_low_frequency, ..

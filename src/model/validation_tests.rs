@@ -596,10 +596,10 @@ fn the_cut_band_taken_back_takes_the_band_top_misfit() {
     assert_eq!((m.band_hz, m.fit.warnings), ([0.1, 39.9], vec![negative]));
 }
 
-/// An effect suspected and then accepted is the model's: no longer said. Another effect's
-/// suspicion stays, its figures said to be of the model identified without the accepted ones.
+/// An extended model is the diagnosis's, whose rounds test every effect beside the accepted
+/// ones: no suspicion of the identified model's is kept, of the accepted effect or another.
 #[test]
-fn an_accepted_suspected_effect_is_not_said_and_another_s_figures_are_marked() {
+fn an_extended_model_keeps_no_suspicion() {
     use crate::effect::Effect;
     use crate::ident::suspicion::Suspicion;
     use crate::ident::warnings::IdentWarning;
@@ -613,12 +613,18 @@ fn an_accepted_suspected_effect_is_not_said_and_another_s_figures_are_marked() {
         delay_shift_sigmas: Some(8.0),
         k_shift: None,
         k_shift_relative: 1e-3,
-        before_accepted: false,
     };
     let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+    let kept = IdentWarning::FewSegments {
+        segments: 7,
+        equivalent_averages: 12.0,
+        segment_len: 1024,
+        segment_auto: true,
+    };
     m.fit.warnings = vec![
         IdentWarning::EffectSuspected(suspicion(Effect::GSensitivity)),
-        IdentWarning::EffectSuspected(suspicion(Effect::LeverArmError)),
+        kept.clone(),
+        IdentWarning::EffectSuspected(suspicion(Effect::AxisTimeSkew)),
     ];
     let mut effects = no_effects(0.004, 0);
     effects.accepted.push(crate::model::effects::AcceptedEffect {
@@ -628,14 +634,5 @@ fn an_accepted_suspected_effect_is_not_said_and_another_s_figures_are_marked() {
         parameter_std: serde_json::Value::Null,
     });
     m.set_effects(effects, K, [[Some(1e-3); 3]; 3], 0.004, Some(1e-5), true);
-    let marked = Suspicion {
-        before_accepted: true,
-        ..suspicion(Effect::LeverArmError)
-    };
-    assert_eq!(m.fit.warnings, vec![IdentWarning::EffectSuspected(marked)]);
-    assert!(
-        m.fit.warnings[0]
-            .to_string()
-            .contains("without the effects accepted")
-    );
+    assert_eq!(m.fit.warnings, vec![kept]);
 }

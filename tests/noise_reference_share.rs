@@ -34,7 +34,7 @@ fn blocks_of(run: Run) -> Vec<(Block, BlockModel, ReferenceShare)> {
         ..Settings::default()
     };
     let mut session = Session::new(run.clone());
-    let mut model = bare_model(&mut session, &settings, &[], &mut |_| {}).expect("identified");
+    let mut model = bare_model(&mut session, &settings, &mut |_| {}).expect("identified");
     let motion = session.motion().expect("observer");
     Block::BOTH
         .iter()

@@ -298,11 +298,7 @@ fn suspect_stage(state: &mut BenchState) -> Result<(), BenchError> {
     };
     let model = crate::model::Model::from_identification(session.run(), &settings, &id);
     std::hint::black_box(crate::diagnose::suspect::suspicions(
-        &model,
-        session,
-        &settings,
-        &id,
-        &[],
+        &model, session, &settings, &id,
     ));
     Ok(())
 }

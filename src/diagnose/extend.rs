@@ -39,7 +39,7 @@ pub fn extended_model(
     accepted: &[(Block, Effect)],
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, DiagnoseError> {
-    let mut model = crate::noise::of_model::bare_model(session, settings, accepted, progress)?;
+    let mut model = crate::noise::of_model::bare_model(session, settings, progress)?;
     let preps = prepare_for_effects(session, settings, &model, accepted)?;
     apply_effects(&mut model, &preps, accepted);
     crate::noise::of_model::attach_noise(&mut model, session, settings)?;

@@ -31,6 +31,7 @@ use super::candidates::{Candidate, Extension, candidates_among};
 use super::prepared::block_design;
 use super::report::gain as gain_of;
 use super::state::State;
+use super::structure::LagShape;
 use crate::block::Block;
 use crate::effect::Effect;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
@@ -39,6 +40,7 @@ use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
 use crate::ident::suspicion::Suspicion;
 use crate::ident::warnings::{ElementChange, IdentWarning};
+use crate::model::band_limit::BandLimitShape;
 use crate::model::{BlockModel, Model};
 use crate::run::Run;
 
@@ -57,18 +59,16 @@ pub fn tested(block: Block) -> [Effect; 3] {
 }
 
 /// The [`IdentWarning::EffectSuspected`] of each block of `model` (made from `id`, the
-/// identification of `session`'s run under `settings`) whose outputs hold [`tested`]'s effect.
-/// Not tested: a block with effects `accepted` (its model is the diagnosis's, whose rounds test
-/// every effect beside the accepted ones: tested beside the paper's model alone, the misfit of
-/// an accepted g-sensitivity was suspected as channel delays), or whose model says it does not
-/// explain the data ([`says_misfit`]).
+/// identification of `session`'s run under `settings`) whose outputs hold one of [`tested`]'s
+/// effects. Not tested: a block whose model says it does not explain the data
+/// ([`says_misfit`]). A block's model later extended by accepted effects drops them
+/// (`Model::set_effects`): it is judged on its own joint fit.
 #[must_use]
 pub fn suspicions(
     model: &Model,
     session: &Session,
     settings: &Settings,
     id: &RunIdentification,
-    accepted: &[(Block, Effect)],
 ) -> Vec<(Block, IdentWarning)> {
     let Ok(span) = session.span(settings) else {
         return Vec::new();
@@ -77,7 +77,6 @@ pub fn suspicions(
     let tests: Vec<(&BlockIdentification, &BlockModel)> = id
         .blocks
         .iter()
-        .filter(|b| !accepted.iter().any(|(block, _)| *block == b.block))
         .filter_map(|b| Some((b, model.blocks.get(b.block.name())?)))
         .filter(|(_, entry)| !says_misfit(entry))
         .collect();
@@ -85,18 +84,7 @@ pub fn suspicions(
     tests
         .par_iter()
         .filter_map(|(b, entry)| {
-            // Not a quadratic scale factor where the model already says its gain depends on
-            // the amplitude.
-            let odd = entry
-                .fit
-                .warnings
-                .iter()
-                .any(|w| matches!(w, IdentWarning::GainDependsOnAmplitude { .. }));
-            let effects: Vec<Effect> = tested(b.block)
-                .into_iter()
-                .filter(|e| !(odd && *e == Effect::ScaleNonlinearity))
-                .collect();
-            let s = suspicion(run, id, b, &span, entry, &effects)?;
+            let s = suspicion(run, id, b, &span, entry)?;
             Some((b.block, IdentWarning::EffectSuspected(s)))
         })
         .collect()
@@ -140,81 +128,143 @@ const RIVALS: [Effect; 3] = [
     Effect::ReferenceBandLimit,
 ];
 
-/// The suspicion for one block, if its outputs hold [`tested`]'s effect over the model's band:
-/// the effect removes more `chi2` than its parameters cost, fitted beside the paper's model and,
-/// where a rival gains on its own too, beside the paper's model with the rival that gains most.
-/// The shifts are of the paper's model (with that rival where it gains more than the effect)
-/// fitted on the whole record over the band (within a deviation of the identified model's `K`
-/// and delay).
+/// The suspicion for one block, if its outputs hold one of [`tested`]'s effects over the
+/// model's band: tried in the order of their gains alone, the first that removes more `chi2`
+/// than it must ([`threshold`]) beside the paper's model and, where a rival gains on its own too,
+/// beside the paper's model with the rival that gains most, and that moves the model's figures
+/// ([`material`]). A quadratic scale factor is not tested where the model already says its gain
+/// depends on the amplitude (it stays a rival). The figures are of the paper's model fitted on
+/// the whole record over the band, with the rival where it gains more than the effect alone.
 fn suspicion(
     run: &Run,
     id: &RunIdentification,
     b: &BlockIdentification,
     span: &Range<usize>,
     entry: &BlockModel,
-    effects: &[Effect],
 ) -> Option<Suspicion> {
     let band = b.band_hz;
     let (design, _) = block_design(run, &id.motion.euler, b, (band, false), span)?;
     let per_parameter = (3.0 * design.dof_per_channel()).ln();
-    let gain = |c: &Candidate| c.delta_chi2 - c.added_params as f64 * per_parameter;
+    let gain = |c: &Candidate| c.delta_chi2 - threshold(c.added_params, per_parameter);
     let base = State::base(design, b.structural.tau_s, band)?;
-    let best = |c: Vec<Candidate>| {
-        c.into_iter()
-            .filter(|c| gain(c) > 0.0)
-            .max_by(|x, y| gain(x).total_cmp(&gain(y)))
-    };
+    let odd = entry
+        .fit
+        .warnings
+        .iter()
+        .any(|w| matches!(w, IdentWarning::GainDependsOnAmplitude { .. }));
+    let all = tested(b.block);
+    let mut alone: Vec<Candidate> = candidates_among(&base, band, &|e| {
+        all.contains(&e) && !(odd && e == Effect::ScaleNonlinearity)
+    })
+    .into_iter()
+    .filter(|c| gain(c) > 0.0)
+    .collect();
     // Most models end here: the rivals are fitted only where a tested effect gains alone.
-    let alone = best(candidates_among(&base, band, &|e| effects.contains(&e)))?;
-    let effect = alone.effect;
-    let rival = best(candidates_among(&base, band, &|e| {
-        RIVALS.contains(&e) || (e != effect && effects.contains(&e))
-    }));
-    // Beside the rival that gains most it must gain too; its figures are of the model beside
-    // the rival only where the rival gains more than it does alone (a gyro's lag beside its
-    // g-sensitivity), else of the paper's model alone, which the identified model is (fitted
-    // beside channel delays that gained a little, a g-sensitivity moved a delay 5.4 us early
-    // by a further 5.2 us: the channel delays' mean is another delay).
-    let (from, candidate, beside) = match rival {
-        None => (base, alone, None),
-        Some(r) => {
-            let next = base.with(&r, band)?;
-            let c = candidates_among(&next, band, &|e| e == effect)
-                .into_iter()
-                .next()?;
-            (gain(&c) > 0.0).then_some(())?;
-            if gain(&r) > gain(&alone) {
-                (next, c, Some(r.effect))
-            } else {
-                (base, alone, None)
+    if alone.is_empty() {
+        return None;
+    }
+    alone.sort_by(|x, y| gain(y).total_cmp(&gain(x)));
+    alone.into_iter().find_map(|c| {
+        let rival = candidates_among(&base, band, &|e| {
+            RIVALS.contains(&e) || (e != c.effect && all.contains(&e))
+        })
+        .into_iter()
+        .filter(|r| gain(r) > 0.0)
+        .max_by(|x, y| gain(x).total_cmp(&gain(y)));
+        // Beside the rival that gains most it must gain too (a fit beside it that fails
+        // clears nothing: not said); its figures are of the model beside the rival only where
+        // the rival gains more than it does alone (a gyro's lag beside its g-sensitivity), else
+        // of the paper's model alone, which the identified model is (fitted beside channel
+        // delays that gained a little, a g-sensitivity moved a delay 5.4 us early by a further
+        // 5.2 us: the channel delays' mean is another delay).
+        let (from, candidate, beside) = match rival {
+            None => (base.clone(), c, None),
+            Some(r) => {
+                let next = base.with(&r, band)?;
+                let beside_r = candidates_among(&next, band, &|e| e == c.effect)
+                    .into_iter()
+                    .next()?;
+                (gain(&beside_r) > 0.0).then_some(())?;
+                if gain(&r) > gain(&c) {
+                    (next, beside_r, Some(r.effect))
+                } else {
+                    (base.clone(), c, None)
+                }
             }
-        }
-    };
+        };
+        figures(b.block, band, (&from, &candidate, beside), entry, per_parameter)
+    })
+}
+
+/// The suspicion of `candidate` fitted from `from` (beside the rival `beside`) over `band`, if
+/// it moves the model's figures.
+fn figures(
+    block: Block,
+    band: [f64; 2],
+    (from, candidate, beside): (&State, &Candidate, Option<Effect>),
+    entry: &BlockModel,
+    per_parameter: f64,
+) -> Option<Suspicion> {
     let Extension::Structural(fitted) = &candidate.extension else {
         return None;
     };
-    let k_before = gain_of(&from);
+    let k_before = gain_of(from);
     let k_after = {
         let beta = &fitted.profile.beta;
         [0, 1, 2].map(|i| [0, 1, 2].map(|j| beta[3 * i + j]))
     };
+    let tau_std = entry.fit.tau_std_s.filter(|s| *s > 0.0);
     let shift = fitted.theta.tau_s - from.fitted.theta.tau_s;
-    let delay_shift_sigmas = entry.fit.tau_std_s.filter(|s| *s > 0.0).map(|s| shift.abs() / s);
-    let k_shift = furthest_element(b.block, &k_before, &k_after, &entry.fit.k_std);
-    // Said where it moves the model's figures beyond their deviations (or they have none).
-    let moved = [delay_shift_sigmas, k_shift.as_ref().map(|e| e.sigmas)];
-    let material = moved.iter().all(Option::is_none) || moved.iter().flatten().any(|&z| z > MATERIAL_SIGMAS);
-    material.then_some(Suspicion {
-        effect,
+    // Channel delays: each channel's delay against the model's (the fitted delay is their plain
+    // mean, the model's one weighted by the channels' information: that shift is a gauge).
+    let channels = (candidate.effect == Effect::AxisTimeSkew).then(|| {
+        fitted
+            .theta
+            .channel_skew_s()
+            .map(|d| fitted.theta.tau_s + d - from.fitted.theta.tau_s)
+    });
+    // One channel's delay holds about a third of the block's information: its deviation is
+    // about sqrt(3) times the model's delay deviation.
+    let delay_shift_sigmas = tau_std.map(|s| match channels {
+        Some(c) => c.iter().fold(0.0_f64, |m, d| m.max(d.abs())) / (3.0_f64.sqrt() * s),
+        None => shift.abs() / s,
+    });
+    let k_shift = furthest_element(block, &k_before, &k_after, &entry.fit.k_std);
+    material(delay_shift_sigmas, k_shift.as_ref().map(|e| e.sigmas)).then(|| Suspicion {
+        effect: candidate.effect,
         delta_chi2: candidate.delta_chi2,
-        threshold: candidate.added_params as f64 * per_parameter,
+        threshold: threshold(candidate.added_params, per_parameter),
         band_hz: band,
         beside,
         delay_shift_s: shift,
         delay_shift_sigmas,
+        channel_delays_s: channels,
         k_shift,
         k_shift_relative: largest_relative_move(&k_before, &k_after),
     })
+}
+
+/// How many candidates the test may fit on a block: the tested effects, and the rivals as the
+/// diagnosis counts them (each lag shape, each resonant axis, each band-limit shape).
+const TRIED: usize = 3 + LagShape::SHAPES.len() + 3 + BandLimitShape::SHAPES.len();
+
+/// The `chi2` an effect of `added` parameters must remove: BIC's `ln n` each (`per_parameter`)
+/// and the diagnosis's look-elsewhere cost of the best of [`TRIED`] candidates, so that the
+/// command line says no more than the diagnosis's first round would name (without it, channel
+/// delays that took a small g-sensitivity's misfit, chi2 22.6 against 19.7, were said; the
+/// diagnosis does not name them).
+fn threshold(added: usize, per_parameter: f64) -> f64 {
+    added as f64 * per_parameter + 2.0 * (TRIED as f64).ln()
+}
+
+/// Whether an effect moves the model's delay or an element of `K` by more than
+/// [`MATERIAL_SIGMAS`] of its own deviation (with no deviation known, it cannot be judged: not
+/// said).
+fn material(delay_sigmas: Option<f64>, k_sigmas: Option<f64>) -> bool {
+    [delay_sigmas, k_sigmas]
+        .into_iter()
+        .flatten()
+        .any(|z| z > MATERIAL_SIGMAS)
 }
 
 /// How many of its own deviations an effect must move the model's delay or an element of `K`

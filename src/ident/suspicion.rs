@@ -21,20 +21,30 @@ pub struct Suspicion {
     pub effect: Effect,
     /// The `chi2` it removes.
     pub delta_chi2: f64,
-    /// The `chi2` its parameters cost (BIC: `ln n` each).
+    /// The `chi2` it must remove: BIC's `ln n` per parameter and the diagnosis's look-elsewhere
+    /// cost (`crate::diagnose::suspect`).
     pub threshold: f64,
     /// The band tested (the model's), Hz.
     pub band_hz: [f64; 2],
-    /// The rival effect it was fitted beside, one that gains on its own too (a lag, channel
-    /// delays, ...: `crate::diagnose::suspect`); `None`: beside the paper's model alone.
+    /// The rival it was fitted beside, one that gains more on its own (a lag, a mount
+    /// resonance, the stand's band limit: `crate::diagnose::suspect`); `None`: beside the
+    /// paper's model alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub beside: Option<Effect>,
-    /// How far the delay moves with the effect fitted, s: of the paper's model (with `beside`)
-    /// fitted on the whole record over the band, within a deviation of the model's delay.
+    /// How much later the delay comes out with the effect fitted than without, s: the paper's
+    /// model (with `beside`) fitted on the whole record over the band, not the identified
+    /// model itself (its delay and `K` are those of the same data over the same band, by
+    /// another estimator).
     pub delay_shift_s: f64,
-    /// The same over the model's delay deviation (`None`: no deviation).
+    /// How far the delay moves over the model's delay deviation (`None`: no deviation); for
+    /// channel delays, the channel that moves furthest over a channel's deviation (sqrt(3)
+    /// times the model's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delay_shift_sigmas: Option<f64>,
+    /// For channel delays: each output channel's delay with them fitted, less the delay
+    /// without, s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channel_delays_s: Option<[f64; 3]>,
     /// The element of `K` that moves furthest against its own deviation (`None`: no deviations).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_shift: Option<ElementChange>,
@@ -67,29 +77,46 @@ impl fmt::Display for Suspicion {
         let beside = self
             .beside
             .map_or_else(String::new, |r| format!(" with {r} fitted first"));
-        let sigmas = self
-            .delay_shift_sigmas
-            .map_or_else(String::new, |s| format!(" ({s:.1} of its deviations)"));
-        let element = self.k_shift.as_ref().map_or_else(String::new, |e| {
-            format!(
-                " (its {}/{} element by {:.1} of its deviations)",
-                e.output, e.input, e.sigmas
-            )
-        });
+        let sigmas = |z: Option<f64>| z.map_or_else(String::new, |z| format!(" ({z:.1} of its deviations)"));
         write!(
             f,
-            "{what} ({} over {:.2}-{:.1} Hz removes chi2 {:.1}{beside}, its parameters cost {:.1}): \
-             the paper's model takes it into K and the delay, where neither its chi2 nor its \
-             deviations show it; fitted beside K and the delay, it moves the delay by {:+.1} \
-             us{sigmas} and K by up to {}{element}",
-            self.effect,
-            self.band_hz[0],
-            self.band_hz[1],
-            self.delta_chi2,
-            self.threshold,
-            self.delay_shift_s * 1e6,
-            relative(self.k_shift_relative),
+            "{what} ({} over {:.2}-{:.1} Hz removes chi2 {:.1}{beside}, {:.1} needed): \
+             the model's K and delay hold part of it, without a misfit the self-check sees; with \
+             it fitted beside them, ",
+            self.effect, self.band_hz[0], self.band_hz[1], self.delta_chi2, self.threshold,
         )?;
+        if let Some(d) = self.channel_delays_s {
+            let of_a_channel = self.delay_shift_sigmas.map_or_else(String::new, |z| {
+                format!(" (the furthest {z:.1} of a channel's deviation)")
+            });
+            write!(
+                f,
+                "the channels' delays are {:+.1}, {:+.1}, {:+.1} us from the model's{of_a_channel}",
+                d[0] * 1e6,
+                d[1] * 1e6,
+                d[2] * 1e6,
+            )?;
+        } else {
+            let way = if self.delay_shift_s >= 0.0 {
+                "later"
+            } else {
+                "earlier"
+            };
+            write!(
+                f,
+                "the delay comes out {:.1} us {way}{}",
+                self.delay_shift_s.abs() * 1e6,
+                sigmas(self.delay_shift_sigmas)
+            )?;
+        }
+        write!(f, " and K moves by up to {}", relative(self.k_shift_relative))?;
+        if let Some(e) = &self.k_shift {
+            write!(
+                f,
+                " (its {}/{} element by {:.1} of its deviations)",
+                e.output, e.input, e.sigmas
+            )?;
+        }
         write!(
             f,
             ". `imu-attest discrepancy` sizes it and `identify --effects` fits it beside K (in the \
@@ -113,6 +140,7 @@ mod tests {
             beside: None,
             delay_shift_s: 25.5e-6,
             delay_shift_sigmas: Some(14.04),
+            channel_delays_s: None,
             k_shift: Some(ElementChange {
                 output: "gy".to_owned(),
                 input: "wz".to_owned(),
@@ -127,9 +155,9 @@ mod tests {
         let text = IdentWarning::EffectSuspected(g_sensitivity()).to_string();
         for part in [
             "the outputs follow the specific force, as a g-sensitive gyro's do",
-            "g_sensitivity over 0.12-39.9 Hz removes chi2 348.0, its parameters cost 88.7",
-            "it moves the delay by +25.5 us (14.0 of its deviations)",
-            "K by up to 0.11 % (its gy/wz element by 2.6 of its deviations)",
+            "g_sensitivity over 0.12-39.9 Hz removes chi2 348.0, 88.7 needed",
+            "the delay comes out 25.5 us later (14.0 of its deviations)",
+            "K moves by up to 0.11 % (its gy/wz element by 2.6 of its deviations)",
             "`identify --effects`",
         ] {
             assert!(text.contains(part), "{part:?} not in: {text}");
@@ -137,9 +165,14 @@ mod tests {
         assert!(!text.contains("fitted first"));
         let skew = Suspicion {
             effect: Effect::AxisTimeSkew,
+            channel_delays_s: Some([-1.2e-4, 2.4e-4, -1.2e-4]),
             ..g_sensitivity()
         }
         .to_string();
+        assert!(
+            skew.contains("the channels' delays are -120.0, +240.0, -120.0 us from the model's (the furthest 14.0 of a channel's deviation)"),
+            "{skew}"
+        );
         assert!(
             skew.starts_with("the output channels are delayed apart (axis_time_skew over"),
             "{skew}"
@@ -158,7 +191,7 @@ mod tests {
         for part in [
             "lever arm other than the sidecar's",
             "removes chi2 348.0 with sensor_lag fitted first",
-            "moves the delay by -6.0 us and K by up to 50 ppm. `imu-attest discrepancy`",
+            "the delay comes out 6.0 us earlier and K moves by up to 50 ppm. `imu-attest discrepancy`",
         ] {
             assert!(bare.contains(part), "{part:?} not in: {bare}");
         }
@@ -177,7 +210,7 @@ mod tests {
         let json = serde_json::to_value(&w).expect("serialised");
         assert_eq!(json["kind"], "effect_suspected");
         assert_eq!(json["effect"], "g_sensitivity");
-        for absent in ["delay_shift_sigmas", "k_shift", "beside"] {
+        for absent in ["delay_shift_sigmas", "channel_delays_s", "k_shift", "beside"] {
             assert!(json.get(absent).is_none(), "{absent}: {json}");
         }
         assert!(!json.to_string().contains("null"), "{json}");

@@ -438,10 +438,11 @@ pub enum IdentWarning {
         /// The band tested (the model's), Hz.
         band_hz: [f64; 2],
     },
-    /// The outputs follow a catalogue effect that the paper's model takes into `K` and the delay
-    /// without a misfit (`crate::diagnose::suspect`: a gyro's g-sensitivity, an accelerometer's
-    /// lever-arm error): fitted beside `K e^(-tau s)` over the model's band it removes more
-    /// `chi2` than BIC's cost of its parameters, and `K` and the delay move.
+    /// The outputs hold a catalogue effect that the paper's model takes into `K` and the delay
+    /// without a misfit the self-check sees (`crate::diagnose::suspect`: a gyro's g-sensitivity,
+    /// an accelerometer's lever-arm error, channel delays, a quadratic scale factor): fitted
+    /// beside `K e^(-tau s)` over the model's band it removes more `chi2` than BIC's cost of its
+    /// parameters, and the delay or `K` moves beyond its deviation.
     EffectSuspected(super::suspicion::Suspicion),
 }
 

@@ -611,6 +611,7 @@ fn an_extended_model_keeps_no_suspicion() {
         beside: None,
         delay_shift_s: 2e-5,
         delay_shift_sigmas: Some(8.0),
+        channel_delays_s: None,
         k_shift: None,
         k_shift_relative: 1e-3,
     };

@@ -7,7 +7,6 @@ use rayon::prelude::*;
 
 use super::{BlockNoise, NoiseWarning, block_noise};
 use crate::block::Block;
-use crate::effect::Effect;
 use crate::ident::IdentError;
 use crate::ident::identify::IdentStep;
 use crate::ident::session::{Session, Start};
@@ -69,21 +68,19 @@ pub fn identified_model(
     settings: &Settings,
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, IdentError> {
-    let mut model = bare_model(session, settings, &[], progress)?;
+    let mut model = bare_model(session, settings, progress)?;
     attach_noise(&mut model, session, settings)?;
     Ok(model)
 }
 
 /// [`identified_model`] before its noise terms are attached, with the effects the model may take
-/// in without a misfit said ([`crate::diagnose::suspect`]; not those of `accepted`, which the
-/// caller adds to the model).
+/// in without a misfit said ([`crate::diagnose::suspect`]).
 ///
 /// # Errors
 /// The identification's errors.
 pub fn bare_model(
     session: &mut Session,
     settings: &Settings,
-    accepted: &[(Block, Effect)],
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, IdentError> {
     let run = session.run().clone();
@@ -97,7 +94,7 @@ pub fn bare_model(
         done: 0,
         total: 1,
     });
-    let found = crate::diagnose::suspect::suspicions(&model, session, &settings, &id, accepted);
+    let found = crate::diagnose::suspect::suspicions(&model, session, &settings, &id);
     crate::diagnose::suspect::attach(&mut model, found);
     Ok(model)
 }

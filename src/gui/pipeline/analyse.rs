@@ -186,13 +186,14 @@ impl Analysis<'_> {
             let settings = settings.clone();
             let mut model = Model::from_identification(cache.session.run(), &settings, core);
             // Tested on a settled identification only (a retune's is shown at once, and its
-            // settled refit follows within the second: `polish`), once per identification
-            // (an accepted effect's suspicion is dropped by the model: `Model::set_effects`).
+            // settled refit follows within the second: `polish`), once per identification, as
+            // `identify` tests it (a block extended by accepted effects drops them:
+            // `Model::set_effects`).
             if !core.provisional() {
                 let found = match &cache.suspected {
                     Some((id, found)) if Arc::ptr_eq(id, core) => found.clone(),
                     _ => {
-                        let found = suspicions(&model, &cache.session, &settings, core, &[]);
+                        let found = suspicions(&model, &cache.session, &settings, core);
                         cache.suspected = Some((core.clone(), found.clone()));
                         found
                     }

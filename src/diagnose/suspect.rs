@@ -153,24 +153,24 @@ fn suspicion(
         .iter()
         .any(|w| matches!(w, IdentWarning::GainDependsOnAmplitude { .. }));
     let all = tested(b.block);
-    let mut alone: Vec<Candidate> = candidates_among(&base, band, &|e| {
-        all.contains(&e) && !(odd && e == Effect::ScaleNonlinearity)
-    })
-    .into_iter()
-    .filter(|c| gain(c) > 0.0)
-    .collect();
+    // Each tested effect fitted once: a candidate in its own right and a rival of the others.
+    let fitted = candidates_among(&base, band, &|e| all.contains(&e));
+    let mut alone: Vec<&Candidate> = fitted
+        .iter()
+        .filter(|c| gain(c) > 0.0 && !(odd && c.effect == Effect::ScaleNonlinearity))
+        .collect();
     // Most models end here: the rivals are fitted only where a tested effect gains alone.
     if alone.is_empty() {
         return None;
     }
     alone.sort_by(|x, y| gain(y).total_cmp(&gain(x)));
+    let rivals = candidates_among(&base, band, &|e| RIVALS.contains(&e));
     alone.into_iter().find_map(|c| {
-        let rival = candidates_among(&base, band, &|e| {
-            RIVALS.contains(&e) || (e != c.effect && all.contains(&e))
-        })
-        .into_iter()
-        .filter(|r| gain(r) > 0.0)
-        .max_by(|x, y| gain(x).total_cmp(&gain(y)));
+        let rival = rivals
+            .iter()
+            .chain(fitted.iter().filter(|t| t.effect != c.effect))
+            .filter(|r| gain(r) > 0.0)
+            .max_by(|x, y| gain(x).total_cmp(&gain(y)));
         // Beside the rival that gains most it must gain too (a fit beside it that fails
         // clears nothing: not said); its figures are of the model beside the rival only where
         // the rival gains more than it does alone (a gyro's lag beside its g-sensitivity), else
@@ -178,17 +178,17 @@ fn suspicion(
         // delays that gained a little, a g-sensitivity moved a delay 5.4 us early by a further
         // 5.2 us: the channel delays' mean is another delay).
         let (from, candidate, beside) = match rival {
-            None => (base.clone(), c, None),
+            None => (base.clone(), c.clone(), None),
             Some(r) => {
-                let next = base.with(&r, band)?;
+                let next = base.with(r, band)?;
                 let beside_r = candidates_among(&next, band, &|e| e == c.effect)
                     .into_iter()
                     .next()?;
                 (gain(&beside_r) > 0.0).then_some(())?;
-                if gain(&r) > gain(&c) {
+                if gain(r) > gain(c) {
                     (next, beside_r, Some(r.effect))
                 } else {
-                    (base.clone(), c, None)
+                    (base.clone(), c.clone(), None)
                 }
             }
         };

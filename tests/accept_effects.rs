@@ -12,11 +12,11 @@ use std::sync::Arc;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::extend::{extended_model, prepare_for_effects, starts_match};
+use imu_attest::diagnose::identified::identified_model;
 use imu_attest::effect::Effect;
 use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
 use imu_attest::model::{BlockModel, Model};
-use imu_attest::noise::of_model::identified_model;
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::truth::{BlockTruth, EffectTruth};
 use sim_common::simulated_run_of;

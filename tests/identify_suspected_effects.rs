@@ -12,13 +12,13 @@ use std::sync::Arc;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::extend::extended_model;
+use imu_attest::diagnose::identified::identified_model;
 use imu_attest::effect::Effect;
 use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
 use imu_attest::ident::suspicion::Suspicion;
 use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::model::{BlockModel, Model};
-use imu_attest::noise::of_model::identified_model;
 use imu_attest::run::Run;
 use imu_attest::sim::SimConfig;
 use imu_attest::sim::regime::Regime;

@@ -10,10 +10,10 @@
 use std::sync::Arc;
 
 use imu_attest::block::Block;
+use imu_attest::diagnose::identified::bare_model;
 use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
 use imu_attest::model::BlockModel;
-use imu_attest::noise::of_model::bare_model;
 use imu_attest::noise::reference::AccelGeometry;
 use imu_attest::noise::share::{ReferenceShare, reference_share};
 use imu_attest::rng::Rng;

@@ -5,11 +5,11 @@
 
 use std::sync::Arc;
 
+use imu_attest::diagnose::identified::identified_model;
 use imu_attest::ident::session::Session;
 use imu_attest::ident::settings::Settings;
 use imu_attest::model::Model;
 use imu_attest::noise::TermEstimate;
-use imu_attest::noise::of_model::identified_model;
 use imu_attest::noise::terms::NoiseTerm;
 use imu_attest::run::{LoadOptions, load};
 use imu_attest::sim::regime::Regime;

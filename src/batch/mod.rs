@@ -14,10 +14,10 @@ use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::diagnose::identified::identified_model;
 use crate::diagnose::{DiagnoseOptions, diagnose_session};
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
-use crate::noise::of_model::identified_model;
 use crate::run::{LoadOptions, load};
 
 /// Runs decoded at once: each holds its columns, the observer's estimate and the spectra.

@@ -29,7 +29,7 @@ use crate::block::Block;
 use crate::ident::IdentError;
 use crate::ident::band::native_bins;
 use crate::ident::factorisation::Factorisation;
-use crate::ident::identify::{resolve_band, structural_fit};
+use crate::ident::identify::{RunIdentification, resolve_band, structural_fit};
 use crate::ident::session::{Session, Start};
 use crate::ident::settings::{LambdaSetting, OrderSetting, Settings};
 use crate::ident::signals::channel_names;
@@ -273,12 +273,7 @@ fn rewelch_stage(state: &mut BenchState) -> Result<(), BenchError> {
 /// The noise terms of the session's latest identification.
 fn noise_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let session = state.session("noise")?;
-    let Some((settings, id)) = session.identification().map(|(s, i)| (s.clone(), i.clone())) else {
-        return Err(BenchError::Missing {
-            stage: "noise",
-            needs: "retune_cold",
-        });
-    };
+    let (settings, id) = latest_identification(session, "noise")?;
     let run = session.run().clone();
     let mut model = crate::model::Model::from_identification(&run, &settings, &id);
     crate::noise::of_model::attach_noise(&mut model, session, &settings)?;
@@ -290,17 +285,27 @@ fn noise_stage(state: &mut BenchState) -> Result<(), BenchError> {
 /// `identify` tests them ([`crate::diagnose::suspect`]).
 fn suspect_stage(state: &mut BenchState) -> Result<(), BenchError> {
     let session = state.session("suspect")?;
-    let Some((settings, id)) = session.identification().map(|(s, i)| (s.clone(), i.clone())) else {
-        return Err(BenchError::Missing {
-            stage: "suspect",
-            needs: "retune_cold",
-        });
-    };
+    let (settings, id) = latest_identification(session, "suspect")?;
     let model = crate::model::Model::from_identification(session.run(), &settings, &id);
     std::hint::black_box(crate::diagnose::suspect::suspicions(
         &model, session, &settings, &id,
     ));
     Ok(())
+}
+
+/// The session's latest identification and its settings, which `stage` needs (timed by
+/// `retune_cold` before it).
+fn latest_identification(
+    session: &Session,
+    stage: &'static str,
+) -> Result<(Settings, Arc<RunIdentification>), BenchError> {
+    session
+        .identification()
+        .map(|(s, i)| (s.clone(), i.clone()))
+        .ok_or(BenchError::Missing {
+            stage,
+            needs: "retune_cold",
+        })
 }
 
 /// The whole missing-effect workflow on the session.

@@ -29,7 +29,7 @@ use crate::model::{BlockModel, Model, ModelEffects};
 
 /// The model file of `session`'s run under `settings` with the `accepted` effects in its
 /// blocks' models, its noise terms attached: `identify --effects`. With nothing accepted it is
-/// exactly `noise::of_model::identified_model`'s file.
+/// exactly [`super::identified::identified_model`]'s file.
 ///
 /// # Errors
 /// The identification's and the diagnosis's (a record too short for the whole-record fit).
@@ -39,7 +39,7 @@ pub fn extended_model(
     accepted: &[(Block, Effect)],
     progress: &mut dyn FnMut(IdentStep),
 ) -> Result<Model, DiagnoseError> {
-    let mut model = crate::noise::of_model::bare_model(session, settings, progress)?;
+    let mut model = super::identified::bare_model(session, settings, progress)?;
     let preps = prepare_for_effects(session, settings, &model, accepted)?;
     apply_effects(&mut model, &preps, accepted);
     crate::noise::of_model::attach_noise(&mut model, session, settings)?;

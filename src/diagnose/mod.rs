@@ -27,6 +27,7 @@ pub mod extend;
 pub mod fit;
 pub mod gate;
 pub mod halves;
+pub mod identified;
 pub mod input_limit;
 pub mod limits;
 pub mod map;

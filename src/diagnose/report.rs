@@ -302,8 +302,13 @@ pub struct BlockReport {
 /// The static gain `K` of a state.
 #[must_use]
 pub fn gain(state: &State) -> [[f64; 3]; 3] {
-    let b = &state.fitted.profile.beta;
-    [0, 1, 2].map(|i| [0, 1, 2].map(|j| b[3 * i + j]))
+    gain_of_beta(&state.fitted.profile.beta)
+}
+
+/// `K` from a fitted profile's linear parameters (its first nine, row by row).
+#[must_use]
+pub fn gain_of_beta(beta: &[f64]) -> [[f64; 3]; 3] {
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| beta[3 * i + j]))
 }
 
 fn slice3(beta: &[f64], at: Option<usize>) -> [f64; 3] {

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 
 use super::candidates::{Candidate, Extension, candidates_among};
 use super::prepared::block_design;
-use super::report::gain as gain_of;
+use super::report::{gain as gain_of, gain_of_beta};
 use super::state::State;
 use super::structure::LagShape;
 use crate::block::Block;
@@ -209,10 +209,7 @@ fn figures(
         return None;
     };
     let k_before = gain_of(from);
-    let k_after = {
-        let beta = &fitted.profile.beta;
-        [0, 1, 2].map(|i| [0, 1, 2].map(|j| beta[3 * i + j]))
-    };
+    let k_after = gain_of_beta(&fitted.profile.beta);
     let tau_std = entry.fit.tau_std_s.filter(|s| *s > 0.0);
     let shift = fitted.theta.tau_s - from.fitted.theta.tau_s;
     // Channel delays: each channel's delay against the model's (the fitted delay is their plain

@@ -8,8 +8,7 @@ use rayon::prelude::*;
 use super::{BlockNoise, NoiseWarning, block_noise};
 use crate::block::Block;
 use crate::ident::IdentError;
-use crate::ident::identify::IdentStep;
-use crate::ident::session::{Session, Start};
+use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::ident::signals::{BlockSignals, channel_names};
 use crate::ident::warnings::IdentWarning;
@@ -55,48 +54,6 @@ pub fn model_block_noise(
             .insert(0, NoiseWarning::ModelMisfit { chi2_per_dof });
     }
     Some(noise)
-}
-
-/// The model file of `session`'s run under `settings` as `identify` writes it: identified from
-/// scratch (`progress` before each stage), its noise terms attached. The one path of `identify`,
-/// `batch` and `report`.
-///
-/// # Errors
-/// The identification's errors.
-pub fn identified_model(
-    session: &mut Session,
-    settings: &Settings,
-    progress: &mut dyn FnMut(IdentStep),
-) -> Result<Model, IdentError> {
-    let mut model = bare_model(session, settings, progress)?;
-    attach_noise(&mut model, session, settings)?;
-    Ok(model)
-}
-
-/// [`identified_model`] before its noise terms are attached, with the effects the model may take
-/// in without a misfit said ([`crate::diagnose::suspect`]).
-///
-/// # Errors
-/// The identification's errors.
-pub fn bare_model(
-    session: &mut Session,
-    settings: &Settings,
-    progress: &mut dyn FnMut(IdentStep),
-) -> Result<Model, IdentError> {
-    let run = session.run().clone();
-    let id = session.identify(settings, Start::Cold, progress)?;
-    // The echo is the settings as used (a caller's unresolved ones would name another segment).
-    let settings = settings.for_run(&run);
-    let mut model = Model::from_identification(&run, &settings, &id);
-    progress(IdentStep {
-        block: None,
-        stage: "effects suspected",
-        done: 0,
-        total: 1,
-    });
-    let found = crate::diagnose::suspect::suspicions(&model, session, &settings, &id);
-    crate::diagnose::suspect::attach(&mut model, found);
-    Ok(model)
 }
 
 /// Fills `noise` of every block of `model` (identified from `session`'s run under `settings`).

@@ -17,12 +17,13 @@ pub mod svg;
 use std::io::Write as _;
 use std::path::Path;
 
+use crate::diagnose::identified::identified_model;
 use crate::diagnose::{DiagnoseError, DiagnoseOptions, Report as Diagnosis, diagnose_session};
 use crate::ident::IdentError;
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::model::Model;
-use crate::noise::of_model::{attach_noise, identified_model};
+use crate::noise::of_model::attach_noise;
 use crate::output::{OutputError, write_atomic};
 
 /// What the report shows of one run.

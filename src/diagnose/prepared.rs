@@ -296,22 +296,8 @@ pub(super) fn block_design(
             .specific_forces(run.sidecar.gyro_lever_arm_m, g)
             .into_iter()
             .collect(),
-        Block::Accel => {
-            let r = run.sidecar.accel_lever_arm_m;
-            let at = motion.specific_forces(r, g);
-            // d f_i / d r_l at AUX + 3 i + l (f is affine in the lever arm: the difference is
-            // exact), one shifted arm at a time (a whole record's forces each).
-            let mut d = vec![Vec::new(); 9];
-            for l in 0..3 {
-                let mut rl = r;
-                rl[l] += 1.0;
-                let shifted = motion.specific_forces(rl, g);
-                for (i, (s, a)) in shifted.iter().zip(&at).enumerate() {
-                    d[3 * i + l] = s.iter().zip(a).map(|(s, a)| s - a).collect();
-                }
-            }
-            d
-        }
+        // d f_i / d r_l at AUX + 3 i + l (exact: f is affine in the lever arm).
+        Block::Accel => motion.lever_arm_jacobian().into_iter().collect(),
     };
     // Views of the span: no copies of whole records.
     let expected = smoothed_noise_psd(b);

@@ -185,6 +185,38 @@ impl EulerSeries {
         let r = Vector3::from(lever_arm);
         columns(self.len(), |n| specific_force(&self.at(n), &r, g))
     }
+
+    /// How the specific force moves with the lever arm at every sample: column `3 i + l` is
+    /// `d f_i / d r_l`, 1/s^2 (m/s^2 per m). The force is affine in the lever arm
+    /// (`w' x r + w x (w x r)` plus gravity's part, which has none), so this is exact:
+    /// `d f_i / d r_l = eps_ijl w'_j + w_i w_l - delta_il |w|^2`.
+    #[must_use]
+    pub fn lever_arm_jacobian(&self) -> [Vec<f64>; 9] {
+        let len = self.len();
+        let mut out: [Vec<f64>; 9] = std::array::from_fn(|_| Vec::with_capacity(len));
+        for n in 0..len {
+            let e = self.at(n);
+            let (w, dw) = (body_rate(&e), body_angular_accel(&e));
+            let w2 = w.norm_squared();
+            for i in 0..3 {
+                for l in 0..3 {
+                    // eps_ijl w'_j: the one j that is neither i nor l, signed by the permutation.
+                    let cross = match (i, l) {
+                        (0, 1) => -dw.z,
+                        (0, 2) => dw.y,
+                        (1, 0) => dw.z,
+                        (1, 2) => -dw.x,
+                        (2, 0) => -dw.y,
+                        (2, 1) => dw.x,
+                        _ => 0.0,
+                    };
+                    let diagonal = if i == l { w2 } else { 0.0 };
+                    out[3 * i + l].push(cross + w[i] * w[l] - diagonal);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Evaluates a vector-valued function at every sample into three columns.

@@ -182,7 +182,7 @@ fn lever_arm_jacobian_is_the_difference_of_forces_at_shifted_arms() {
     // by a unit along l minus the force at the arm, sample by sample (a brute-force reference).
     let mut series = EulerSeries::default();
     for n in 0..400 {
-        let e = trajectory(0.013 * n as f64);
+        let e = trajectory(0.013 * f64::from(n));
         for k in 0..3 {
             series.angle[k].push(e.angle[k]);
             series.rate[k].push(e.rate[k]);

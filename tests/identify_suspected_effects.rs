@@ -93,6 +93,19 @@ fn a_g_sensitive_gyro_is_said_and_the_shift_it_names_is_towards_the_truth() {
     }
 }
 
+/// Simulates `config`, identifies it and asserts that no block is suspected of anything.
+fn assert_nothing_suspected(config: &SimConfig, what: &str) {
+    let (_, run) = simulated_run(config);
+    let model = identify(run);
+    for (name, block) in &model.blocks {
+        assert!(
+            suspected(block).is_empty(),
+            "{what} {name}: {:?}",
+            block.fit.warnings
+        );
+    }
+}
+
 /// Clean runs, of a perfect stand and of one with a real stand's imperfections (coloured,
 /// band-limited angle noise, latency), in the three regimes: nothing suspected on either block.
 #[test]
@@ -110,15 +123,7 @@ fn clean_runs_suspect_nothing() {
         if real_stand {
             config.stand = StandImperfections::real();
         }
-        let (_, run) = simulated_run(&config);
-        let model = identify(run);
-        for (name, block) in &model.blocks {
-            assert!(
-                suspected(block).is_empty(),
-                "{regime:?} {seed} {name}: {:?}",
-                block.fit.warnings
-            );
-        }
+        assert_nothing_suspected(&config, &format!("{regime:?} {seed}"));
     }
 }
 
@@ -145,15 +150,7 @@ fn large_sines_on_a_clean_run_suspect_nothing() {
                 amplitude_rad: 10f64.to_radians(),
             },
         ];
-        let (_, run) = simulated_run(&config);
-        let model = identify(run);
-        for (name, block) in &model.blocks {
-            assert!(
-                suspected(block).is_empty(),
-                "{seed} {duration_s} s {name}: {:?}",
-                block.fit.warnings
-            );
-        }
+        assert_nothing_suspected(&config, &format!("{seed} {duration_s} s"));
     }
 }
 

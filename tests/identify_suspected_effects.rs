@@ -1,9 +1,9 @@
 //! Issue 13, never silently wrong: an effect the paper's model takes into `K` and the delay
 //! without a misfit (a gyro's g-sensitivity, an accelerometer's lever-arm error) is said on the
 //! identified model (`effect_suspected`, `imu_attest::diagnose::suspect`), and only there: not on
-//! clean runs of a perfect or a real-like stand, not for a gyro's lag (a rival that the test fits
-//! first), not on a model that already says it misfits, and not once the effect is accepted. The
-//! truth is read by this test alone.
+//! clean runs of a perfect or a real-like stand (large sine programmes among them), not for a
+//! gyro's lag (a rival that the test fits first), not on a model that already says it misfits,
+//! and not once the effect is accepted. The truth is read by this test alone.
 
 #[path = "common/sim.rs"]
 mod sim_common;
@@ -128,7 +128,7 @@ fn clean_runs_suspect_nothing() {
 }
 
 /// A perfect stand's programme with large sines (20 degrees of roll at 0.8 Hz, 10 of pitch at
-/// 0.5 Hz): the model is right (delay within a deviation of the truth), but at the sines' lines
+/// 0.5 Hz): the model is right (delays within 1.1 deviations of the truth), but at the sines' lines
 /// a g-sensitivity removed chi2 140-551 while the residual's power grew, and was said with the
 /// delay "4.8-6.9 us earlier", 13-18 of its deviations (1 Dec, before the diagnosis's rule that
 /// an effect must close the gap applied here too; this seed at 120 s: chi2 551, 94 needed).

@@ -10,9 +10,10 @@ use crate::ident::settings::Settings;
 use crate::model::Model;
 use crate::noise::of_model::attach_noise;
 
-/// The model file of `session`'s run under `settings` as `identify` writes it: identified from
-/// scratch (`progress` before each stage), its noise terms attached. The one path of `identify`,
-/// `batch` and `report`.
+/// The model file of `session`'s run under `settings` as `identify` writes it without accepted
+/// effects: identified from scratch (`progress` before each stage), its noise terms attached.
+/// `batch` and `report` write it; `identify` goes through [`super::extend::extended_model`],
+/// which with nothing accepted gives this file.
 ///
 /// # Errors
 /// The identification's errors.

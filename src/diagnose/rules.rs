@@ -1,6 +1,7 @@
 //! The rules a significant candidate must pass to be named (the search's rounds,
-//! [`super::workflow`]), and an accepted effect's fit to be added ([`super::extend`]): a mode
-//! within reach of the band's data, and a fit that closes part of the gap and opens it nowhere.
+//! [`super::workflow`]): a mode within reach of the band's data (also asked of an accepted
+//! mode, [`super::extend`]), and a fit that closes part of the gap and opens it nowhere (also
+//! asked of an effect the identified model is suspected of, and of its rival, [`super::suspect`]).
 //! A candidate that fails one is said with the reason ([`super::not_named`]).
 
 use std::cmp::Ordering;

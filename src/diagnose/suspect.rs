@@ -132,9 +132,10 @@ const RIVALS: [Effect; 3] = [
 
 /// The suspicion for one block, if its outputs hold one of [`tested`]'s effects over the
 /// model's band: tried in the order of their gains alone, the first that removes more `chi2`
-/// than it must ([`threshold`]) beside the paper's model and, where a rival gains on its own too,
-/// beside the paper's model with the rival that gains most, and that moves the model's figures
-/// ([`material`]). A quadratic scale factor is not tested where the model already says its gain
+/// than it must ([`threshold`]) beside the paper's model and, where a rival gains on its own too
+/// (and passes the diagnosis's rule itself), beside the paper's model with the rival that gains
+/// most, that closes part of the gap and opens it nowhere ([`opens_gap`]), and that moves the
+/// model's figures ([`material`]). A quadratic scale factor is not tested where the model already says its gain
 /// depends on the amplitude (it stays a rival). The figures are of the paper's model fitted on
 /// the whole record over the band, with the rival where it gains more than the effect alone.
 fn suspicion(
@@ -166,12 +167,25 @@ fn suspicion(
         return None;
     }
     alone.sort_by(|x, y| gain(y).total_cmp(&gain(x)));
-    let rivals = candidates_among(&base, band, &|e| RIVALS.contains(&e));
+    let outputs = channel_names(b.block).1;
+    // A rival counts where it gains and passes the diagnosis's rule (`rules::opens_gap`) itself:
+    // one the diagnosis would refuse is no starting point (a g-sensitivity refused at a clean
+    // run's large sines would otherwise have been the channel delays' rival, "fitted first").
+    let passes = |c: &Candidate| {
+        gain(c) > 0.0
+            && base
+                .with(c, band)
+                .is_some_and(|next| opens_gap(&base, &next, outputs).is_none())
+    };
+    let rivals: Vec<Candidate> = candidates_among(&base, band, &|e| RIVALS.contains(&e))
+        .into_iter()
+        .chain(fitted.iter().cloned())
+        .filter(|r| passes(r))
+        .collect();
     alone.into_iter().find_map(|c| {
         let rival = rivals
             .iter()
-            .chain(fitted.iter().filter(|t| t.effect != c.effect))
-            .filter(|r| gain(r) > 0.0)
+            .filter(|r| r.effect != c.effect)
             .max_by(|x, y| gain(x).total_cmp(&gain(y)));
         // Beside the rival that gains most it must gain too (a fit beside it that fails
         // clears nothing: not said); its figures are of the model beside the rival only where
@@ -200,7 +214,7 @@ fn suspicion(
         // lines while the residual's power grew: said, with the delay 4.8-6.9 us "earlier", 13-18
         // of its deviations, on a delay that was right; the diagnosis refused it (`total_grows`).
         let next = from.with(&candidate, band)?;
-        if opens_gap(&from, &next, channel_names(b.block).1).is_some() {
+        if opens_gap(&from, &next, outputs).is_some() {
             return None;
         }
         figures(b.block, band, (&from, &candidate, beside), entry, per_parameter)

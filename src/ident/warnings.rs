@@ -442,7 +442,8 @@ pub enum IdentWarning {
     /// without a misfit the self-check sees (`crate::diagnose::suspect`: a gyro's g-sensitivity,
     /// an accelerometer's lever-arm error, channel delays, a quadratic scale factor): fitted
     /// beside `K e^(-tau s)` over the model's band it removes more `chi2` than BIC's cost of its
-    /// parameters, and the delay or `K` moves beyond its deviation.
+    /// parameters plus the diagnosis's look-elsewhere cost, closes part of the gap between model
+    /// and outputs and opens it nowhere, and the delay or `K` moves beyond its deviation.
     EffectSuspected(super::suspicion::Suspicion),
 }
 

@@ -358,6 +358,8 @@ fn time_must_increase_uniformly() {
             && words.contains("at most 1 % is accepted"),
         "{words}"
     );
+    // A jitter is not a gap: no missing samples are claimed.
+    assert!(!words.contains("missing"), "{words}");
     if let LoadError::IrregularSampling { dt, nominal_dt, .. } = err {
         assert!(
             (dt - 0.0102).abs() < 1e-9 && (nominal_dt - 0.01).abs() < 1e-9,
@@ -383,6 +385,41 @@ fn time_must_increase_uniformly() {
         )
         .is_ok()
     );
+}
+
+/// A logger that dropped samples leaves a step of a whole number of nominal steps: the error
+/// says how many samples are missing and what to do (cut or fill), and names the line.
+#[test]
+fn a_dropped_sample_is_named_as_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, _) = csv(&ALL[..7], 40, 0.0, 0.01);
+    for (dropped, words) in [(1, "1 sample missing there"), (3, "3 samples missing there")] {
+        // `dropped` rows from line 22 on removed (the header is line 1): the step that ends on
+        // the new line 22 is the gap.
+        let lines: Vec<String> = text
+            .lines()
+            .enumerate()
+            .filter(|(i, _)| !(21..21 + dropped).contains(i))
+            .map(|(_, l)| l.to_owned())
+            .collect();
+        let err = lines_err(dir.path(), "dropped.csv", &lines);
+        assert!(
+            matches!(
+                err,
+                LoadError::IrregularSampling {
+                    line: 22,
+                    column: 1,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let message = err.to_string();
+        assert!(
+            message.contains(words) && message.contains("cut the record at the gap"),
+            "{message}"
+        );
+    }
 }
 
 #[test]

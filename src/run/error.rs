@@ -171,12 +171,13 @@ pub enum LoadError {
     /// A time step deviates more than the tolerance (1 %) from the nominal (median) step.
     #[error(
         "{}:{line}:{column} (column 't'): irregular sampling: a step of {} s, {} % off the \
-         nominal {} s (the median step; at most {} % is accepted)",
+         nominal {} s (the median step; at most {} % is accepted){}",
         path.display(),
         significant(*dt, 7),
         significant(100.0 * (dt - nominal_dt).abs() / nominal_dt, 4),
         significant(*nominal_dt, 7),
-        significant(100.0 * tolerance, 4)
+        significant(100.0 * tolerance, 4),
+        missing_samples_hint(*dt, *nominal_dt, *tolerance)
     )]
     IrregularSampling {
         /// The file.
@@ -273,6 +274,25 @@ pub enum LoadError {
 
 /// `x` to `digits` significant digits, without trailing zeros (`0.0020299999999999763` to 7 is
 /// `0.00203`; a deviation of 1.0043 % to 4 is `1.004`, not a contradicting `1`).
+/// For a step that is a whole number `k >= 2` of nominal steps (within the tolerance), the
+/// words that say `k - 1` samples are missing and what can be done; empty otherwise. The
+/// spectra assume uniform sampling, so a gap is not bridged silently: the user cuts the record
+/// there or fills the gap and says so.
+fn missing_samples_hint(dt: f64, nominal_dt: f64, tolerance: f64) -> String {
+    let ratio = dt / nominal_dt;
+    let k = ratio.round();
+    if !(2.0..=1e6).contains(&k) || (ratio - k).abs() > tolerance * k {
+        return String::new();
+    }
+    let missing = k as u64 - 1;
+    let samples = if missing == 1 { "sample" } else { "samples" };
+    format!(
+        ": {missing} {samples} missing there (the step is {k} nominal steps); the spectra need \
+         uniform sampling: cut the record at the gap, or fill it (interpolated, and say so) \
+         before loading"
+    )
+}
+
 fn significant(x: f64, digits: i32) -> String {
     if x == 0.0 || !x.is_finite() {
         return x.to_string();

@@ -5,8 +5,7 @@
 //! normalised errors over several seeds and regimes have rms near 1), the extended model explains
 //! more, and a block without accepted effects is exactly as identified.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::sync::Arc;
 

@@ -12,8 +12,7 @@ use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::run::Run;
 use imu_attest::sim::regime::Regime;
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 /// Each block's bound, when it says `angle_noise_overstated`.
 fn said(run: &Run) -> Vec<Option<[f64; 3]>> {

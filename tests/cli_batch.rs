@@ -6,7 +6,7 @@ use std::path::Path;
 
 use imu_attest::model::Model;
 
-mod binary;
+use crate::binary;
 use binary::imu_attest;
 
 fn simulate(dir: &Path, name: &str, regime: &str, seed: &str) {

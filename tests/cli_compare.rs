@@ -12,10 +12,9 @@ use imu_attest::diagnose::Verdict;
 use imu_attest::effect::Effect;
 use imu_attest::model::Model;
 
-mod binary;
+use crate::binary;
+use crate::binary::approach;
 use binary::imu_attest;
-#[path = "binary/approach.rs"]
-mod approach;
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -11,10 +11,9 @@ use imu_attest::effect::Effect;
 use imu_attest::ident::settings::Settings;
 use imu_attest::run::{LoadOptions, load};
 
-mod binary;
+use crate::binary;
+use crate::binary::approach;
 use binary::imu_attest;
-#[path = "binary/approach.rs"]
-mod approach;
 
 fn simulated_run(dir: &Path, name: &str, effect: Option<&str>) -> PathBuf {
     let run = dir.join(format!("{name}.csv"));

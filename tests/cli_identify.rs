@@ -6,10 +6,9 @@ use std::path::{Path, PathBuf};
 
 use imu_attest::model::{MODEL_SCHEMA, Model};
 
-mod binary;
+use crate::binary;
+use crate::binary::approach;
 use binary::imu_attest;
-#[path = "binary/approach.rs"]
-mod approach;
 
 fn simulated_run(dir: &Path) -> PathBuf {
     simulated_run_as(dir, "cruise.csv", &["--seed", "4"])

@@ -8,7 +8,7 @@ use std::process::Command;
 
 use imu_attest::model::Model;
 
-mod binary;
+use crate::binary;
 use binary::imu_attest;
 
 fn sample(name: &str) -> PathBuf {

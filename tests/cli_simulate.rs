@@ -8,7 +8,7 @@
 use std::io::Read;
 use std::path::Path;
 
-mod binary;
+use crate::binary;
 use binary::imu_attest;
 
 fn read_csv(path: &Path) -> String {

@@ -4,8 +4,7 @@
 //! command line, and `inspect` says it first. Before, such a run failed deep in the fit with exit
 //! status 1, "internal error: ... row weight of output 2 at bin 0 is not finite".
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::path::Path;
 use std::process::Command;

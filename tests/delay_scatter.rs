@@ -5,9 +5,7 @@
 //! they are found), and the same runs without the slip say none of it. The slip's time and
 //! channels are read from the simulator's truth, by the test only.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::faults::Channel;

@@ -5,8 +5,7 @@
 //! imperfections, every regime, the slip hidden by `simulate --fault slip` (its time only in the
 //! truth the test reads) and a real recording slipped here; clean and drifting runs have no step.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::path::Path;
 

@@ -4,8 +4,7 @@
 //! whole record's taper loses of a drift; without (a record too short to cut), the profiled
 //! cost's curvature, conservative. Only this test reads the truth.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};

@@ -7,8 +7,7 @@
 //! sees the CSV and the sidecar's declared fields, as it would from a real stand.
 #![expect(clippy::unwrap_used, reason = "tests")]
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 use sim_common::simulated_run_of;
 
 use imu_attest::diagnose::DiagnoseOptions;

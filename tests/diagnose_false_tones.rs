@@ -6,9 +6,7 @@
 //! inverse of their nearly collinear correlation with the wrong scales (`diagnose::tone`). The
 //! truth (which effect was hidden) is known to this test only.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};

@@ -5,8 +5,7 @@
 //! the accelerometer (whose clock does not drift) got a false `lever_arm_error` (`stand::colour`).
 //! The truth (only the gyro's clock drifts) is known to this test only.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};

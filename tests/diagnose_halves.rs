@@ -12,8 +12,7 @@ use imu_attest::ident::settings::Settings;
 use imu_attest::run::Run;
 use imu_attest::sim::regime::Regime;
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 /// Said when the halves disagree with each other or with the whole record.
 const CAVEAT: &str = "not one fixed property of the block over this run";

@@ -26,8 +26,7 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::{SimConfig, SimulatedRun};
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 const SEARCHED: [f64; 2] = [0.1, 40.0];
 

@@ -17,9 +17,7 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::truth::EffectTruth;
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 #[test]
 fn a_lag_behind_a_late_reference_is_found_first_and_alone() {

@@ -19,9 +19,7 @@ use imu_attest::sim::SimConfig;
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 fn run_of(
     regime: Regime,

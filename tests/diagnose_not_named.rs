@@ -20,9 +20,7 @@ use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::truth::EffectTruth;
 use imu_attest::sim::{SimConfig, SimulatedRun};
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 fn run_of(regime: Regime, seed: u64, coloured_rad: f64, effects: &[&str]) -> (SimulatedRun, Run) {
     let stand = StandImperfections {

@@ -6,9 +6,7 @@
 //! these tests know how the runs were made; the diagnosis sees the CSV and the sidecar's declared
 //! fields.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::sync::Arc;
 

@@ -8,8 +8,7 @@
 //! Seeds and regimes other than the runs the cause was found on (cruise seeds 21-24). Only this
 //! test reads what the simulator hid.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};

@@ -7,9 +7,7 @@
 //! and an accelerometer `lever_arm_error` (5) (1 Dec, thirty-fourth session). Only these tests
 //! know how the runs were made.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::report::{Finding, Report};

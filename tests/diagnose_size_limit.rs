@@ -26,9 +26,7 @@
 //! the criterion: it bites at 3 times.) `SizeLimit::any_direction` against the evidence it
 //! promises in every direction is a unit test of `diagnose::size_limit`.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::size_limit::SizeLimit;

@@ -7,9 +7,7 @@
 //! the accelerometer above a real stand's band); at 0.4 times it is not named. A limit stated
 //! too low fails the first two, one stated too high the last.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::{DiagnoseOptions, Report, diagnose_run};

@@ -5,8 +5,7 @@
 //! times too small on its noisier vertical and lateral channels (errors of 15-31 deviations).
 //! Each channel now has its own, from its own continuum. Only this test reads the truth.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use imu_attest::block::Block;
 use imu_attest::diagnose::{DiagnoseOptions, diagnose_run};

@@ -16,9 +16,7 @@ use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::truth::EffectTruth;
 use imu_attest::sim::{SimConfig, SimulatedRun};
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 /// The lag finding on `block` of a cruise run with `stand` and a hidden lag there, and the
 /// lag's true time constant.

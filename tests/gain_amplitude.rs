@@ -5,8 +5,7 @@
 //! nothing; once the effect is accepted (`identify --effects`) the model no longer says it. The
 //! truth (`k2`, `K`) is read by the test only.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::sync::Arc;
 

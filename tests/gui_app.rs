@@ -32,7 +32,7 @@ fn sample_app(builder: egui_kittest::HarnessBuilder<App>) -> Harness<'static, Ap
 
 /// Pixel snapshot, rendered with wgpu on a software adapter (Mesa lavapipe:
 /// `mesa-vulkan-drivers libvulkan1`); only with `--features gui-snapshots`. Update the stored
-/// image with `UPDATE_SNAPSHOTS=1 cargo test --features gui-snapshots --test gui_app`.
+/// image with `UPDATE_SNAPSHOTS=1 cargo test --features gui-snapshots --test integration gui_app::`.
 #[cfg(feature = "gui-snapshots")]
 #[test]
 fn spectra_tab_snapshot() {

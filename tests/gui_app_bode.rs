@@ -8,8 +8,7 @@ use egui_kittest::kittest::Queryable as _;
 use imu_attest::gui::view::bode::readout;
 use imu_attest::gui::{WorkerMode, sample_run_path};
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 
 #[test]
 fn hovering_a_bode_plot_reads_out_gain_phase_and_deviation_from_k() {

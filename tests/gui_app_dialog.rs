@@ -12,8 +12,7 @@ use egui_kittest::kittest::Queryable as _;
 use imu_attest::gui::app::{Command, DialogRequest, FilePicker, Tab};
 use imu_attest::gui::{AppOptions, WorkerMode, sample_run_path};
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 
 fn with_picker(paths: Vec<PathBuf>, picker: FilePicker) -> AppOptions {
     AppOptions {
@@ -39,9 +38,10 @@ fn the_app_keeps_working_while_a_slow_dialog_is_open_and_opens_what_it_picks() {
     let asked = Instant::now();
     harness.run_steps(2);
     // The frames go on while the dialog is open (with a blocking dialog these two frames would
-    // have waited for it), the app says a dialog is open, and a click still changes the tab.
+    // have waited its 2 s), the app says a dialog is open, and a click still changes the tab. The
+    // bound leaves room for a loaded machine (the suite's other tests run beside this one).
     assert!(
-        asked.elapsed() < Duration::from_millis(500),
+        asked.elapsed() < Duration::from_millis(1500),
         "{:?}",
         asked.elapsed()
     );

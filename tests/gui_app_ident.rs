@@ -16,8 +16,7 @@ use imu_attest::ident::settings::{Estimate, LambdaSetting, OrderSetting};
 use imu_attest::model::{MODEL_SCHEMA, Model};
 use imu_attest::run::LoadOptions;
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 use gui_common::options;
 
 fn app(options: AppOptions) -> Harness<'static, App> {

@@ -14,8 +14,7 @@ use imu_attest::gui::app::session_file::{SESSION_SCHEMA, read_session};
 use imu_attest::gui::{App, Command, WorkerMode};
 use imu_attest::ident::settings::OrderSetting;
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 
 /// The two sample runs copied (with their sidecars) into `dir`.
 fn two_runs(dir: &Path) -> Vec<PathBuf> {

@@ -9,8 +9,7 @@ use egui_kittest::kittest::Queryable as _;
 use imu_attest::gui::view::timeseries::dragged_span;
 use imu_attest::gui::{App, WorkerMode, sample_run_path};
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 
 /// Presses at `from`, moves to `to` in four steps and releases, with `modifiers` held.
 fn drag(harness: &mut Harness<'_, App>, from: Pos2, to: Pos2, modifiers: Modifiers) {

@@ -20,8 +20,7 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, simulate};
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 
 fn app(paths: Vec<PathBuf>) -> Harness<'static, App> {
     gui_common::app(gui_common::options(paths, WorkerMode::Synchronous), 4)

@@ -8,8 +8,7 @@ use egui_kittest::kittest::Queryable as _;
 use imu_attest::gui::view::validation::fit_label;
 use imu_attest::gui::{WorkerMode, sample_run_path};
 
-#[path = "common/gui.rs"]
-mod gui_common;
+use crate::common::gui as gui_common;
 
 #[test]
 fn the_model_predicts_its_own_run_and_another_run_s_outputs() {

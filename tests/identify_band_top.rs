@@ -13,9 +13,7 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::{SimConfig, SimulatedRun};
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 fn run(regime: Regime, seed: u64, stand: StandImperfections) -> (SimulatedRun, imu_attest::run::Run) {
     let mut config = SimConfig::new(regime);

@@ -17,9 +17,7 @@ use imu_attest::sim::SimConfig;
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::truth::EffectTruth;
 
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 #[test]
 fn a_resonant_gyro_mount_leaves_the_accelerometer_s_model_alone() {

@@ -7,13 +7,12 @@
 
 use std::path::PathBuf;
 
+use crate::common::real as real_common;
 use imu_attest::ident::band::BandSetting;
 use imu_attest::ident::identify::{BlockIdentification, identify_run};
 use imu_attest::ident::settings::{OrderSetting, Settings};
 use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::run::{LoadOptions, load};
-#[path = "common/real.rs"]
-mod real_common;
 use real_common::{gyro, gyro_late, k_error, kinds, real};
 
 const RUNS: [&str; 3] = [

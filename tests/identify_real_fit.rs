@@ -7,15 +7,13 @@
 
 use std::path::PathBuf;
 
+use crate::common::real as real_common;
 use imu_attest::ident::identify::{BlockIdentification, identify_run};
 use imu_attest::ident::settings::Settings;
 use imu_attest::ident::structural::admissible::Rejection;
 use imu_attest::ident::warnings::IdentWarning;
 use imu_attest::run::{LoadOptions, Run, load_bytes};
 use imu_attest::spectral::WelchSettings;
-#[path = "common/real.rs"]
-#[expect(dead_code, reason = "this test needs only `real`, `gyro` and `kinds`")]
-mod real_common;
 use real_common::{gyro, kinds, real};
 
 /// Why the fitted order-2 candidate was not admissible (`None`: it was).

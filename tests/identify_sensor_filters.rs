@@ -37,8 +37,7 @@ use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::truth::EffectTruth;
 use imu_attest::sim::{SimConfig, SimulatedRun};
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 fn truth_of(sim: &SimulatedRun, block: Block) -> &imu_attest::sim::truth::BlockTruth {
     match block {

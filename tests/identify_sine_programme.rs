@@ -4,9 +4,7 @@
 //! chi2/dof was 57-272 on these runs, `auto` chose order 3 with a delay 37 standard deviations off
 //! on two of six seeds, and every fit was called poor. The truth is read by this test alone.
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim;
+use crate::common::sim;
 
 use imu_attest::block::Block;
 use imu_attest::ident::identify::identify_run;

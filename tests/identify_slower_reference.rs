@@ -14,11 +14,8 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 use imu_attest::sim::{SimConfig, SimulatedRun};
 
-#[path = "common/poles.rs"]
-mod poles;
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::poles;
+use crate::common::sim as sim_common;
 use poles::{assert_poles_said, poles_said};
 
 fn run(regime: Regime, seed: u64, reference_rate_hz: Option<f64>) -> (SimulatedRun, imu_attest::run::Run) {

@@ -5,8 +5,7 @@
 //! gyro's lag (a rival that the test fits first), not on a model that already says it misfits,
 //! and not once the effect is accepted. The truth is read by this test alone.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::sync::Arc;
 

@@ -14,9 +14,7 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 use nalgebra::Matrix3;
 
-#[path = "common/sim.rs"]
-#[expect(dead_code, reason = "this test needs only `simulated_run`")]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 #[test]
 fn a_turned_gyro_changes_neither_block_but_by_its_turn() {

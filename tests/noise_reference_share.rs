@@ -20,8 +20,7 @@ use imu_attest::rng::Rng;
 use imu_attest::run::Run;
 use imu_attest::sim::regime::Regime;
 
-#[path = "common/sim.rs"]
-mod sim;
+use crate::common::sim;
 
 /// White noise added to the angles, rad (a few times the simulator's 1e-5 rad).
 const EXTRA_RAD: f64 = 5e-5;

@@ -9,16 +9,13 @@
 //! delay of 11.4 ms (25.2 due), said by nothing. Defaults must keep order 0 and the recording's
 //! own delay here.
 
+use crate::common::poles;
+use crate::common::real as real_common;
 use imu_attest::ident::identify::identify_run;
 use imu_attest::ident::settings::{OrderSetting, Settings};
 use imu_attest::ident::warnings::IdentWarning;
-#[path = "common/real.rs"]
-#[expect(dead_code, reason = "this test needs only `real`, `k_error` and `gyro_late`")]
-mod real_common;
-use real_common::{gyro_late, k_error, real};
-#[path = "common/poles.rs"]
-mod poles;
 use poles::{assert_poles_said, poles_said};
+use real_common::{gyro_late, k_error, real};
 
 #[test]
 fn a_later_gyro_keeps_order_0_and_its_delay_on_every_real_run() {

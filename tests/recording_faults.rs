@@ -11,7 +11,7 @@ use imu_attest::sim::regime::Regime;
 use imu_attest::sim::write::write_run;
 use imu_attest::sim::{SimConfig, SimulatedRun, simulate};
 
-mod binary;
+use crate::binary;
 use binary::imu_attest;
 
 const REGIMES: [Regime; 3] = [Regime::Cruise, Regime::TurbulentCruise, Regime::Approach];

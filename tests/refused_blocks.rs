@@ -4,8 +4,7 @@
 //! is refused beside it, in every output that reports blocks (model, diagnosis, batch row,
 //! certificate). A still stand axis, which takes every block's inputs with it, refuses the run.
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 use std::sync::Arc;
 

@@ -15,12 +15,11 @@
 use std::fmt::Write as _;
 use std::ops::ControlFlow;
 
+use crate::common::loader as loader_common;
 use imu_attest::rng::Rng;
 use imu_attest::run::{Block, LoadError, LoadOptions, LoadProgress, Run, load, load_with_progress};
-use sha2::{Digest as _, Sha256};
-#[path = "common/loader.rs"]
-mod loader_common;
 use loader_common::{ALL, chunked, csv, gzip, load_err, opts, write};
+use sha2::{Digest as _, Sha256};
 
 /// The column of `run` that holds header `name`.
 fn column<'a>(run: &'a Run, name: &str) -> &'a [f64] {

@@ -1,16 +1,10 @@
 //! Robustness of `imu_attest::run`: random damage to a run's CSV (plain or gzip, loaded in blocks
 //! of any size) or to its sidecar never panics, and a run accepted despite it holds only finite,
 //! equal-length columns.
-#![expect(
-    clippy::unwrap_used,
-    reason = "test helpers: a failed setup step should panic"
-)]
 
+use crate::common::loader as loader_common;
 use imu_attest::rng::Rng;
 use imu_attest::run::{LoadError, Run, load};
-#[path = "common/loader.rs"]
-#[expect(dead_code, reason = "this test does not use `load_err`")]
-mod loader_common;
 use loader_common::{ALL, chunked, csv, gzip, opts, write};
 
 /// `bytes` with one random flip, insertion or deletion.

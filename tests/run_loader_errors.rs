@@ -1,16 +1,11 @@
 //! Integration tests of `imu_attest::run` on bad files: one test per `LoadError` variant, each
 //! with the right line and column, in a one-line message that names the file.
-#![expect(
-    clippy::unwrap_used,
-    reason = "test helpers: a failed setup step should panic"
-)]
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
+use crate::common::loader as loader_common;
 use imu_attest::run::{LoadError, LoadOptions, load, load_with_progress};
-#[path = "common/loader.rs"]
-mod loader_common;
 use loader_common::{ALL, chunked, csv, gzip, load_err, opts, write};
 
 /// A valid 7-column gyro run of 40 rows (header line 1, row `i` at line `i + 2`) as lines.
@@ -339,20 +334,9 @@ fn time_must_increase_uniformly() {
         *line = format!("{:.6},{rest}", (i - 1) as f64 * 0.01 + 0.0002);
     }
     let err = lines_err(dir.path(), "gap.csv", &lines);
-    assert!(
-        matches!(
-            err,
-            LoadError::IrregularSampling {
-                line: 30,
-                column: 1,
-                ..
-            }
-        ),
-        "{err}"
-    );
     // The message gives the step and the nominal without rounding digits, the deviation and the
     // limit (it gave "step 0.0020299999999999763 s, nominal 0.0019999999999997797 s").
-    let words = err.to_string();
+    let words = irregular_at(&err, 30);
     assert!(
         words.contains("a step of 0.0102 s, 2 % off the nominal 0.01 s")
             && words.contains("at most 1 % is accepted"),
@@ -402,24 +386,21 @@ fn a_dropped_sample_is_named_as_missing() {
             .filter(|(i, _)| !(21..21 + dropped).contains(i))
             .map(|(_, l)| l.to_owned())
             .collect();
-        let err = lines_err(dir.path(), "dropped.csv", &lines);
-        assert!(
-            matches!(
-                err,
-                LoadError::IrregularSampling {
-                    line: 22,
-                    column: 1,
-                    ..
-                }
-            ),
-            "{err}"
-        );
-        let message = err.to_string();
+        let message = irregular_at(&lines_err(dir.path(), "dropped.csv", &lines), 22);
         assert!(
             message.contains(words) && message.contains("cut the record at the gap"),
             "{message}"
         );
     }
+}
+
+/// The message of `err`, which must be an irregular step ending on `line`, in the time column.
+fn irregular_at(err: &LoadError, line: usize) -> String {
+    assert!(
+        matches!(err, LoadError::IrregularSampling { line: l, column: 1, .. } if *l == line),
+        "{err}"
+    );
+    err.to_string()
 }
 
 #[test]

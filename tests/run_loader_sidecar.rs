@@ -3,18 +3,12 @@
 //! with the field it most likely meant, and a bad sidecar refused with its line and column or its
 //! field.
 #![expect(
-    clippy::unwrap_used,
-    reason = "test helpers: a failed setup step should panic"
-)]
-#![expect(
     clippy::float_cmp,
     reason = "a parser must reproduce the written values to the bit"
 )]
 
+use crate::common::loader as loader_common;
 use imu_attest::run::{LoadError, load, sidecar_path};
-#[path = "common/loader.rs"]
-#[expect(dead_code, reason = "this test does not use `chunked` or `load_err`")]
-mod loader_common;
 use loader_common::{ALL, csv, gzip, opts, write};
 
 #[test]

@@ -15,8 +15,7 @@ use imu_attest::sim::SimConfig;
 use imu_attest::sim::regime::Regime;
 use imu_attest::sim::stand::StandImperfections;
 
-#[path = "common/sim.rs"]
-mod sim_common;
+use crate::common::sim as sim_common;
 
 fn config(regime: Regime, latency_s: f64, seed: u64) -> SimConfig {
     let mut config = SimConfig::new(regime);

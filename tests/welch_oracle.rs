@@ -2,7 +2,7 @@
 //! written straight from the definition in the module docs (zero-padded to `fft_len` when set).
 //! The oracle is first checked on sinusoids whose density is known in closed form.
 
-mod common;
+use crate::common;
 
 use common::{correlated_channels, settings, views};
 use imu_attest::spectral::{Detrend, SpectralMatrix, WelchPlanner, WelchSettings, Window};

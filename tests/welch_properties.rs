@@ -1,7 +1,7 @@
 //! Structural properties of `welch_matrix`: Hermitian, positive semi-definite bins, Parseval,
 //! coherence and the transfer-function convention, errors, planner reuse, thread independence.
 
-mod common;
+use crate::common;
 
 use common::{correlated_channels, settings, views};
 use imu_attest::rng::Rng;

@@ -1,6 +1,5 @@
 //! A 60-second simulated approach run, written by the binary's `simulate` (for the command-line
-//! tests that need a run with a known hidden effect). Included with
-//! `#[path = "binary/approach.rs"] mod approach;` beside `mod binary;`.
+//! tests that need a run with a known hidden effect).
 
 use std::path::Path;
 

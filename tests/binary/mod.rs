@@ -1,5 +1,7 @@
 //! Running the `imu-attest` binary from the command-line tests.
 
+pub mod approach;
+
 use std::process::{Command, Output};
 
 /// Runs `imu-attest` with `args` and waits for it.

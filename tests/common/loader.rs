@@ -1,6 +1,10 @@
 //! Helpers shared by the tests of `imu_attest::run` (`tests/run_loader*.rs`): CSV texts of known
 //! values, written plain or gzip, loaded with the default or chunked options, and the error of a
 //! file that should be refused.
+#![expect(
+    clippy::unwrap_used,
+    reason = "test helpers: a failed setup step should panic"
+)]
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};

@@ -1,4 +1,13 @@
-//! Helpers shared by the spectral integration tests.
+//! Helpers shared by the integration tests: the spectral ones here, the others in their own
+//! modules (`sim` simulated runs, `real` the real recordings, `loader` CSV texts, `poles` a warning
+//! read, `gui` the app's harness).
+
+#[cfg(feature = "gui")]
+pub mod gui;
+pub mod loader;
+pub mod poles;
+pub mod real;
+pub mod sim;
 
 use imu_attest::rng::Rng;
 use imu_attest::spectral::{Detrend, WelchSettings, Window};

@@ -171,22 +171,21 @@ fn suspicion(
     // A rival counts where it gains and passes the diagnosis's rule (`rules::opens_gap`) itself:
     // one the diagnosis would refuse is no starting point (a g-sensitivity refused at a clean
     // run's large sines would otherwise have been the channel delays' rival, "fitted first").
-    let passes = |c: &Candidate| {
-        gain(c) > 0.0
-            && base
-                .with(c, band)
-                .is_some_and(|next| opens_gap(&base, &next, outputs).is_none())
-    };
-    let rivals: Vec<Candidate> = candidates_among(&base, band, &|e| RIVALS.contains(&e))
+    // Each rival's state is kept: the one chosen below is fitted from it.
+    let rivals: Vec<(Candidate, State)> = candidates_among(&base, band, &|e| RIVALS.contains(&e))
         .into_iter()
         .chain(fitted.iter().cloned())
-        .filter(|r| passes(r))
+        .filter(|r| gain(r) > 0.0)
+        .filter_map(|r| {
+            let next = base.with(&r, band)?;
+            opens_gap(&base, &next, outputs).is_none().then_some((r, next))
+        })
         .collect();
     alone.into_iter().find_map(|c| {
         let rival = rivals
             .iter()
-            .filter(|r| r.effect != c.effect)
-            .max_by(|x, y| gain(x).total_cmp(&gain(y)));
+            .filter(|(r, _)| r.effect != c.effect)
+            .max_by(|(x, _), (y, _)| gain(x).total_cmp(&gain(y)));
         // Beside the rival that gains most it must gain too (a fit beside it that fails
         // clears nothing: not said); its figures are of the model beside the rival only where
         // the rival gains more than it does alone (a gyro's lag beside its g-sensitivity), else
@@ -194,17 +193,16 @@ fn suspicion(
         // delays that gained a little, a g-sensitivity moved a delay 5.4 us early by a further
         // 5.2 us: the channel delays' mean is another delay).
         let (from, candidate, beside) = match rival {
-            None => (base.clone(), c.clone(), None),
-            Some(r) => {
-                let next = base.with(r, band)?;
-                let beside_r = candidates_among(&next, band, &|e| e == c.effect)
+            None => (&base, c.clone(), None),
+            Some((r, next)) => {
+                let beside_r = candidates_among(next, band, &|e| e == c.effect)
                     .into_iter()
                     .next()?;
                 (gain(&beside_r) > 0.0).then_some(())?;
                 if gain(r) > gain(c) {
                     (next, beside_r, Some(r.effect))
                 } else {
-                    (base.clone(), c.clone(), None)
+                    (&base, c.clone(), None)
                 }
             }
         };
@@ -214,10 +212,10 @@ fn suspicion(
         // lines while the residual's power grew: said, with the delay 4.8-6.9 us "earlier", 13-18
         // of its deviations, on a delay that was right; the diagnosis refused it (`total_grows`).
         let next = from.with(&candidate, band)?;
-        if opens_gap(&from, &next, outputs).is_some() {
+        if opens_gap(from, &next, outputs).is_some() {
             return None;
         }
-        figures(b.block, band, (&from, &candidate, beside), entry, per_parameter)
+        figures(b.block, band, (from, &candidate, beside), entry, per_parameter)
     })
 }
 

@@ -6,7 +6,7 @@
 //! `cargo test` ran the binaries one after another, so a file of one long test kept one of the
 //! CI machine's two cores idle. Here the harness spreads every test over the cores, and the
 //! suite compiles and links once. Run one file's tests with its module name as the filter:
-//! `cargo test --test integration identify_calibration::` (a substring: `span::` runs
+//! `cargo test --release --test integration identify_calibration::` (a substring: `span::` runs
 //! `gui_app_span::` too; add `-- --skip gui_app_span` to leave it out).
 //!
 //! The app's tests (`gui_app*`, and `common::gui`) need the default feature `gui`.

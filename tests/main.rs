@@ -99,6 +99,7 @@ mod stream_alignment;
 mod welch_oracle;
 mod welch_properties;
 mod welch_scipy;
+mod witness_noise_shared;
 mod wrapped_angles;
 
 /// Every `.rs` file beside this one is a module of the binary: with `autotests = false` in

@@ -420,6 +420,12 @@ impl Session {
             let said = self.amplitude_dependence(&settings, b);
             b.warnings.extend(said);
         }
+        if let Some(w) = witness_noise_shared(&identified) {
+            // The gyro's noise taken for the angles' shrank every block's inputs.
+            for b in identified.iter_mut().filter(|b| b.block != Block::Gyro) {
+                b.warnings.push(w.clone());
+            }
+        }
         if let Some(w) = angle_noise_overstated(&motion, self.run.sidecar.angle_noise_rad) {
             // What the gyro says of the declared angle noise concerns every block's inputs.
             for b in &mut identified {
@@ -513,6 +519,22 @@ impl Session {
         }
         Some(self.identify(&settings, Start::Cold, &mut |_| {}))
     }
+}
+
+/// `witness_noise_shared` for the other blocks when the gyro's identification says
+/// `witness_noise_bias` ([`super::witness_noise`]): the angle-noise model that took part of the
+/// gyro's own noise for the stand's made every block's inputs.
+fn witness_noise_shared(identified: &[BlockIdentification]) -> Option<IdentWarning> {
+    identified
+        .iter()
+        .filter(|b| b.block == Block::Gyro)
+        .flat_map(|b| &b.warnings)
+        .find_map(|w| match w {
+            IdentWarning::WitnessNoiseBias { estimate, .. } => Some(IdentWarning::WitnessNoiseShared {
+                gyro_estimate: *estimate,
+            }),
+            _ => None,
+        })
 }
 
 /// `angle_noise_overstated` when the sidecar declares an angle noise more than

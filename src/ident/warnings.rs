@@ -26,7 +26,8 @@ use super::spectra::BlockSpectra;
 use super::warning_words::{
     angle_noise_colour_unknown_words, angle_noise_overstated_words, delay_absorbed_words,
     delay_outside_words, delay_step_words, gain_change_words, gain_depends_on_amplitude_words,
-    poles_or_even_gain_words, write_stretches_without_delay, zeros_lag_words, zeros_lead_words,
+    poles_or_even_gain_words, witness_noise_bias_words, witness_noise_shared_words,
+    write_stretches_without_delay, zeros_lag_words, zeros_lead_words,
 };
 
 /// Relative reconstruction error of a spectral factor above which it is reported.
@@ -193,6 +194,14 @@ pub enum IdentWarning {
         axis: usize,
         /// Every input axis's estimate, relative.
         estimates: [f64; 3],
+    },
+    /// Said on every other block beside a gyro that says [`Self::WitnessNoiseBias`]: their
+    /// inputs come from the same observer, whose angle-noise model took part of the gyro's own
+    /// noise for the stand's, so they were shrunk too and the gains read high by an amount not in
+    /// their deviations ([`super::witness_noise`]).
+    WitnessNoiseShared {
+        /// The gyro's largest estimate of its own gains' bias, relative.
+        gyro_estimate: f64,
     },
     /// A delay that is negative beyond its uncertainty: the block answers before the stand moves.
     NegativeDelay {
@@ -532,16 +541,12 @@ impl fmt::Display for IdentWarning {
                  determine the block's gain to a percent, too little motion for the noise; move \
                  the stand more, or record longer, before certifying from it"
             ),
-            IdentWarning::WitnessNoiseBias { estimate, axis, .. } => write!(
-                f,
-                "the gyro's residual noise is not small beside this run's motion: the angle-noise \
-                 model cannot tell the gyro's own noise from the stand's, and as far as it is the \
-                 gyro's the gains read high, by about {:.2} % at first order (column {}; simulated \
-                 runs read high by 1 to 3 times that); the standard deviations of K include it; \
-                 move the stand more before certifying the gains",
-                estimate * 100.0,
-                ["wx", "wy", "wz"].get(*axis).copied().unwrap_or("?"),
-            ),
+            IdentWarning::WitnessNoiseBias { estimate, axis, .. } => {
+                witness_noise_bias_words(f, *estimate, *axis)
+            }
+            IdentWarning::WitnessNoiseShared { gyro_estimate } => {
+                witness_noise_shared_words(f, *gyro_estimate)
+            }
             IdentWarning::NegativeDelay { tau_s, tau_std_s } => write!(
                 f,
                 "negative delay {:.3} ms (+- {:.3} ms): the block cannot answer before the stand \

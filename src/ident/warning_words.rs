@@ -470,9 +470,10 @@ pub(super) fn angle_noise_overstated_words(
 }
 
 /// The words of [`super::warnings::IdentWarning::WitnessNoiseBias`]: its first-order `estimate`
-/// for the input column `axis`. The multiples are measured (`super::witness_noise`): 1 to 3 with
-/// a white gyro noise; 7 to 16 where the gyro's bias drifts (`simulate --random-walk`
-/// 1.5e-2 to 3e-2, 1 Dec), whose noise the white floor the estimate is capped by does not see.
+/// for the input column `axis`. The multiples are measured (`super::witness_noise`): with a white
+/// gyro noise the errors are now below the estimate (`tests/identify_accuracy.rs`); where the
+/// gyro's bias drifts (`simulate --random-walk` 1.5e-2 to 3e-2, 1 Dec, seven runs) they were 7 to
+/// 16 times it, a noise the white floor the estimate is capped by does not see.
 pub(super) fn witness_noise_bias_words(
     f: &mut fmt::Formatter<'_>,
     estimate: f64,
@@ -482,11 +483,11 @@ pub(super) fn witness_noise_bias_words(
         f,
         "the gyro's residual noise is not small beside this run's motion: the angle-noise \
          model cannot tell the gyro's own noise from the stand's, and as far as it is the \
-         gyro's the gains read high, by about {:.2} % at first order (column {}; simulated \
-         runs read high by 1 to 3 times that, and by up to 16 times where the gyro's bias \
-         drifts: its noise then grows toward low frequency, beyond the floor this estimate \
-         is measured by); the standard deviations of K include the first-order figure only; \
-         move the stand more before certifying the gains",
+         gyro's the gains read high, by about {:.2} % at first order (column {}), which the \
+         standard deviations of K include; a gyro whose bias drifts (its noise growing toward \
+         low frequency, beyond the floor this figure is measured by) reads further off: 7 to \
+         16 times this figure on the simulated runs tried; move the stand more before \
+         certifying the gains",
         estimate * 100.0,
         ["wx", "wy", "wz"].get(axis).copied().unwrap_or("?"),
     )
@@ -498,11 +499,12 @@ pub(super) fn witness_noise_shared_words(f: &mut fmt::Formatter<'_>, gyro_estima
     write!(
         f,
         "this block's inputs come from the observer whose angle-noise model took part of the \
-         gyro's own noise for the stand's (the gyro says its gains read high by about {:.2} % at \
-         first order): as far as it did, these inputs were shrunk too and this block's gains \
-         read high, by an amount not in their deviations (on simulated runs whose gyro bias \
-         drifts, an accelerometer's diagonal gains 3 to 8 % off, 8 to 16 of their \
-         deviations); move the stand more before certifying this block's gains",
+         gyro's own noise for the stand's (the gyro says witness_noise_bias, {:.2} % at first \
+         order for its own gains, which does not size this block's): as far as it did, these \
+         inputs were shrunk too and this block's gains are biased by an amount not in their \
+         deviations (on simulated runs whose gyro bias drifts, an accelerometer's diagonal \
+         gains 2.6 to 8 % off, 8 to 16 of their deviations, mostly high); move the stand more \
+         before certifying this block's gains",
         gyro_estimate * 100.0
     )
 }

@@ -197,7 +197,7 @@ pub enum IdentWarning {
     },
     /// Said on every other block beside a gyro that says [`Self::WitnessNoiseBias`]: their
     /// inputs come from the same observer, whose angle-noise model took part of the gyro's own
-    /// noise for the stand's, so they were shrunk too and the gains read high by an amount not in
+    /// noise for the stand's, so they were shrunk too and the gains are biased by an amount not in
     /// their deviations ([`super::witness_noise`]).
     WitnessNoiseShared {
         /// The gyro's largest estimate of its own gains' bias, relative.

@@ -46,11 +46,18 @@ fn gyro_estimate(b: &BlockIdentification) -> Option<f64> {
     })
 }
 
+/// The block's `witness_noise_shared`, if it says it.
+fn shared_warning(b: &BlockIdentification) -> Option<&IdentWarning> {
+    b.warnings
+        .iter()
+        .find(|w| matches!(w, IdentWarning::WitnessNoiseShared { .. }))
+}
+
 fn shared(b: &BlockIdentification) -> Option<f64> {
-    b.warnings.iter().find_map(|w| match w {
+    match shared_warning(b)? {
         IdentWarning::WitnessNoiseShared { gyro_estimate } => Some(*gyro_estimate),
         _ => None,
-    })
+    }
 }
 
 #[test]
@@ -69,12 +76,7 @@ fn a_gyro_noise_taken_for_the_angles_is_said_on_the_accelerometer_too() {
         .map(|i| (s.k[i][i] - truth.k[i][i]).abs() / s.k_std[i][i])
         .fold(0.0, f64::max);
     assert!(worst > 3.0, "largest diagonal error {worst} deviations");
-    let words = accel
-        .warnings
-        .iter()
-        .find(|w| matches!(w, IdentWarning::WitnessNoiseShared { .. }))
-        .map(ToString::to_string)
-        .unwrap_or_default();
+    let words = shared_warning(accel).map(ToString::to_string).unwrap_or_default();
     assert!(
         words.contains(&format!("{:.2} %", estimate * 100.0)) && words.contains("not in their deviations"),
         "{words}"

@@ -213,6 +213,8 @@ fn a_lever_arm_error_is_said_and_a_model_that_misfits_is_not_tested() {
     let said = suspected(accel);
     assert_eq!(said.len(), 1, "{:?}", accel.fit.warnings);
     assert_eq!(said[0].effect, Effect::LeverArmError);
+    // The gyro beside it witnessed the angle noise: no other reading to offer.
+    assert!(!said[0].angle_noise_taken_white);
     let element = said[0].k_shift.as_ref().expect("K's deviations");
     let z = (accel.k[0][2] - truth.k[0][2]) / accel.fit.k_std[0][2].expect("deviation");
     assert!(z.abs() > 10.0, "K[ax][fz] {z} deviations off");
@@ -267,5 +269,50 @@ fn the_real_recordings_suspect_nothing() {
         let run = imu_attest::run::load(&path, &imu_attest::run::LoadOptions::default()).expect("loads");
         let gyro = &identify(run).blocks["gyro"];
         assert!(suspected(gyro).is_empty(), "{name}: {:?}", gyro.fit.warnings);
+    }
+}
+
+/// An accelerometer alone on a real-like stand (coloured angle noise, no gyro to witness it):
+/// the angle noise is taken white, the coloured part shrinks the inputs where the motion is weak,
+/// and the test of effects read that as a lever-arm error moving `K` by about 5 % (a campaign
+/// on 1 Dec, the same seed with a gyro beside it said nothing). The suspicion now says that
+/// reading too; the lever arm is the sidecar's (the run has no effect), so what the words offer
+/// in its place is the cause.
+#[test]
+fn a_suspicion_under_a_white_angle_noise_says_the_coloured_noise_reads_so_too() {
+    let mut config = SimConfig::new(Regime::Cruise);
+    config.seed = 11;
+    config.duration_s = 120.0;
+    config.blocks = vec![Block::Accel];
+    config.stand = StandImperfections::real();
+    let (sim, run) = simulated_run(&config);
+    assert!(
+        sim.sidecar
+            .truth
+            .accel
+            .as_ref()
+            .expect("accel truth")
+            .effects
+            .is_empty()
+    );
+    let model = identify(run);
+    let accel = &model.blocks["accel"];
+    assert!(
+        accel
+            .fit
+            .warnings
+            .iter()
+            .any(|w| matches!(w, IdentWarning::AngleNoiseColourUnknown { .. })),
+        "{:?}",
+        accel.fit.warnings
+    );
+    let said = suspected(accel);
+    assert!(!said.is_empty(), "{:?}", accel.fit.warnings);
+    for s in said {
+        assert!(s.angle_noise_taken_white, "{s:?}");
+        assert!(
+            s.to_string().contains("a coloured one, which shrinks the inputs"),
+            "{s}"
+        );
     }
 }

@@ -48,6 +48,7 @@ mod diagnose_tone_limit;
 mod diagnose_tone_sizes;
 mod diagnose_tones;
 mod diagnose_usable_band;
+mod diagnose_white_angle_noise;
 mod fuzz_parsers;
 mod gain_amplitude;
 #[cfg(feature = "gui")]

@@ -47,6 +47,7 @@ pub mod tone;
 pub mod tone_limit;
 pub mod uncertainty;
 pub mod usable_band;
+pub mod white_angles;
 mod workflow;
 
 pub use report::{DISCREPANCY_SCHEMA, Finding, Report, Verdict};

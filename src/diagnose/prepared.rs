@@ -21,6 +21,7 @@ use crate::model::refused::refused_blocks;
 use crate::model::{RefusedBlock, Source};
 use crate::run::Run;
 use crate::stand::kinematics::EulerSeries;
+use crate::stand::observer::NoiseColour;
 
 /// What every diagnosis of a run under one set of settings starts from, computed once: the
 /// order-0 identification over the diagnosis's band, each block's whole-record design and the
@@ -84,6 +85,10 @@ pub struct PreparedBlock {
     /// `"auto"`: each finding's sizes are fitted there ([`super::usable_band`]). A band the user
     /// gives is the band the sizes are fitted over.
     pub usable_band_hz: Option<[f64; 2]>,
+    /// Whether the observer took the angle noise white for want of a sound gyro: a smooth
+    /// finding may then be the stand's coloured angle noise, and its evidence says so
+    /// ([`super::white_angles`]).
+    pub angle_noise_taken_white: bool,
 }
 
 /// [`Prepared`] for `session`'s run under `settings`.
@@ -246,6 +251,7 @@ pub fn prepare(session: &mut Session, settings: &Settings) -> Result<Prepared, D
             usable_band_hz: usable
                 .and_then(Result::ok)
                 .and_then(|usable| super::usable_band::compared_band(usable, band)),
+            angle_noise_taken_white: id.motion.noise_colour == NoiseColour::White,
         });
     }
     // Every block set aside: refused as the identification refuses a run with none left.

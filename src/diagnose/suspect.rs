@@ -40,11 +40,12 @@ use crate::ident::identify::{BlockIdentification, RunIdentification};
 use crate::ident::session::Session;
 use crate::ident::settings::Settings;
 use crate::ident::signals::channel_names;
-use crate::ident::suspicion::Suspicion;
+use crate::ident::suspicion::{Suspicion, input_noise_reads_as};
 use crate::ident::warnings::{ElementChange, IdentWarning};
 use crate::model::band_limit::BandLimitShape;
 use crate::model::{BlockModel, Model};
 use crate::run::Run;
+use crate::stand::observer::NoiseColour;
 
 /// The effects tested on each block: those a per-bin estimate takes in without a misfit (a
 /// gyro's g-sensitivity, an accelerometer's lever-arm error), and those the identifier's own
@@ -76,6 +77,9 @@ pub fn suspicions(
         return Vec::new();
     };
     let run = session.run();
+    // No sound gyro: the angle noise was taken white, and a suspicion of an effect that inputs
+    // shrunk by it may read as says so.
+    let angle_noise_taken_white = id.motion.noise_colour == NoiseColour::White;
     let tests: Vec<(&BlockIdentification, &BlockModel)> = id
         .blocks
         .iter()
@@ -87,7 +91,13 @@ pub fn suspicions(
         .par_iter()
         .filter_map(|(b, entry)| {
             let s = suspicion(run, id, b, &span, entry)?;
-            Some((b.block, IdentWarning::EffectSuspected(s)))
+            Some((
+                b.block,
+                IdentWarning::EffectSuspected(Suspicion {
+                    angle_noise_taken_white: angle_noise_taken_white && input_noise_reads_as(s.effect),
+                    ..s
+                }),
+            ))
         })
         .collect()
 }
@@ -261,6 +271,8 @@ fn figures(
         channel_delays_s: channels,
         k_shift,
         k_shift_relative: largest_relative_move(&k_before, &k_after),
+        // The run's, set by `suspicions`.
+        angle_noise_taken_white: false,
     })
 }
 

@@ -358,7 +358,11 @@ fn diagnose_block(
             .as_ref()
             .and_then(|step| super::step_caveat::step_caveat(*effect, searched, step));
         let untested = super::step_caveat::untested_step_caveat(*effect, &pb.untested_step_delays_s);
-        for words in step.into_iter().chain(untested) {
+        let white = pb
+            .angle_noise_taken_white
+            .then(|| super::white_angles::white_angle_noise_caveat(*effect))
+            .flatten();
+        for words in step.into_iter().chain(untested).chain(white) {
             finding.evidence.push_str(&words);
         }
     }

@@ -50,6 +50,38 @@ pub struct Suspicion {
     pub k_shift: Option<ElementChange>,
     /// The largest move of an element of `K`, relative to the largest element of `K`.
     pub k_shift_relative: f64,
+    /// Whether the run's angle noise was taken white for want of a sound gyro (the block also
+    /// says `angle_noise_colour_unknown`) and the effect is one that inputs shrunk by it may read
+    /// as ([`input_noise_reads_as`]): a stand's coloured angle noise, taken as motion,
+    /// shrinks the inputs where the motion is weak, and a fit across frequency reads that as a
+    /// smooth effect too (on accelerometer-only runs of a real-like stand, a lever-arm error
+    /// moving `K` by 5 %, the same runs with a gyro beside it clean). Left out of the file when
+    /// false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub angle_noise_taken_white: bool,
+}
+
+/// What a smooth effect found with the angle noise taken white for want of a sound gyro may be
+/// instead (`angle_noise_colour_unknown`): the stand's coloured angle noise, taken as motion,
+/// shrinks the inputs where the motion is weak, and a fit across frequency reads the gain's fall
+/// as the effect (`crate::diagnose::white_angles` says it of the diagnosis's findings).
+pub const WHITE_ANGLE_NOISE_READING: &str = "the stand's angle noise is taken white here (no sound gyro in \
+     this run): a coloured one, which shrinks the inputs where the motion is weak, reads as this \
+     effect too, so confirm it with a sound gyro on the stand before correcting for it";
+
+/// Whether a fit across frequency may read inputs shrunk by an angle noise taken white as
+/// `effect`: the input noise taken as motion lowers the measured gain where the motion is weak,
+/// with no phase of its own, which an effect that bends the gain down takes (a sensor's lag, a
+/// lever-arm error, a mount resonance's flank, a g-sensitivity's cross-axis filter). Not an
+/// effect of phase alone (channel delays, the angle measurement's lag), one that raises the gain
+/// (the angle measurement's band limit), a line (a tone), a re-timing (a clock drift) or a part
+/// of the outputs not linear in the inputs (a quadratic scale factor).
+#[must_use]
+pub fn input_noise_reads_as(effect: Effect) -> bool {
+    matches!(
+        effect,
+        Effect::SensorLag | Effect::LeverArmError | Effect::PlatformResonance | Effect::GSensitivity
+    )
 }
 
 /// A relative size in words: percent to two decimals from 0.01 %, parts per million below.
@@ -117,6 +149,9 @@ impl fmt::Display for Suspicion {
                 e.output, e.input, e.sigmas
             )?;
         }
+        if self.angle_noise_taken_white {
+            write!(f, "; {WHITE_ANGLE_NOISE_READING}")?;
+        }
         write!(
             f,
             ". `imu-attest discrepancy` sizes it and `identify --effects` fits it beside K (in the \
@@ -147,6 +182,7 @@ mod tests {
                 sigmas: 2.64,
             }),
             k_shift_relative: 1.1e-3,
+            angle_noise_taken_white: false,
         }
     }
 
@@ -195,6 +231,23 @@ mod tests {
         ] {
             assert!(bare.contains(part), "{part:?} not in: {bare}");
         }
+        assert!(!bare.contains("taken white"), "{bare}");
+        // With the angle noise taken white for want of a sound gyro, the other reading is said.
+        let white = Suspicion {
+            angle_noise_taken_white: true,
+            ..g_sensitivity()
+        }
+        .to_string();
+        assert!(
+            white.contains(
+                "(14.0 of its deviations) and K moves by up to 0.11 % (its gy/wz element by 2.6 of \
+                 its deviations); the stand's angle noise is taken white here (no sound gyro in \
+                 this run): a coloured one, which shrinks the inputs where the motion is weak, \
+                 reads as this effect too, so confirm it with a sound gyro on the stand before \
+                 correcting for it. `imu-attest discrepancy`"
+            ),
+            "{white}"
+        );
     }
 
     /// Figures without deviations are left out of the file, not written as `null` (which the
@@ -210,11 +263,25 @@ mod tests {
         let json = serde_json::to_value(&w).expect("serialised");
         assert_eq!(json["kind"], "effect_suspected");
         assert_eq!(json["effect"], "g_sensitivity");
-        for absent in ["delay_shift_sigmas", "channel_delays_s", "k_shift", "beside"] {
+        for absent in [
+            "delay_shift_sigmas",
+            "channel_delays_s",
+            "k_shift",
+            "beside",
+            "angle_noise_taken_white",
+        ] {
             assert!(json.get(absent).is_none(), "{absent}: {json}");
         }
         assert!(!json.to_string().contains("null"), "{json}");
         let back: IdentWarning = serde_json::from_value(json).expect("read back");
         assert_eq!(back, w);
+        let white = IdentWarning::EffectSuspected(Suspicion {
+            angle_noise_taken_white: true,
+            ..g_sensitivity()
+        });
+        let json = serde_json::to_value(&white).expect("serialised");
+        assert_eq!(json["angle_noise_taken_white"], true);
+        let back: IdentWarning = serde_json::from_value(json).expect("read back");
+        assert_eq!(back, white);
     }
 }

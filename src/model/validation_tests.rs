@@ -614,6 +614,7 @@ fn an_extended_model_keeps_no_suspicion() {
         channel_delays_s: None,
         k_shift: None,
         k_shift_relative: 1e-3,
+        angle_noise_taken_white: false,
     };
     let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
     let kept = IdentWarning::FewSegments {

@@ -72,6 +72,7 @@ mod gui_app_validation;
 mod identify_accuracy;
 mod identify_band_top;
 mod identify_calibration;
+mod identify_gain_pattern;
 mod identify_gyro_mount_resonance;
 mod identify_holdout;
 mod identify_real;

@@ -21,6 +21,7 @@ pub mod excitation;
 pub mod explained;
 pub mod factorisation;
 pub mod gain_curvature;
+pub mod gain_pattern;
 pub mod holdout;
 pub mod identify;
 pub mod odd_gain;

@@ -8,7 +8,9 @@
 //!   structure across frequency rather than one number).
 //! - **Implausible gain**: with `calibrated` (the default), a diagonal element of `K` more than
 //!   [`GAIN_TOLERANCE`] from 1 or a cross-coupling above it: wrong units, axis order or signs, or a
-//!   band where the inputs are noise.
+//!   band where the inputs are noise. Where `K` reads as a unit slip or axes swapped or reversed
+//!   (a scale times a signed permutation of the identity), that is said too
+//!   ([`super::gain_pattern`]).
 //! - **Imprecise gain**: with `calibrated`, the largest standard deviation of an element of `K`
 //!   above [`IMPRECISE_GAIN`]: the run does not determine the gain to a percent.
 //! - **Gain changes across the band**: the measured gain rises (or falls) evenly in frequency,
@@ -288,7 +290,11 @@ pub fn self_check(
     }
     if settings.calibrated {
         let (inputs, outputs) = channel_names(block);
+        let before = out.len();
         out.extend(implausible_gains(&fit.k, inputs, outputs));
+        if out.len() > before {
+            out.extend(super::gain_pattern::gain_pattern(block, &fit.k).map(IdentWarning::GainPattern));
+        }
         out.extend(imprecise_gain(block, fit));
     }
     out.extend(negative_delay(fit.tau_s, fit.tau_std_s));

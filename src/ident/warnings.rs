@@ -454,6 +454,10 @@ pub enum IdentWarning {
     /// parameters plus the diagnosis's look-elsewhere cost, closes part of the gap between model
     /// and outputs and opens it nowhere, and the delay or `K` moves beyond its deviation.
     EffectSuspected(super::suspicion::Suspicion),
+    /// An implausible `K` that reads as a unit slip or axes swapped or reversed: a scale times
+    /// a signed permutation of the identity ([`super::gain_pattern`]), said beside
+    /// [`Self::ImplausibleGain`].
+    GainPattern(super::gain_pattern::GainPattern),
 }
 
 impl fmt::Display for IdentWarning {
@@ -632,6 +636,7 @@ impl fmt::Display for IdentWarning {
                 gain_depends_on_amplitude_words(f, outputs, *band_hz)
             }
             IdentWarning::EffectSuspected(s) => s.fmt(f),
+            IdentWarning::GainPattern(p) => p.fmt(f),
             IdentWarning::FactorNotCausal {
                 negative_lags,
                 refinement,

@@ -471,7 +471,7 @@ impl BlockModel {
     /// The gain-plausibility check ([`crate::ident::selfcheck::implausible_gains`]) on the
     /// extended model's own `K` where the block is `calibrated`: the identified model's elements
     /// go, the new `K`'s beyond the tolerance are said (in the place of the first identified one,
-    /// else at the end).
+    /// else at the end), with what it reads as (`gain_pattern`).
     fn redo_implausible_gain(&mut self, calibrated: bool) {
         let at = self
             .fit
@@ -479,16 +479,28 @@ impl BlockModel {
             .iter()
             .position(|w| matches!(w, IdentWarning::ImplausibleGain { .. }))
             .unwrap_or(self.fit.warnings.len());
-        self.fit
-            .warnings
-            .retain(|w| !matches!(w, IdentWarning::ImplausibleGain { .. }));
+        self.fit.warnings.retain(|w| {
+            !matches!(
+                w,
+                IdentWarning::ImplausibleGain { .. } | IdentWarning::GainPattern(_)
+            )
+        });
         if !calibrated {
             return;
         }
         let inputs = self.inputs.each_ref().map(String::as_str);
         let outputs = self.outputs.each_ref().map(String::as_str);
-        let judged: Vec<IdentWarning> =
+        let mut judged: Vec<IdentWarning> =
             crate::ident::selfcheck::implausible_gains(&self.k, inputs, outputs).collect();
+        // What the implausible `K` reads as, for the block whose outputs these are.
+        let block = [crate::block::Block::Gyro, crate::block::Block::Accel]
+            .into_iter()
+            .find(|b| crate::ident::signals::channel_names(*b).1 == outputs);
+        if let Some(block) = block.filter(|_| !judged.is_empty()) {
+            judged.extend(
+                crate::ident::gain_pattern::gain_pattern(block, &self.k).map(IdentWarning::GainPattern),
+            );
+        }
         let at = at.min(self.fit.warnings.len());
         self.fit.warnings.splice(at..at, judged);
     }

@@ -38,7 +38,9 @@ fn a_real_gyro_in_deg_per_s_or_with_axes_swapped_says_so() {
 
     let mut run = real("broad07_fast_rotation");
     for c in run.gyro.as_mut().expect("a gyro").iter_mut() {
-        c.iter_mut().for_each(|v| *v = v.to_degrees());
+        for v in c.iter_mut() {
+            *v = v.to_degrees();
+        }
     }
     let b = gyro(&run, &settings);
     assert!(implausible(&b));
@@ -46,11 +48,19 @@ fn a_real_gyro_in_deg_per_s_or_with_axes_swapped_says_so() {
     assert_eq!(p.units, Some(UnitSlip::OutputsInDegPerS), "{p:?}");
     assert!(p.axes.is_empty(), "{p:?}");
     assert!((p.scale / 57.2958 - 1.0).abs() < 0.01, "{}", p.scale);
+    // The cause is said before the elements it makes implausible.
+    let first = |f: fn(&IdentWarning) -> bool| b.warnings.iter().position(f).expect("said");
+    assert!(
+        first(|w| matches!(w, IdentWarning::GainPattern(_)))
+            < first(|w| matches!(w, IdentWarning::ImplausibleGain { .. }))
+    );
 
     let mut run = real("broad07_fast_rotation");
     let [gx, gy, _] = run.gyro.as_mut().expect("a gyro");
     std::mem::swap(gx, gy);
-    gy.iter_mut().for_each(|v| *v = -*v);
+    for v in gy.iter_mut() {
+        *v = -*v;
+    }
     let b = gyro(&run, &settings);
     let p = pattern(&b).expect("a pattern");
     assert_eq!(p.units, None);
@@ -69,7 +79,9 @@ fn a_real_gyro_in_deg_per_s_or_with_axes_swapped_says_so() {
 fn a_simulated_accelerometer_in_g_says_so() {
     let (_, mut run) = simulated_run_of(120.0, Regime::Cruise, 5, &[]);
     for c in run.accel.as_mut().expect("an accelerometer").iter_mut() {
-        c.iter_mut().for_each(|v| *v /= 9.80665);
+        for v in c.iter_mut() {
+            *v /= 9.80665;
+        }
     }
     let id = identify_run(&run, &Settings::default()).expect("identified");
     let accel = id.blocks.iter().find(|b| b.block == Block::Accel).expect("accel");

@@ -292,8 +292,11 @@ pub fn self_check(
         let (inputs, outputs) = channel_names(block);
         let before = out.len();
         out.extend(implausible_gains(&fit.k, inputs, outputs));
-        if out.len() > before {
-            out.extend(super::gain_pattern::gain_pattern(block, &fit.k).map(IdentWarning::GainPattern));
+        // What the implausible elements read as, first: the cause before its symptoms.
+        if out.len() > before
+            && let Some(p) = super::gain_pattern::gain_pattern(block, &fit.k)
+        {
+            out.insert(before, IdentWarning::GainPattern(p));
         }
         out.extend(imprecise_gain(block, fit));
     }

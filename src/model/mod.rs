@@ -496,10 +496,10 @@ impl BlockModel {
         let block = [crate::block::Block::Gyro, crate::block::Block::Accel]
             .into_iter()
             .find(|b| crate::ident::signals::channel_names(*b).1 == outputs);
-        if let Some(block) = block.filter(|_| !judged.is_empty()) {
-            judged.extend(
-                crate::ident::gain_pattern::gain_pattern(block, &self.k).map(IdentWarning::GainPattern),
-            );
+        if let Some(block) = block.filter(|_| !judged.is_empty())
+            && let Some(p) = crate::ident::gain_pattern::gain_pattern(block, &self.k)
+        {
+            judged.insert(0, IdentWarning::GainPattern(p));
         }
         let at = at.min(self.fit.warnings.len());
         self.fit.warnings.splice(at..at, judged);

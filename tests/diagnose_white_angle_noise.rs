@@ -60,13 +60,14 @@ fn smooth_findings_under_a_white_angle_noise_say_so_and_witnessed_ones_do_not() 
         &DiagnoseOptions::default(),
     )
     .expect("diagnosed");
-    let lever_arm = report
-        .findings
-        .iter()
-        .find(|f| f.block == Block::Accel && f.effect == Effect::LeverArmError)
-        .expect("the lever-arm error named");
+    assert!(
+        report
+            .findings
+            .iter()
+            .any(|f| f.block == Block::Accel && f.effect == Effect::LeverArmError),
+        "the lever-arm error named"
+    );
     for f in &report.findings {
         assert!(!f.evidence.contains(CAVEAT), "{}: {}", f.effect, f.evidence);
     }
-    assert!(!lever_arm.evidence.is_empty());
 }

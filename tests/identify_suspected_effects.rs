@@ -273,8 +273,8 @@ fn the_real_recordings_suspect_nothing() {
 }
 
 /// An accelerometer alone on a real-like stand (coloured angle noise, no gyro to witness it):
-/// the angle noise is taken white, the coloured part shrinks the inputs where the motion is weak,
-/// and the test of effects read that as a lever-arm error moving `K` by about 5 % (a campaign
+/// the angle noise is taken white, the coloured part enters the inputs as motion where the motion
+/// is weak and lowers the gain there, and the test of effects read that as a lever-arm error moving `K` by about 5 % (a campaign
 /// on 1 Dec, the same seed with a gyro beside it said nothing). The suspicion now says that
 /// reading too; the lever arm is the sidecar's (the run has no effect), so what the words offer
 /// in its place is the cause.
@@ -311,7 +311,8 @@ fn a_suspicion_under_a_white_angle_noise_says_the_coloured_noise_reads_so_too() 
     for s in said {
         assert!(s.angle_noise_taken_white, "{s:?}");
         assert!(
-            s.to_string().contains("a coloured one, which shrinks the inputs"),
+            s.to_string()
+                .contains("a coloured one enters the inputs as motion"),
             "{s}"
         );
     }

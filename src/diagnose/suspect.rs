@@ -78,7 +78,7 @@ pub fn suspicions(
     };
     let run = session.run();
     // No sound gyro: the angle noise was taken white, and a suspicion of an effect that inputs
-    // shrunk by it may read as says so.
+    // holding a coloured one may read as says so.
     let angle_noise_taken_white = id.motion.noise_colour == NoiseColour::White;
     let tests: Vec<(&BlockIdentification, &BlockModel)> = id
         .blocks

@@ -16,9 +16,10 @@
 //!
 //! Said of the effects such a fall may read as ([`input_noise_reads_as`]): a lag, a lever-arm
 //! error, a mount resonance, a g-sensitivity; not of a tone, a clock drift, a quadratic scale
-//! factor, channel delays or the angle measurement's own lag or band limit (which raises the
-//! gain: on a real-like stand's turbulent cruise, accelerometer alone, the stand's 30 Hz band
-//! limit was named, rightly).
+//! factor, channel delays, the angle measurement's own lag, or its band limit, which raises the
+//! gain (on a real-like stand's turbulent cruise, accelerometer alone, the stand's 30 Hz band
+//! limit was named, rightly). The lag and the lever-arm error were measured to read so; the
+//! resonance and the g-sensitivity are included by caution.
 
 use crate::effect::Effect;
 use crate::ident::suspicion::{WHITE_ANGLE_NOISE_READING, input_noise_reads_as};

@@ -10,9 +10,11 @@
 //! `K` (the one whose elements carry most of `K`), and says it where every one of its elements
 //! lies within [`PATTERN_TOLERANCE`] of their common size and every other element below that
 //! share of it: then it names the unit whose factor the size matches within [`UNIT_TOLERANCE`]
-//! (only those that apply to the block: a gyro's outputs in deg/s or its angles in degrees, an
-//! accelerometer's outputs in g or mg; angles in degrees do not scale an accelerometer's inputs,
-//! which hold gravity's sine), and each output that follows another input or the reversed one.
+//! (only those that apply to the block: a gyro's outputs in deg/s, an accelerometer's outputs in
+//! g or mg; angles in degrees scale no block's inputs, which hold their sines and cosines, the
+//! Euler rates' conversion to body rates and gravity's direction, and a stand's moves of a
+//! degree or more in degrees read as radians make `K` no pattern at all), and each output that
+//! follows another input or the reversed one.
 //! A pattern with neither (the identity at a scale no unit explains) is not said.
 //!
 //! Units: `K` dimensionless (output unit over input unit, as the run format's); the scale is
@@ -40,8 +42,6 @@ const STANDARD_GRAVITY: f64 = 9.80665;
 pub enum UnitSlip {
     /// A gyro's outputs in deg/s (`K` near `180 / pi`).
     OutputsInDegPerS,
-    /// The angles in degrees (a gyro's `K` near `pi / 180`).
-    AnglesInDegrees,
     /// An accelerometer's outputs in g (`K` near `1 / 9.80665`).
     OutputsInG,
     /// An accelerometer's outputs in mg (`K` near `1000 / 9.80665`).
@@ -53,7 +53,7 @@ impl UnitSlip {
     #[must_use]
     pub fn of(block: Block) -> &'static [UnitSlip] {
         match block {
-            Block::Gyro => &[UnitSlip::OutputsInDegPerS, UnitSlip::AnglesInDegrees],
+            Block::Gyro => &[UnitSlip::OutputsInDegPerS],
             Block::Accel => &[UnitSlip::OutputsInG, UnitSlip::OutputsInMilliG],
         }
     }
@@ -63,7 +63,6 @@ impl UnitSlip {
     pub fn factor(self) -> f64 {
         match self {
             UnitSlip::OutputsInDegPerS => 180.0 / std::f64::consts::PI,
-            UnitSlip::AnglesInDegrees => std::f64::consts::PI / 180.0,
             UnitSlip::OutputsInG => 1.0 / STANDARD_GRAVITY,
             UnitSlip::OutputsInMilliG => 1000.0 / STANDARD_GRAVITY,
         }
@@ -73,9 +72,6 @@ impl UnitSlip {
         match self {
             UnitSlip::OutputsInDegPerS => {
                 "the outputs look to be in deg/s (K near 180/pi = 57.30), where the run format's unit is rad/s"
-            }
-            UnitSlip::AnglesInDegrees => {
-                "the angles look to be in degrees (K near pi/180 = 0.01745), where the run format's unit is rad"
             }
             UnitSlip::OutputsInG => {
                 "the outputs look to be in g (K near 1/9.807 = 0.1020), where the run format's unit is m/s^2"
@@ -166,7 +162,7 @@ impl fmt::Display for GainPattern {
         };
         write!(
             f,
-            "K reads as {:.4} times {shape} (every element within {:.0} % of that): ",
+            "K reads as {:.4} times {shape} (its elements within {:.0} % of that, the others below): ",
             self.scale,
             PATTERN_TOLERANCE * 100.0
         )?;

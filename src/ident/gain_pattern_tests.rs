@@ -22,7 +22,6 @@ fn a_unit_slip_is_named_by_its_factor() {
     let mut rng = Rng::new(7);
     for (block, unit) in [
         (Block::Gyro, UnitSlip::OutputsInDegPerS),
-        (Block::Gyro, UnitSlip::AnglesInDegrees),
         (Block::Accel, UnitSlip::OutputsInG),
         (Block::Accel, UnitSlip::OutputsInMilliG),
     ] {
@@ -65,6 +64,14 @@ fn swapped_and_reversed_axes_are_named_and_rebuild_k() {
                     continue;
                 }
                 let found = found.expect("a pattern");
+                assert_eq!(
+                    found.units,
+                    unit.then_some(UnitSlip::OutputsInDegPerS),
+                    "{found:?}"
+                );
+                // Only the rows off their own axis or reversed are named.
+                let moved = (0..3).filter(|&i| perm[i] != i || signs >> i & 1 == 1).count();
+                assert_eq!(found.axes.len(), moved, "{perm:?} {signs}: {found:?}");
                 let names = ["gx", "gy", "gz"];
                 let inputs = ["wx", "wy", "wz"];
                 let mut rebuilt = [[0.0; 3]; 3];
@@ -130,8 +137,8 @@ fn the_words_say_the_unit_and_the_axes() {
     .to_string();
     assert_eq!(
         both,
-        "K reads as 57.4100 times the identity with axes swapped or reversed (every element \
-         within 5 % of that): the outputs look to be in deg/s (K near 180/pi = 57.30), where the \
+        "K reads as 57.4100 times the identity with axes swapped or reversed (its elements \
+         within 5 % of that, the others below): the outputs look to be in deg/s (K near 180/pi = 57.30), where the \
          run format's unit is rad/s; gx follows wy, gy follows -wx: the outputs' axis order or \
          signs differ from the stand's axes. Convert or reorder the columns and identify again: \
          this model is of the run as recorded"
@@ -144,4 +151,25 @@ fn the_words_say_the_unit_and_the_axes() {
     .expect("serialised");
     assert_eq!(json["units"], "outputs_in_g");
     assert!(json.get("axes").is_none(), "{json}");
+}
+
+/// The warning in the model file: its kind, its fields, and read back the same.
+#[test]
+fn the_warning_round_trips_through_the_model_file() {
+    use crate::ident::warnings::IdentWarning;
+    let w = IdentWarning::GainPattern(GainPattern {
+        scale: 0.9986,
+        units: None,
+        axes: vec![AxisFollows {
+            output: "gx".to_owned(),
+            input: "wy".to_owned(),
+            reversed: true,
+        }],
+    });
+    let json = serde_json::to_value(&w).expect("serialised");
+    assert_eq!(json["kind"], "gain_pattern");
+    assert_eq!(json["axes"][0]["input"], "wy");
+    assert!(json.get("units").is_none(), "{json}");
+    let back: IdentWarning = serde_json::from_value(json).expect("read back");
+    assert_eq!(back, w);
 }

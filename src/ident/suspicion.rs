@@ -51,10 +51,10 @@ pub struct Suspicion {
     /// The largest move of an element of `K`, relative to the largest element of `K`.
     pub k_shift_relative: f64,
     /// Whether the run's angle noise was taken white for want of a sound gyro (the block also
-    /// says `angle_noise_colour_unknown`) and the effect is one that inputs shrunk by it may read
-    /// as ([`input_noise_reads_as`]): a stand's coloured angle noise, taken as motion,
-    /// shrinks the inputs where the motion is weak, and a fit across frequency reads that as a
-    /// smooth effect too (on accelerometer-only runs of a real-like stand, a lever-arm error
+    /// says `angle_noise_colour_unknown`) and the effect is one that inputs holding it may read
+    /// as ([`input_noise_reads_as`]): a stand's coloured angle noise, taken as motion, enters
+    /// the inputs where the motion is weak and lowers the gain there, and a fit across frequency
+    /// reads that as a smooth effect too (on accelerometer-only runs of a real-like stand, a lever-arm error
     /// moving `K` by 5 %, the same runs with a gyro beside it clean). Left out of the file when
     /// false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -63,19 +63,22 @@ pub struct Suspicion {
 
 /// What a smooth effect found with the angle noise taken white for want of a sound gyro may be
 /// instead (`angle_noise_colour_unknown`): the stand's coloured angle noise, taken as motion,
-/// shrinks the inputs where the motion is weak, and a fit across frequency reads the gain's fall
-/// as the effect (`crate::diagnose::white_angles` says it of the diagnosis's findings).
+/// enters the inputs where the motion is weak and lowers the measured gain there
+/// (errors in variables), and a fit across frequency reads the gain's fall as the effect
+/// (`crate::diagnose::white_angles` says it of the diagnosis's findings).
 pub const WHITE_ANGLE_NOISE_READING: &str = "the stand's angle noise is taken white here (no sound gyro in \
-     this run): a coloured one, which shrinks the inputs where the motion is weak, reads as this \
-     effect too, so confirm it with a sound gyro on the stand before correcting for it";
+     this run): a coloured one enters the inputs as motion where the motion is weak and lowers \
+     the measured gain there, which a fit across frequency can take for this effect, so confirm \
+     it with a sound gyro on the stand before correcting for it";
 
-/// Whether a fit across frequency may read inputs shrunk by an angle noise taken white as
-/// `effect`: the input noise taken as motion lowers the measured gain where the motion is weak,
-/// with no phase of its own, which an effect that bends the gain down takes (a sensor's lag, a
-/// lever-arm error, a mount resonance's flank, a g-sensitivity's cross-axis filter). Not an
-/// effect of phase alone (channel delays, the angle measurement's lag), one that raises the gain
-/// (the angle measurement's band limit), a line (a tone), a re-timing (a clock drift) or a part
-/// of the outputs not linear in the inputs (a quadratic scale factor).
+/// Whether a fit across frequency may read inputs that hold an angle noise taken white as
+/// `effect`: the noise taken as motion lowers the measured gain where the motion is weak, with no
+/// phase of its own (errors in variables). Measured to read so: a sensor's lag and a lever-arm
+/// error (`crate::diagnose::white_angles`); included by caution: a mount resonance (its flank
+/// above the peak) and a g-sensitivity (a cross-axis filter). Not an effect of phase alone
+/// (channel delays, the angle measurement's lag), one that raises the gain (the angle
+/// measurement's band limit), a line (a tone), a re-timing (a clock drift) or a part of the
+/// outputs not linear in the inputs (a quadratic scale factor).
 #[must_use]
 pub fn input_noise_reads_as(effect: Effect) -> bool {
     matches!(
@@ -242,9 +245,10 @@ mod tests {
             white.contains(
                 "(14.0 of its deviations) and K moves by up to 0.11 % (its gy/wz element by 2.6 of \
                  its deviations); the stand's angle noise is taken white here (no sound gyro in \
-                 this run): a coloured one, which shrinks the inputs where the motion is weak, \
-                 reads as this effect too, so confirm it with a sound gyro on the stand before \
-                 correcting for it. `imu-attest discrepancy`"
+                 this run): a coloured one enters the inputs as motion where the motion is weak \
+                 and lowers the measured gain there, which a fit across frequency can take for \
+                 this effect, so confirm it with a sound gyro on the stand before correcting for \
+                 it. `imu-attest discrepancy`"
             ),
             "{white}"
         );

@@ -477,7 +477,12 @@ impl BlockModel {
             .fit
             .warnings
             .iter()
-            .position(|w| matches!(w, IdentWarning::ImplausibleGain { .. }))
+            .position(|w| {
+                matches!(
+                    w,
+                    IdentWarning::ImplausibleGain { .. } | IdentWarning::GainPattern(_)
+                )
+            })
             .unwrap_or(self.fit.warnings.len());
         self.fit.warnings.retain(|w| {
             !matches!(

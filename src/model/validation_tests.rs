@@ -638,3 +638,54 @@ fn an_extended_model_keeps_no_suspicion() {
     m.set_effects(effects, K, [[Some(1e-3); 3]; 3], 0.004, Some(1e-5), true);
     assert_eq!(m.fit.warnings, vec![kept]);
 }
+
+/// An extended model's `K` that reads as a unit slip: its pattern is said again with its own
+/// figures, before its implausible elements, in the place of the identified model's (whose stale
+/// pattern goes), the warnings after them kept after them.
+#[test]
+fn an_extended_model_says_its_own_gain_pattern_in_place() {
+    use crate::ident::gain_pattern::{GainPattern, UnitSlip};
+    use crate::ident::warnings::IdentWarning;
+    use crate::model::effects::ModelEffects;
+    let deg = 180.0 / std::f64::consts::PI;
+    let k = [[deg, 0.0, 0.0], [0.0, deg, 0.0], [0.0, 0.0, deg]];
+    let few = IdentWarning::FewSegments {
+        segments: 7,
+        equivalent_averages: 12.0,
+        segment_len: 1024,
+        segment_auto: true,
+    };
+    let mut m = delayed_gain(K, 0.004, [0.1, 20.0]);
+    m.fit.warnings = vec![
+        IdentWarning::GainPattern(GainPattern {
+            scale: 50.0,
+            units: None,
+            axes: Vec::new(),
+        }),
+        IdentWarning::ImplausibleGain {
+            output: "gx".to_owned(),
+            input: "wx".to_owned(),
+            value: 50.0,
+        },
+        few.clone(),
+    ];
+    let effects = ModelEffects {
+        chi2_per_dof: [1.2, 1.1],
+        ..no_effects(0.004, 0)
+    };
+    m.set_effects(effects, k, [[Some(1e-4); 3]; 3], 0.004, Some(1e-5), true);
+    match &m.fit.warnings[..] {
+        [
+            IdentWarning::GainPattern(p),
+            IdentWarning::ImplausibleGain { .. },
+            IdentWarning::ImplausibleGain { .. },
+            IdentWarning::ImplausibleGain { .. },
+            kept,
+        ] => {
+            assert_eq!(p.units, Some(UnitSlip::OutputsInDegPerS), "{p:?}");
+            assert!((p.scale / deg - 1.0).abs() < 1e-12, "{}", p.scale);
+            assert_eq!(kept, &few);
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -213,6 +213,24 @@ pub fn implausible_gains<'a>(
     })
 }
 
+/// The gain-plausibility check of a calibrated `block`'s `k` ([`implausible_gains`] on its
+/// channels), with what an implausible `K` reads as ([`super::gain_pattern`]) said first, the
+/// cause before its symptoms; empty where every element is plausible. Of any model (an extended
+/// one's on its own `K`, `crate::model::BlockModel`).
+#[must_use]
+pub fn gain_plausibility(block: Block, k: &[[f64; 3]; 3]) -> Vec<IdentWarning> {
+    let (inputs, outputs) = channel_names(block);
+    let elements: Vec<IdentWarning> = implausible_gains(k, inputs, outputs).collect();
+    if elements.is_empty() {
+        return elements;
+    }
+    super::gain_pattern::gain_pattern(block, k)
+        .map(IdentWarning::GainPattern)
+        .into_iter()
+        .chain(elements)
+        .collect()
+}
+
 /// The delay-sign check (module docs): a delay `tau_s` more than three of its deviations
 /// `tau_std_s` below zero, of any model (an extended one's on its own figures,
 /// `crate::model::BlockModel`).
@@ -289,15 +307,7 @@ pub fn self_check(
         out.extend(gain_changes(block, bins, spectra.bin_correlation, fit).map(|(w, _)| w));
     }
     if settings.calibrated {
-        let (inputs, outputs) = channel_names(block);
-        let before = out.len();
-        out.extend(implausible_gains(&fit.k, inputs, outputs));
-        // What the implausible elements read as, first: the cause before its symptoms.
-        if out.len() > before
-            && let Some(p) = super::gain_pattern::gain_pattern(block, &fit.k)
-        {
-            out.insert(before, IdentWarning::GainPattern(p));
-        }
+        out.extend(gain_plausibility(block, &fit.k));
         out.extend(imprecise_gain(block, fit));
     }
     out.extend(negative_delay(fit.tau_s, fit.tau_std_s));

@@ -468,44 +468,37 @@ impl BlockModel {
         self.replace_warning(at, judged);
     }
 
-    /// The gain-plausibility check ([`crate::ident::selfcheck::implausible_gains`]) on the
+    /// The gain-plausibility check ([`crate::ident::selfcheck::gain_plausibility`]) on the
     /// extended model's own `K` where the block is `calibrated`: the identified model's elements
-    /// go, the new `K`'s beyond the tolerance are said (in the place of the first identified one,
-    /// else at the end), with what it reads as (`gain_pattern`).
+    /// and pattern go, the new `K`'s beyond the tolerance are said with what it reads as (in the
+    /// place of the first identified one, else at the end).
     fn redo_implausible_gain(&mut self, calibrated: bool) {
+        let gain_check = |w: &IdentWarning| {
+            matches!(
+                w,
+                IdentWarning::ImplausibleGain { .. } | IdentWarning::GainPattern(_)
+            )
+        };
         let at = self
             .fit
             .warnings
             .iter()
-            .position(|w| {
-                matches!(
-                    w,
-                    IdentWarning::ImplausibleGain { .. } | IdentWarning::GainPattern(_)
-                )
-            })
+            .position(gain_check)
             .unwrap_or(self.fit.warnings.len());
-        self.fit.warnings.retain(|w| {
-            !matches!(
-                w,
-                IdentWarning::ImplausibleGain { .. } | IdentWarning::GainPattern(_)
-            )
-        });
+        self.fit.warnings.retain(|w| !gain_check(w));
         if !calibrated {
             return;
         }
         let inputs = self.inputs.each_ref().map(String::as_str);
         let outputs = self.outputs.each_ref().map(String::as_str);
-        let mut judged: Vec<IdentWarning> =
-            crate::ident::selfcheck::implausible_gains(&self.k, inputs, outputs).collect();
-        // What the implausible `K` reads as, for the block whose outputs these are.
+        // The block whose channels these are (the identifier names them so).
         let block = [crate::block::Block::Gyro, crate::block::Block::Accel]
             .into_iter()
             .find(|b| crate::ident::signals::channel_names(*b).1 == outputs);
-        if let Some(block) = block.filter(|_| !judged.is_empty())
-            && let Some(p) = crate::ident::gain_pattern::gain_pattern(block, &self.k)
-        {
-            judged.insert(0, IdentWarning::GainPattern(p));
-        }
+        let judged: Vec<IdentWarning> = match block {
+            Some(block) => crate::ident::selfcheck::gain_plausibility(block, &self.k),
+            None => crate::ident::selfcheck::implausible_gains(&self.k, inputs, outputs).collect(),
+        };
         let at = at.min(self.fit.warnings.len());
         self.fit.warnings.splice(at..at, judged);
     }

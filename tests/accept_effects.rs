@@ -368,6 +368,42 @@ fn an_extended_gyro_keeps_the_witness_noise_estimate_in_its_deviations() {
     }
 }
 
+/// An accepted effect refits the gyro's gains; the angle noise the observer's model left out
+/// (`ident::left_out_noise`, on a real stand's coloured noise) stays in the refitted deviations,
+/// as the model file's shift says.
+#[test]
+fn an_extended_gyro_keeps_the_left_out_angle_noise_in_its_deviations() {
+    use imu_attest::sim::SimConfig;
+    use imu_attest::sim::stand::StandImperfections;
+    let mut config = SimConfig::new(Regime::TurbulentCruise);
+    config.duration_s = 120.0;
+    config.rate_hz = 500.0;
+    config.seed = 96;
+    config.effects = vec!["sensor_lag:gyro".parse().expect("effect")];
+    config.stand = StandImperfections::real();
+    let (_, run) = sim_common::simulated_run(&config);
+    let model = extend(run, &[(Block::Gyro, Effect::SensorLag)]);
+    let gyro = &model.blocks["gyro"];
+    assert!(gyro.effects.as_ref().is_some_and(|e| e.extends()));
+    let shift = gyro
+        .fit
+        .k_shift_left_out_angle_noise
+        .expect("the gyro witnessed the angle noise");
+    assert!(shift.iter().flatten().any(|d| d.abs() > 0.0), "{shift:?}");
+    for i in 0..3 {
+        for j in 0..3 {
+            let sd = gyro.fit.k_std[i][j].expect("a deviation");
+            assert!(
+                sd >= shift[i][j].abs() / 3.0_f64.sqrt() * (1.0 - 1e-12),
+                "K[{i}][{j}] = {} +- {sd}, shift {}",
+                gyro.k[i][j],
+                shift[i][j]
+            );
+        }
+    }
+    assert!(model.blocks["accel"].fit.k_shift_left_out_angle_noise.is_none());
+}
+
 /// A reference interpolated from 120 Hz: the delay-only model gives `K` at low frequency and
 /// carries the even gain; the joint fit of an accepted effect (its own design and weights) gives
 /// its gain as fitted, without the even gain, and the warning says `K` is not moved. (Seed 94

@@ -75,6 +75,7 @@ mod identify_calibration;
 mod identify_gain_pattern;
 mod identify_gyro_mount_resonance;
 mod identify_holdout;
+mod identify_left_out_noise;
 mod identify_real;
 mod identify_real_fit;
 mod identify_sensor_filters;

@@ -53,6 +53,7 @@ fn block(k00: f64, k_std: Option<f64>, tau_s: f64, tau_std_s: Option<f64>) -> Bl
             noise_factor_error: Some(0.0),
             input_factor_error: Some(0.0),
             causal_grid_refinement: Some(1),
+            k_shift_left_out_angle_noise: None,
             warnings: Vec::new(),
         },
     }

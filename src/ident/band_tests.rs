@@ -22,6 +22,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
         centroid_hz: Vec::new(),
         centroid_offset_hz: Vec::new(),
         gyro_witnessed: false,
+        left_out_noise: None,
         s_uu: vec![one; BINS],
         s_xu: vec![one; BINS],
         s_xx: frequency_hz

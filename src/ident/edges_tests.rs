@@ -29,6 +29,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
         centroid_hz: Vec::new(),
         centroid_offset_hz: Vec::new(),
         gyro_witnessed: false,
+        left_out_noise: None,
         frequency_hz: (0..BINS).map(|k| k as f64 * RATE / fft_len as f64).collect(),
         s_xu: s_uu.iter().map(|s| h * s).collect(),
         s_xx: s_uu

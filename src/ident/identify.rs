@@ -24,6 +24,7 @@ use super::excitation::check_excitation;
 use super::factorisation::{Factorisation, FactorisationSettings};
 use super::gain_curvature::EvenGain;
 use super::holdout::{HeldOut, cached_held_out};
+use super::left_out_noise::{gain_shift, widen_for_left_out_noise};
 use super::selfcheck::{chi2_per_bin, self_check};
 use super::session::{Session, Start};
 use super::settings::{OrderSetting, Settings};
@@ -319,6 +320,10 @@ fn identify_excited(
             widen(&mut w, st);
         }
         let said = witness.and_then(|e| widen_for_witness_noise(&mut w, e));
+        if let Some(left_out) = spectra.left_out_noise.as_deref() {
+            let shift = gain_shift(&spectra, &factorisation.coherence, &band, &w.k, left_out);
+            widen_for_left_out_noise(&mut w, &shift);
+        }
         (w, said)
     };
     let (first, said) = widened(&structural);

@@ -24,6 +24,7 @@ pub mod gain_curvature;
 pub mod gain_pattern;
 pub mod holdout;
 pub mod identify;
+pub mod left_out_noise;
 pub mod odd_gain;
 pub mod selfcheck;
 pub mod session;

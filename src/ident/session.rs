@@ -37,6 +37,7 @@ use super::factorisation::{Factorisation, FactorisationSettings, factorise_from}
 use super::identify::{
     BlockIdentification, FitStart, IdentStep, Refusal, RunIdentification, identify_block_from,
 };
+use super::left_out_noise::LeftOutNoise;
 use super::odd_gain::{OddSpectra, amplitude_dependent, odd_spectra};
 use super::settings::{Estimate, Settings};
 use super::signals::{BlockSignals, block_signals, bridged, channel_names};
@@ -232,8 +233,14 @@ impl Session {
             } else {
                 let signals = self.span_signals(block, &span)?;
                 let mut s = block_spectra(&mut self.planner, &signals, self.run.sample_rate_hz, &welch)?;
-                s.gyro_witnessed =
-                    block == Block::Gyro && self.motion()?.noise_colour == NoiseColour::FromGyro;
+                let motion = self.motion()?;
+                s.gyro_witnessed = block == Block::Gyro && motion.noise_colour == NoiseColour::FromGyro;
+                if s.gyro_witnessed
+                    && let Some(psd) = &motion.angle_noise_left_out_psd
+                {
+                    let angles = motion.euler.angle.each_ref().map(Vec::as_slice);
+                    s.left_out_noise = Some(Arc::new(LeftOutNoise::new(psd.clone(), angles)));
+                }
                 let s = Arc::new(s);
                 self.spectra.push((block, s.clone()));
                 s

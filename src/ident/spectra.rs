@@ -59,6 +59,10 @@ pub struct BlockSpectra {
     /// widens its gains' deviations by the bias that leaves ([`super::witness_noise`]). Set by
     /// the session; `false` from [`block_spectra`].
     pub gyro_witnessed: bool,
+    /// For the gyro's spectra when its outputs coloured the model: what the model left out
+    /// ([`super::left_out_noise`]), whose possible bias the identification puts into the gains'
+    /// deviations. Set by the session; `None` from [`block_spectra`].
+    pub left_out_noise: Option<std::sync::Arc<super::left_out_noise::LeftOutNoise>>,
     /// Sample rate, Hz.
     pub sample_rate_hz: f64,
     /// FFT length (the two-sided grid length), samples.
@@ -266,6 +270,7 @@ pub fn block_spectra(
         centroid_hz: centroids.hz,
         centroid_offset_hz: centroids.offset_hz,
         gyro_witnessed: false,
+        left_out_noise: None,
         stretches,
         finer_stretches,
         stationarity_cache: StationarityCache::default(),

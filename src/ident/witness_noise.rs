@@ -120,15 +120,16 @@ pub fn widen_for_witness_noise(fit: &mut StructuralFit, estimate: [f64; 3]) -> O
     })
 }
 
+/// Spectra and fits for the tests here and in [`super::left_out_noise`].
 #[cfg(test)]
-mod tests {
+pub(super) mod tests_support {
     use super::*;
     use nalgebra::Matrix3;
     use num_complex::Complex64;
 
     /// Spectra on a 0..100 Hz grid (fs 200 Hz, 101 bins) with output level `band_level` below
     /// 50 Hz and `top_level` above.
-    fn spectra(band_level: f64, top_level: f64) -> BlockSpectra {
+    pub fn spectra(band_level: f64, top_level: f64) -> BlockSpectra {
         let frequency_hz: Vec<f64> = (0..=100).map(f64::from).collect();
         let s_xx = frequency_hz
             .iter()
@@ -152,6 +153,7 @@ mod tests {
             centroid_hz: Vec::new(),
             centroid_offset_hz: Vec::new(),
             gyro_witnessed: true,
+            left_out_noise: None,
             sample_rate_hz: 200.0,
             fft_len: 200,
             segment_len: 200,
@@ -159,7 +161,7 @@ mod tests {
     }
 
     /// An order-0 fit of gain `k`, every element's standard deviation `std`.
-    fn order0_fit(k: [[f64; 3]; 3], std: f64) -> StructuralFit {
+    pub fn fit(k: [[f64; 3]; 3], std: f64) -> StructuralFit {
         StructuralFit {
             order: 0,
             k,
@@ -184,6 +186,12 @@ mod tests {
             fitted: crate::ident::structural::FittedOrders::default(),
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tests_support::{fit as order0_fit, spectra};
+    use super::*;
 
     /// The widening in quadrature per column, the static figures alike, and the warning for the
     /// largest estimate only above 1e-3.

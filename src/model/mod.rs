@@ -28,6 +28,7 @@ pub use refused::RefusedBlock;
 use crate::faults::RecordingFault;
 use crate::ident::gain_curvature::EvenGain;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
+use crate::ident::left_out_noise::{gain_shift, widened_by_shift};
 use crate::ident::settings::{Estimate, Settings};
 use crate::ident::signals::channel_names;
 use crate::ident::structural::OrderCandidate;
@@ -228,6 +229,13 @@ pub struct Fit {
     /// (`ident::causal_stage`, item 3); absent when the fit did not go through it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub causal_grid_refinement: Option<usize>,
+    /// For a gyro whose outputs coloured the angle-noise model: the error of `K` (reported less
+    /// true) if what the gyro left unexplained in the angles where that model kept its white
+    /// floor were all the angles' noise (negative: the gains read low; it may as well be the
+    /// gyro's own noise, then none), `|shift| / sqrt(3)` being in `k_std`
+    /// ([`crate::ident::left_out_noise`]). Absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_shift_left_out_angle_noise: Option<[[f64; 3]; 3]>,
     /// What was regularised or is inexact (absent or empty when all is well).
     #[serde(default)]
     pub warnings: Vec<IdentWarning>,
@@ -307,6 +315,11 @@ impl BlockModel {
                 noise_factor_error: Some(f.noise_factor_error),
                 input_factor_error: causal.map(|c| c.input_factor_error),
                 causal_grid_refinement: causal.map(|c| c.input_refinement),
+                k_shift_left_out_angle_noise: b
+                    .spectra
+                    .left_out_noise
+                    .as_deref()
+                    .map(|l| gain_shift(&b.spectra, &b.factorisation.coherence, &b.band, &s.k, l)),
                 warnings: b.warnings.clone(),
             },
         }
@@ -367,6 +380,13 @@ impl BlockModel {
         let k_std = match witness {
             Some(e) => std::array::from_fn(|i| {
                 std::array::from_fn(|j| k_std[i][j].map(|s| widened_std(s, e[j], k[i][j])))
+            }),
+            None => k_std,
+        };
+        // So does the angle noise the observer's model left out (`ident::left_out_noise`).
+        let k_std = match self.fit.k_shift_left_out_angle_noise {
+            Some(shift) => std::array::from_fn(|i| {
+                std::array::from_fn(|j| k_std[i][j].map(|s| widened_by_shift(s, shift[i][j])))
             }),
             None => k_std,
         };

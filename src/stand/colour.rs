@@ -131,6 +131,13 @@ const MIN_EQUIVALENT: f64 = 24.0;
 pub(super) struct Coloured {
     /// Per bin of the observer's grid and axis, the model (see [`coloured_noise`]).
     pub per_bin: Vec<[f64; 3]>,
+    /// Per bin and axis, what the witness left unexplained above the white floor where the model
+    /// kept the floor ([`MIN_SHARE`]), the same medians: the angles' noise may be up to this much
+    /// more than the model (it may as well be the gyro's own noise; one run cannot tell them
+    /// apart), and the gains fitted on the inputs read low by up to its share of the motion
+    /// (`ident::left_out_noise`). 0 where the model is the unexplained part itself, and below
+    /// the frequency where the gyro's drift is kept out.
+    pub left_out_per_bin: Vec<[f64; 3]>,
     /// Per axis, the white level that bounds the angles' noise from above: the median over the
     /// bins between [`BOUND_BAND_HZ`]'s ends (the top capped at `0.4 fs`) of `min(N_c, S_yy)`
     /// without the floor (the unexplained part holds the angles' noise and more: the gyro's own,
@@ -188,6 +195,9 @@ pub(super) fn coloured_noise(
     let mut out: Vec<[f64; 3]> = (0..grid.n_bins())
         .map(|k| [0, 1, 2].map(|a| median(k, a, |c| c.model)))
         .collect();
+    let mut left_out: Vec<[f64; 3]> = (0..grid.n_bins())
+        .map(|k| [0, 1, 2].map(|a| median(k, a, |c| c.left_out)))
+        .collect();
     let top = BOUND_BAND_HZ[1].min(0.4 * rate);
     let band: Vec<usize> = (0..grid.n_bins())
         .filter(|&k| (BOUND_BAND_HZ[0]..=top).contains(&grid.frequency_hz(k)))
@@ -208,9 +218,10 @@ pub(super) fn coloured_noise(
         [Some(x), Some(y), Some(z)] => Some([x, y, z]),
         _ => None,
     };
-    keep_the_gyro_s_drift_out(&mut out, grid, white);
+    keep_the_gyro_s_drift_out(&mut out, &mut left_out, grid, white);
     Coloured {
         per_bin: out,
+        left_out_per_bin: left_out,
         bound_rad,
     }
 }
@@ -220,6 +231,8 @@ pub(super) fn coloured_noise(
 #[derive(Clone, Copy)]
 struct Cell {
     model: [f64; 3],
+    /// The unexplained part above the floor where the model keeps the floor ([`Coloured`]).
+    left_out: [f64; 3],
     bound: [f64; 3],
     /// The angles' power `S_yy`.
     total: [f64; 3],
@@ -232,7 +245,13 @@ struct Cell {
 /// part is at most its level at that minimum, which is subtracted. (Taken as angle noise, a gyro's
 /// rate random walk, `1/f^4` in angle units, shrank the inputs at low frequency and hid the walk
 /// from the noise terms; its white noise shrank them where the motion is weak.)
-fn keep_the_gyro_s_drift_out(out: &mut [[f64; 3]], grid: &RecordFft, white: [f64; 3]) {
+/// What the model left out (`left_out`, [`Coloured::left_out_per_bin`]) is treated alike.
+fn keep_the_gyro_s_drift_out(
+    out: &mut [[f64; 3]],
+    left_out: &mut [[f64; 3]],
+    grid: &RecordFft,
+    white: [f64; 3],
+) {
     let top = (0.4 * grid.sample_rate_hz()).min(40.0);
     for a in 0..3 {
         let in_rate = |k: usize| {
@@ -249,13 +268,15 @@ fn keep_the_gyro_s_drift_out(out: &mut [[f64; 3]], grid: &RecordFft, white: [f64
         // The gyro's part is at most its level at the minimum, and (flat or falling) no more above
         // it: what rises beyond that level is the angle measurement's.
         let floor = in_rate(lowest);
-        for (k, v) in out.iter_mut().enumerate() {
+        for (k, (v, l)) in out.iter_mut().zip(left_out.iter_mut()).enumerate() {
             let w = 2.0 * std::f64::consts::PI * grid.frequency_hz(k);
-            v[a] = if k < lowest {
-                white[a]
+            if k < lowest {
+                v[a] = white[a];
+                l[a] = 0.0;
             } else {
-                (v[a] - floor / (w * w)).max(white[a])
-            };
+                v[a] = (v[a] - floor / (w * w)).max(white[a]);
+                l[a] = (l[a] - floor / (w * w)).max(0.0);
+            }
         }
     }
 }
@@ -394,15 +415,24 @@ fn stretch_cells(
 /// nothing is known beyond it).
 fn cell_of(total: [f64; 3], witnessed: Option<[f64; 3]>, white: [f64; 3]) -> Cell {
     let left = witnessed.unwrap_or(white);
+    let kept_white = |a: usize| left[a] < MIN_SHARE * total[a];
     let model = [0, 1, 2].map(|a| {
-        if left[a] < MIN_SHARE * total[a] {
+        if kept_white(a) {
             white[a]
         } else {
             left[a].min(total[a]).max(white[a])
         }
     });
+    let left_out = [0, 1, 2].map(|a| {
+        if witnessed.is_some() && kept_white(a) {
+            (left[a] - white[a]).max(0.0)
+        } else {
+            0.0
+        }
+    });
     Cell {
         model,
+        left_out,
         // Where the witness says nothing the floor is no bound: NaN, left out of the median.
         bound: witnessed.map_or([f64::NAN; 3], |w| [0, 1, 2].map(|a| w[a].min(total[a]))),
         total,

@@ -123,6 +123,11 @@ pub struct ObserverEstimate {
     /// the gyro leaves unexplained in them, over the auto band's search limits; module
     /// [`super::colour`]), rad; `None` without one.
     pub angle_noise_bound_rad: Option<[f64; 3]>,
+    /// With a witness, what it left unexplained above the white floor where the model kept the
+    /// floor (below a thousandth of the angles' power, module [`super::colour`]): the angles'
+    /// noise may exceed `angle_noise_psd` by up to this, rad^2/Hz per axis in the same bands
+    /// (`ident::left_out_noise` turns it into the gains' deviations); `None` without a witness.
+    pub angle_noise_left_out_psd: Option<ErrorPsd>,
 }
 
 impl ObserverEstimate {
@@ -308,18 +313,28 @@ pub fn observe_with_witness(
     let floor = residuals.iter().map(|r| resolution_floor(r)).fold(0.0, f64::max);
     let noise_var = noise_var.map(|v| v.max(floor));
     let smoothed = smoothed_cross_periodogram(&spectra, effective_len, &fft, settings);
-    let (noise, noise_colour, angle_noise_bound_rad) = match witness {
+    let density = 2.0 / sample_rate_hz;
+    let df = sample_rate_hz / fft.len() as f64;
+    let (noise, noise_colour, angle_noise_bound_rad, angle_noise_left_out_psd) = match witness {
         Some(w) => {
             let smoothing = (settings.smoothing_hz, settings.smoothing_fraction);
             let coloured = coloured_noise(angles, w, &fft, smoothing, noise_var);
             let bound = coloured.bound_rad;
-            (AngleNoise::PerBin(coloured.per_bin), NoiseColour::FromGyro, bound)
+            let left_out: Vec<[f64; 3]> = coloured
+                .left_out_per_bin
+                .iter()
+                .map(|v| v.map(|x| x * density))
+                .collect();
+            (
+                AngleNoise::PerBin(coloured.per_bin),
+                NoiseColour::FromGyro,
+                bound,
+                Some(ErrorPsd::from_bins(&left_out, df)),
+            )
         }
-        None => (AngleNoise::White(noise_var), NoiseColour::White, None),
+        None => (AngleNoise::White(noise_var), NoiseColour::White, None, None),
     };
     let (mut estimate, error_per_bin) = wiener_gain_apply(&spectra, &smoothed, &noise, noise_var);
-    let density = 2.0 / sample_rate_hz;
-    let df = sample_rate_hz / fft.len() as f64;
     let error_psd = ErrorPsd::from_bins(
         &error_per_bin
             .iter()
@@ -379,6 +394,7 @@ pub fn observe_with_witness(
         angle_psd,
         error_psd,
         angle_noise_bound_rad,
+        angle_noise_left_out_psd,
     })
 }
 

@@ -1,0 +1,156 @@
+use super::*;
+use crate::ident::spectra::BlockSpectra;
+use num_complex::Complex64;
+
+/// A left-out model of `level` rad^2/Hz per axis over 0.05-100 Hz (one band).
+fn flat(level: [f64; 3]) -> ErrorPsd {
+    ErrorPsd {
+        frequency_hz: vec![2.0],
+        edges_hz: vec![0.05, 100.0],
+        psd: vec![level],
+    }
+}
+
+fn at_rest(psd: ErrorPsd) -> LeftOutNoise {
+    let zero = [0.0; 4];
+    LeftOutNoise::new(psd, [&zero, &zero, &zero])
+}
+
+/// Spectra with bins at 1..=n Hz and the input matrix `s_uu(f)`.
+fn spectra(n: usize, s_uu: impl Fn(f64) -> Matrix3<Complex64>) -> BlockSpectra {
+    let mut s = crate::ident::witness_noise::tests_support::spectra(1.0, 1.0);
+    s.frequency_hz = (0..=n).map(|k| k as f64).collect();
+    s.s_uu = s.frequency_hz.iter().map(|&f| s_uu(f)).collect();
+    s
+}
+
+/// At rest `E` is the axis map `[roll, yaw, pitch] -> [x, y, z]`, the identity; turned by a
+/// roll of 90 degrees, a yaw rate is seen about the body's `-z`.
+#[test]
+fn the_euler_to_body_map_follows_the_mean_attitude() {
+    let e = at_rest(flat([0.0; 3])).euler_to_body;
+    assert!((e - Matrix3::identity()).abs().max() < 1e-15, "{e}");
+    let roll = [std::f64::consts::FRAC_PI_2; 2];
+    let zero = [0.0; 2];
+    let e = LeftOutNoise::new(flat([0.0; 3]), [&roll, &zero, &zero]).euler_to_body;
+    assert!((e[(2, 1)] + 1.0).abs() < 1e-12 && e[(1, 1)].abs() < 1e-12, "{e}");
+}
+
+/// Uncoupled inputs of density `S` at every bin, a diagonal `K`, the same left-out level `n` on
+/// every axis and coherence: each gain reads low by the bins' mean of `w^2 n / S`, the closed
+/// form `K_ii n (2 pi)^2 mean(f^2) / S`; the off-diagonal elements do not move.
+#[test]
+fn uncoupled_inputs_shift_each_gain_by_the_mean_share() {
+    let s = 2.5e-3;
+    let sp = spectra(10, |_| Matrix3::from_diagonal_element(Complex64::from(s)));
+    let n = 1e-9;
+    let band: Vec<usize> = (1..=10).collect();
+    let coherence = vec![[0.9; 3]; 11];
+    let k = [[1.01, 0.0, 0.0], [0.0, 0.99, 0.0], [0.0, 0.0, 1.0]];
+    let shift = gain_shift(&sp, &coherence, &band, &k, &at_rest(flat([n; 3])));
+    let mean_f2 = (1..=10).map(|f| f64::from(f * f)).sum::<f64>() / 10.0;
+    let share = n * (2.0 * std::f64::consts::PI).powi(2) * mean_f2 / s;
+    for i in 0..3 {
+        for j in 0..3 {
+            let want = if i == j { -k[i][i] * share } else { 0.0 };
+            assert!(
+                (shift[i][j] - want).abs() < 1e-12 * share.max(1.0),
+                "{i}{j}: {} vs {want}",
+                shift[i][j]
+            );
+        }
+    }
+}
+
+/// Coupled inputs (roll and yaw correlated 0.9, as a turbulent cruise's) with noise left out of
+/// roll alone: against the brute-force first-order `K dN S^-1` of one bin, and the cross gain
+/// `K[x][y]` moves though `K` is the identity (by `-dN_x (S^-1)_xy`).
+#[test]
+fn coupled_inputs_move_the_cross_gains() {
+    let (a, rho) = (1e-2, 0.9);
+    let s_uu = Matrix3::new(a, rho * a, 0.0, rho * a, a, 0.0, 0.0, 0.0, a).map(Complex64::from);
+    let sp = spectra(1, |_| s_uu);
+    let n = 1e-8;
+    let k = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let shift = gain_shift(&sp, &[[0.5; 3]; 2], &[1], &k, &at_rest(flat([n, 0.0, 0.0])));
+    let dn = (2.0 * std::f64::consts::PI).powi(2) * n;
+    let inv = s_uu.map(|c| c.re).try_inverse().unwrap();
+    for i in 0..3 {
+        for j in 0..3 {
+            let want = if i == 0 { -dn * inv[(0, j)] } else { 0.0 };
+            assert!(
+                (shift[i][j] - want).abs() < 1e-9 * dn * inv.abs().max(),
+                "{i}{j}: {} vs {want}",
+                shift[i][j]
+            );
+        }
+    }
+    assert!(shift[0][1] > 0.5 * shift[0][0].abs(), "{shift:?}");
+}
+
+/// Two bins each moving one axis only (each `S_uu` singular on its own): the shift is the
+/// weighted sums' closed form `-K (sum dN) (sum S_uu)^-1`, which a per-bin inverse could not give.
+#[test]
+fn the_bins_are_summed_before_the_inverse() {
+    let sp = spectra(2, |f| {
+        let mut m = Matrix3::zeros();
+        m[(0, 0)] = Complex64::from(if f < 1.5 { 4e-2 } else { 1e-2 });
+        m[(1, 1)] = Complex64::from(if f < 1.5 { 0.0 } else { 3e-2 });
+        m[(2, 2)] = Complex64::from(if f < 1.5 { 0.0 } else { 2e-2 });
+        m
+    });
+    let k = [[1.0, 0.002, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let n = 1e-9;
+    let shift = gain_shift(&sp, &[[0.8; 3]; 3], &[1, 2], &k, &at_rest(flat([n; 3])));
+    let w2 = |f: f64| (2.0 * std::f64::consts::PI * f).powi(2);
+    let dn = Matrix3::from_diagonal_element(n * (w2(1.0) + w2(2.0)));
+    let s = Matrix3::from_diagonal(&nalgebra::Vector3::new(5e-2, 3e-2, 2e-2));
+    let want = -Matrix3::from_fn(|i, j| k[i][j]) * dn * s.try_inverse().unwrap();
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!(
+                (shift[i][j] - want[(i, j)]).abs() < 1e-12 * want.abs().max(),
+                "{i}{j}: {shift:?} vs {want}"
+            );
+        }
+    }
+}
+
+/// Bins outside the left-out model's bands, with a NaN coherence or a singular `S_uu` give no
+/// shift; the widening adds `|dK| / sqrt(3)` in quadrature.
+#[test]
+fn nothing_known_shifts_nothing_and_the_widening_is_uniform() {
+    let sp = spectra(3, |f| {
+        if f > 2.5 {
+            Matrix3::zeros()
+        } else {
+            Matrix3::from_diagonal_element(Complex64::from(1e-2))
+        }
+    });
+    let k = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let outside = ErrorPsd {
+        frequency_hz: vec![50.0],
+        edges_hz: vec![40.0, 60.0],
+        psd: vec![[1e-6; 3]],
+    };
+    assert_eq!(
+        gain_shift(&sp, &[[0.9; 3]; 4], &[1, 2], &k, &at_rest(outside)),
+        [[0.0; 3]; 3]
+    );
+    let nan = [[f64::NAN; 3]; 4];
+    assert_eq!(
+        gain_shift(&sp, &nan, &[1, 2], &k, &at_rest(flat([1e-6; 3]))),
+        [[0.0; 3]; 3]
+    );
+    assert_eq!(
+        gain_shift(&sp, &[[0.9; 3]; 4], &[3], &k, &at_rest(flat([1e-6; 3]))),
+        [[0.0; 3]; 3]
+    );
+
+    let mut fit = crate::ident::witness_noise::tests_support::fit(k, 1e-4);
+    let shift = [[3e-4, 0.0, 0.0], [0.0; 3], [0.0, 0.0, -6e-4]];
+    widen_for_left_out_noise(&mut fit, &shift);
+    assert!((fit.k_std[0][0] - 1e-4_f64.hypot(3e-4 / 3.0_f64.sqrt())).abs() < 1e-18);
+    assert!((fit.k_std[1][1] - 1e-4).abs() < 1e-18);
+    assert!((fit.k_std[2][2] - 1e-4_f64.hypot(6e-4 / 3.0_f64.sqrt())).abs() < 1e-18);
+}

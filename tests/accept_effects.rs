@@ -384,7 +384,7 @@ fn an_extended_gyro_keeps_the_left_out_angle_noise_in_its_deviations() {
     let (_, run) = sim_common::simulated_run(&config);
     let model = extend(run, &[(Block::Gyro, Effect::SensorLag)]);
     let gyro = &model.blocks["gyro"];
-    assert!(gyro.effects.as_ref().is_some_and(|e| e.extends()));
+    assert!(gyro.extended_by().is_some());
     let shift = gyro
         .fit
         .k_shift_left_out_angle_noise

@@ -320,10 +320,6 @@ fn identify_excited(
             widen(&mut w, st);
         }
         let said = witness.and_then(|e| widen_for_witness_noise(&mut w, e));
-        if let Some(left_out) = spectra.left_out_noise.as_deref() {
-            let shift = gain_shift(&spectra, &factorisation.coherence, &band, &w.k, left_out);
-            widen_for_left_out_noise(&mut w, &shift);
-        }
         (w, said)
     };
     let (first, said) = widened(&structural);
@@ -341,7 +337,19 @@ fn identify_excited(
         previous.and_then(|p| p.over_even_gain.as_deref()),
         &|f| widened(f).0,
     )?;
-    let structural = over.fit;
+    // The angle noise the colour model left out (`left_out_noise`): a shift common to the gain
+    // across the band, so after the even gain is judged (with it in the deviations, a gain that
+    // changes across the band was no longer seen to: on 30-minute real-stand runs the
+    // accelerometer's `K` then read worse), and before the self-check judges the precision.
+    let structural = match spectra.left_out_noise.as_deref() {
+        Some(left_out) => {
+            let mut w = (*over.fit).clone();
+            let shift = gain_shift(&spectra, &factorisation.coherence, &band, &w.k, left_out);
+            widen_for_left_out_noise(&mut w, &shift);
+            Arc::new(w)
+        }
+        None => over.fit,
+    };
     if let Some(st) = stationarity.as_deref().filter(|st| st.drifts()) {
         let duration = st.stretches.last().map_or(0.0, |l| l.span_s[1]) - st.stretches[0].span_s[0];
         let (trend, trend_std) = st.drift();

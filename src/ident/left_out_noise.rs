@@ -1,5 +1,5 @@
 //! The angle noise the observer's model left out: the gain bias it may leave, put into the
-//! gyro's `K` standard deviations.
+//! `K` standard deviations of the blocks whose inputs come from the angles.
 //!
 //! With a gyro block the observer colours its angle-noise model by what the gyro's outputs leave
 //! unexplained in the measured angles (`stand::colour`), except where that part is below a
@@ -15,8 +15,10 @@
 //!
 //! So the ambiguity is put into the deviations. With the observer's matrix Wiener gain
 //! `I - N S_yy^-1` per bin, a model short of the noise by `dN` gives `H1 = K S_uu (S_uu + dN)^-1`,
-//! to first order `K (I - dN S_uu^-1)` (in the inputs' units: `dN_u = w^2 E dN E^T` for body
-//! rates, `E` the Euler-rate-to-body-rate matrix at the record's mean attitude; the inputs'
+//! to first order `K (I - dN S_uu^-1)` (in the inputs' units: `dN_u = T dN T^H` with `T` the
+//! inputs' linearised response to the angles at the record's mean attitude: for a gyro's body
+//! rates `T = j w E`, `E` the Euler-rate-to-body-rate matrix; for an accelerometer's specific
+//! force `T = A - w^2 B`, `A` its tilt of gravity and `B` its lever arm's `w' x r`; the inputs'
 //! spectra stand in for the motion's). The static gain is fitted over the band, each bin of
 //! output `i` weighted by the inverse of its residual density `S_psi,ik = (1 - gamma2_ik)
 //! S_xx,ik`, so the row's estimate is `K (sum_k S_uu,k / S_psi,ik) (sum_k (S_uu,k + dN_u,k) /
@@ -28,7 +30,8 @@
 //! sums come before the inverse: a bin whose inputs are nearly collinear is not inverted on its
 //! own; averaged per bin, the shifts read ten times the measured on turbulent cruises). Taken
 //! as uniform between, the error's rms about the reported gain is `|dK_ij| / sqrt(3)`, added in
-//! quadrature to each element's deviation ([`widen_for_left_out_noise`]). The off-diagonal
+//! quadrature to each element's deviation ([`widen_for_left_out_noise`]), of the gyro and of an
+//! accelerometer beside it alike (the model is the gyro's, the inputs both blocks'). The off-diagonal
 //! elements move too: `S_uu^-1` couples the axes where the motion does (a turbulent cruise's
 //! roll and yaw). The delay is untouched (the observer's gain is zero-phase).
 //!
@@ -37,51 +40,101 @@
 //! bins, does not shift (nothing widened). Units: the model's densities are
 //! one-sided, rad^2/Hz, as the spectra's (`crate::spectral`).
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
+use num_complex::Complex64;
 
 use super::spectra::BlockSpectra;
 use super::structural::StructuralFit;
-use crate::stand::kinematics::{EulerState, body_rate};
+use crate::stand::kinematics::{EulerState, body_rate, specific_force};
 use crate::stand::observer::ErrorPsd;
 
-/// What the observer's angle-noise model left out, and how it reaches a gyro's inputs.
+/// What the observer's angle-noise model left out, and how it reaches a block's inputs.
 #[derive(Clone, Debug)]
 pub struct LeftOutNoise {
     /// The part left out per band, angle axes `[roll, yaw, pitch]`, rad^2/Hz
     /// (`stand::observer::ObserverEstimate::angle_noise_left_out_psd`).
     pub psd: ErrorPsd,
-    /// Euler rates to body rates at the record's mean attitude, `E` (module docs).
-    pub euler_to_body: Matrix3<f64>,
+    /// The inputs' linearised response to the Euler angles at the record's mean attitude, at
+    /// rest: `du = A dtheta + C dtheta' + B dtheta''` as `[A, C, B]` (module docs).
+    pub to_inputs: [Matrix3<f64>; 3],
 }
 
 impl LeftOutNoise {
-    /// The model `psd` with `E` at the mean of the Euler `angles` (`[roll, yaw, pitch]`, rad).
+    /// For a gyro: body rates `C = E`, the Euler-rate-to-body-rate matrix at the mean of the Euler
+    /// `angles` (`[roll, yaw, pitch]`, rad).
     #[must_use]
-    pub fn new(psd: ErrorPsd, angles: [&[f64]; 3]) -> Self {
-        let mean = angles.map(|a| a.iter().sum::<f64>() / a.len().max(1) as f64);
-        let euler_to_body = Matrix3::from_fn(|r, c| {
+    pub fn for_gyro(psd: ErrorPsd, angles: [&[f64]; 3]) -> Self {
+        let mean = mean_attitude(angles);
+        let c = Matrix3::from_fn(|r, col| {
             let mut rate = [0.0; 3];
-            rate[c] = 1.0;
+            rate[col] = 1.0;
             body_rate(&EulerState {
                 angle: mean,
                 rate,
                 accel: [0.0; 3],
             })[r]
         });
-        Self { psd, euler_to_body }
+        Self {
+            psd,
+            to_inputs: [Matrix3::zeros(), c, Matrix3::zeros()],
+        }
     }
 
-    /// `dN_u` at `f_hz` in body-rate units, (rad/s)^2/Hz; `None` outside the model's bands.
+    /// For an accelerometer at `lever_arm_m` under gravity `g_mps2`: its specific force's tilt of
+    /// gravity `A` (central differences of 1e-6 rad) and the lever arm's `w' x r`, `B` (exact:
+    /// linear in the Euler accelerations at rest), at the mean attitude.
+    #[must_use]
+    pub fn for_accel(psd: ErrorPsd, angles: [&[f64]; 3], lever_arm_m: [f64; 3], g_mps2: f64) -> Self {
+        let mean = mean_attitude(angles);
+        let r = Vector3::from(lever_arm_m);
+        let force = |angle: [f64; 3], accel: [f64; 3]| {
+            specific_force(
+                &EulerState {
+                    angle,
+                    rate: [0.0; 3],
+                    accel,
+                },
+                &r,
+                g_mps2,
+            )
+        };
+        let h = 1e-6;
+        let a = Matrix3::from_fn(|row, col| {
+            let (mut up, mut down) = (mean, mean);
+            up[col] += h;
+            down[col] -= h;
+            (force(up, [0.0; 3])[row] - force(down, [0.0; 3])[row]) / (2.0 * h)
+        });
+        let b = Matrix3::from_fn(|row, col| {
+            let mut accel = [0.0; 3];
+            accel[col] = 1.0;
+            force(mean, accel)[row] - force(mean, [0.0; 3])[row]
+        });
+        Self {
+            psd,
+            to_inputs: [a, Matrix3::zeros(), b],
+        }
+    }
+
+    /// `dN_u = Re(T dN T^H)` at `f_hz`, `T = A + j w C - w^2 B`, in the inputs' units squared per
+    /// Hz; `None` outside the model's bands.
     fn in_inputs(&self, f_hz: f64) -> Option<Matrix3<f64>> {
         let b = self.psd.edges_hz.partition_point(|&e| e <= f_hz);
         if b == 0 || b >= self.psd.edges_hz.len() {
             return None;
         }
         let left = self.psd.psd.get(b - 1)?;
-        let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
-        let e = self.euler_to_body;
-        Some(e * Matrix3::from_diagonal(&left.map(|v| v * w2).into()) * e.transpose())
+        let w = 2.0 * std::f64::consts::PI * f_hz;
+        let [a, c, bb] = self.to_inputs;
+        let t = (a - bb * (w * w)).map(Complex64::from) + c.map(|v| Complex64::new(0.0, w * v));
+        let dn = Matrix3::from_diagonal(&Vector3::from(*left).map(Complex64::from));
+        Some((t * dn * t.adjoint()).map(|v| v.re))
     }
+}
+
+/// The mean of each Euler angle over the record, rad.
+fn mean_attitude(angles: [&[f64]; 3]) -> [f64; 3] {
+    angles.map(|a| a.iter().sum::<f64>() / a.len().max(1) as f64)
 }
 
 /// `dK` (module docs) for the gains `k` over the `band` bins of `spectra`, with the multiple

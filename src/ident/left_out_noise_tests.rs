@@ -13,7 +13,7 @@ fn flat(level: [f64; 3]) -> ErrorPsd {
 
 fn at_rest(psd: ErrorPsd) -> LeftOutNoise {
     let zero = [0.0; 4];
-    LeftOutNoise::new(psd, [&zero, &zero, &zero])
+    LeftOutNoise::for_gyro(psd, [&zero, &zero, &zero])
 }
 
 /// Spectra with bins at 1..=n Hz and the input matrix `s_uu(f)`.
@@ -28,12 +28,41 @@ fn spectra(n: usize, s_uu: impl Fn(f64) -> Matrix3<Complex64>) -> BlockSpectra {
 /// roll of 90 degrees, a yaw rate is seen about the body's `-z`.
 #[test]
 fn the_euler_to_body_map_follows_the_mean_attitude() {
-    let e = at_rest(flat([0.0; 3])).euler_to_body;
+    let e = at_rest(flat([0.0; 3])).to_inputs[1];
     assert!((e - Matrix3::identity()).abs().max() < 1e-15, "{e}");
     let roll = [std::f64::consts::FRAC_PI_2; 2];
     let zero = [0.0; 2];
-    let e = LeftOutNoise::new(flat([0.0; 3]), [&roll, &zero, &zero]).euler_to_body;
+    let e = LeftOutNoise::for_gyro(flat([0.0; 3]), [&roll, &zero, &zero]).to_inputs[1];
     assert!((e[(2, 1)] + 1.0).abs() < 1e-12 && e[(1, 1)].abs() < 1e-12, "{e}");
+}
+
+/// An accelerometer at rest, level, at `r`: the tilt of gravity `A` (a roll turns `g` into `-z`,
+/// a pitch into `x`, a yaw does nothing) and the lever arm's `B` columns `e_j x r` (Euler
+/// accelerations are body ones at rest), closed forms; the noise reaches the inputs through
+/// `A - w^2 B`.
+#[test]
+fn an_accelerometer_takes_the_noise_through_gravity_and_its_lever_arm() {
+    let zero = [0.0; 3];
+    let (r, g) = ([0.3, 0.12, -0.05], 9.81);
+    let m = LeftOutNoise::for_accel(flat([1e-9, 0.0, 0.0]), [&zero, &zero, &zero], r, g);
+    let [a, c, b] = m.to_inputs;
+    let want_a = Matrix3::new(0.0, 0.0, g, 0.0, 0.0, 0.0, -g, 0.0, 0.0);
+    assert!((a - want_a).abs().max() < 1e-6, "{a}");
+    assert_eq!(c, Matrix3::zeros());
+    let rv = nalgebra::Vector3::from(r);
+    for j in 0..3 {
+        let want = nalgebra::Vector3::ith(j, 1.0).cross(&rv);
+        assert!((b.column(j) - want).abs().max() < 1e-12, "{b}");
+    }
+    // Roll noise alone, at 2 Hz: dN_u = t t^T 1e-9 with t the roll column of A - w^2 B.
+    let w2 = (2.0 * std::f64::consts::PI * 2.0).powi(2);
+    let t = a.column(0) - b.column(0) * w2;
+    let want = t * t.transpose() * 1e-9;
+    let got = m.in_inputs(2.0).expect("in band");
+    assert!(
+        (got - want).abs().max() < 1e-9 * want.abs().max(),
+        "{got} vs {want}"
+    );
 }
 
 /// Uncoupled inputs of density `S` at every bin, a diagonal `K`, the same left-out level `n` on

@@ -235,11 +235,18 @@ impl Session {
                 let mut s = block_spectra(&mut self.planner, &signals, self.run.sample_rate_hz, &welch)?;
                 let motion = self.motion()?;
                 s.gyro_witnessed = block == Block::Gyro && motion.noise_colour == NoiseColour::FromGyro;
-                if s.gyro_witnessed
-                    && let Some(psd) = &motion.angle_noise_left_out_psd
-                {
+                if let Some(psd) = &motion.angle_noise_left_out_psd {
                     let angles = motion.euler.angle.each_ref().map(Vec::as_slice);
-                    s.left_out_noise = Some(Arc::new(LeftOutNoise::new(psd.clone(), angles)));
+                    let sidecar = &self.run.sidecar;
+                    s.left_out_noise = Some(Arc::new(match block {
+                        Block::Gyro => LeftOutNoise::for_gyro(psd.clone(), angles),
+                        Block::Accel => LeftOutNoise::for_accel(
+                            psd.clone(),
+                            angles,
+                            sidecar.accel_lever_arm_m,
+                            sidecar.g_mps2,
+                        ),
+                    }));
                 }
                 let s = Arc::new(s);
                 self.spectra.push((block, s.clone()));

@@ -35,6 +35,12 @@
 //! elements move too: `S_uu^-1` couples the axes where the motion does (a turbulent cruise's
 //! roll and yaw). The delay is untouched (the observer's gain is zero-phase).
 //!
+//! Approximations, beside first order: `T` at rest at the mean attitude (the terms of the
+//! current rates, centripetal and Euler-rate products, left out; a plain mean of each angle);
+//! the weights rebuilt from the coherence rather than the fit's own clamped residual model, and
+//! without the even gain's or the scatter's reweighting; the whole record's model, whatever the
+//! span analysed.
+//!
 //! Contracts: bins with a NaN coherence or level, a coherence of 1 (no residual to weigh by) or
 //! no band of the left-out model are skipped; a row whose summed `S_uu` is singular, or without
 //! bins, does not shift (nothing widened). Units: the model's densities are

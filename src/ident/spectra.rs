@@ -59,7 +59,8 @@ pub struct BlockSpectra {
     /// widens its gains' deviations by the bias that leaves ([`super::witness_noise`]). Set by
     /// the session; `false` from [`block_spectra`].
     pub gyro_witnessed: bool,
-    /// For the gyro's spectra when its outputs coloured the model: what the model left out
+    /// For a block of a run whose gyro coloured the model (the gyro and an accelerometer beside
+    /// it): what the model left out
     /// ([`super::left_out_noise`]), whose possible bias the identification puts into the gains'
     /// deviations. Set by the session; `None` from [`block_spectra`].
     pub left_out_noise: Option<std::sync::Arc<super::left_out_noise::LeftOutNoise>>,

@@ -229,11 +229,11 @@ pub struct Fit {
     /// (`ident::causal_stage`, item 3); absent when the fit did not go through it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub causal_grid_refinement: Option<usize>,
-    /// For a gyro whose outputs coloured the angle-noise model: the error of `K` (reported less
-    /// true) if what the gyro left unexplained in the angles where that model kept its white
-    /// floor were all the angles' noise (negative: the gains read low; it may as well be the
-    /// gyro's own noise, then none), `|shift| / sqrt(3)` being in `k_std`
-    /// ([`crate::ident::left_out_noise`]). Absent otherwise.
+    /// For a block of a run whose gyro coloured the angle-noise model (the gyro and an
+    /// accelerometer beside it): the error of `K` (reported less true) if what the gyro left
+    /// unexplained in the angles where that model kept its white floor were all the angles'
+    /// noise (negative: the gains read low; it may as well be the gyro's own noise, then none),
+    /// `|shift| / sqrt(3)` being in `k_std` ([`crate::ident::left_out_noise`]). Absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_shift_left_out_angle_noise: Option<[[f64; 3]; 3]>,
     /// What was regularised or is inexact (absent or empty when all is well).

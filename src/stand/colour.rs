@@ -136,7 +136,9 @@ pub(super) struct Coloured {
     /// more than the model (it may as well be the gyro's own noise; one run cannot tell them
     /// apart), and the gains fitted on the inputs read low by up to its share of the motion
     /// (`ident::left_out_noise`). 0 where the model is the unexplained part itself, and below
-    /// the frequency where the gyro's drift is kept out.
+    /// the frequency where the gyro's drift is kept out; elsewhere it holds the gyro's own
+    /// low-frequency noise as it comes (that rule's minimum lies where the model is the floor,
+    /// so it takes out at most one floor): the ambiguity this part stands for.
     pub left_out_per_bin: Vec<[f64; 3]>,
     /// Per axis, the white level that bounds the angles' noise from above: the median over the
     /// bins between [`BOUND_BAND_HZ`]'s ends (the top capped at `0.4 fs`) of `min(N_c, S_yy)`
@@ -245,7 +247,9 @@ struct Cell {
 /// part is at most its level at that minimum, which is subtracted. (Taken as angle noise, a gyro's
 /// rate random walk, `1/f^4` in angle units, shrank the inputs at low frequency and hid the walk
 /// from the noise terms; its white noise shrank them where the motion is weak.)
-/// What the model left out (`left_out`, [`Coloured::left_out_per_bin`]) is treated alike.
+/// What the model left out (`left_out`, [`Coloured::left_out_per_bin`]) is treated alike (the
+/// minimum is the model's, at most one floor where the model kept it: the gyro's own noise
+/// mostly stays in `left_out`, which is meant to hold either).
 fn keep_the_gyro_s_drift_out(
     out: &mut [[f64; 3]],
     left_out: &mut [[f64; 3]],

@@ -15,7 +15,7 @@
 
 use std::fmt;
 
-use nalgebra::{Matrix3, SymmetricEigen};
+use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
@@ -653,7 +653,7 @@ impl fmt::Display for IdentWarning {
 /// Smallest eigenvalue of the Hermitian part of `m`.
 fn min_eigenvalue(m: &Matrix3<Complex64>) -> f64 {
     let h = (m + m.adjoint()) * Complex64::from(0.5);
-    SymmetricEigen::new(h).eigenvalues.min()
+    h.symmetric_eigenvalues().min()
 }
 
 /// The warnings of a block's factorisation over the `band` bins (indices into the spectra), for

@@ -18,15 +18,22 @@
 //! data"), and a cold fit is what [`super::fit_structure`] gives on them. What is left is the
 //! chosen model's slope less the order-0 slope, times `G`: the poles' own phase slope over a
 //! fraction of a bin, second order. The settled order-0 model's residual also tells where the
-//! weights overstate the estimate's scatter: there they are narrowed to it (`super::scatter`).
+//! weights overstate the estimate's scatter: there they are narrowed to it (`super::scatter`,
+//! the rows divided by a scale: their eigen decompositions are not made again). A refit on
+//! nearby data (`super::placed`) starts the move's first order-0 fit from the last settled delay
+//! instead of the scan (`gain_delay::fit_near`, which scans when the delay left its scan cell).
 //! Without offsets (`ResponseEstimate::offset_hz` `None`) nothing changes.
 //!
 //! Units: Hz for `f` and `G`, `W'` per Hz.
 
+use std::sync::Arc;
+
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
-use super::{ResponseEstimate, StructuralFit, StructuralSettings};
+use super::model::Prepared;
+use super::weights::RowWeight;
+use super::{ResponseEstimate, StructuralError, StructuralFit, StructuralSettings, prepare};
 
 /// The most order-0 refits on a moved estimate.
 const PASSES: usize = 3;
@@ -120,16 +127,52 @@ fn moved(
 
 /// An estimate moved to its bins (module docs) and its weights narrowed to the settled order-0
 /// model's scatter (`super::scatter`; `None`: as given).
-pub(super) struct Aligned {
+struct Aligned {
     response: Vec<Matrix3<Complex64>>,
-    weights: Option<Vec<[Matrix3<Complex64>; 3]>>,
+    rows: Option<Vec<[RowWeight; 3]>>,
+    /// The settled order-0 fit's delay, s.
+    tau: f64,
+}
+
+/// `input` moved to its bins (the module docs; as it is without offsets) and prepared with its
+/// validated row weights `rows` (`super::weights::row_weights` of `input.weights`), narrowed where
+/// the settled order-0 fit's residual scatters less than they say: what every fit starts from
+/// (`super::placed`). The move's first order-0 fit starts from `near` (a delay from a fit to
+/// nearby data, `gain_delay::fit_near`) or scans the delay range; the settled delay of the move
+/// is returned beside the data (`None` without a move).
+///
+/// # Errors
+/// Those of [`prepare`].
+pub(super) fn prepared(
+    input: &ResponseEstimate,
+    rows: Arc<[[RowWeight; 3]]>,
+    settings: &StructuralSettings,
+    near: Option<f64>,
+) -> Result<(Prepared, Option<f64>), StructuralError> {
+    match moved_estimate(input, &rows, settings, near) {
+        Some(aligned) => {
+            let at = ResponseEstimate {
+                response: &aligned.response,
+                offset_hz: None,
+                ..*input
+            };
+            let rows = aligned.rows.map_or(rows, Arc::from);
+            Ok((prepare(&at, rows, settings)?, Some(aligned.tau)))
+        }
+        None => Ok((prepare(input, rows, settings)?, None)),
+    }
 }
 
 /// `input`'s estimate moved to its bins' frequencies by the settled order-0 fit (module docs),
-/// with its row weights narrowed where that fit's residual scatters less than they say
+/// with its row weights `rows` narrowed where that fit's residual scatters less than they say
 /// (`super::scatter`); `None` without offsets, or when no finite order-0 fit can be made (the
 /// orders' own fits then say why).
-pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSettings) -> Option<Aligned> {
+fn moved_estimate(
+    input: &ResponseEstimate,
+    rows: &Arc<[[RowWeight; 3]]>,
+    settings: &StructuralSettings,
+    near: Option<f64>,
+) -> Option<Aligned> {
     let offsets = input.offset_hz?;
     // The model alone (gain and delay, no deviations) is what the move needs; the weights are
     // the input's throughout, and each pass starts from the last delay.
@@ -138,14 +181,13 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return None;
     }
-    let rows = super::weights::row_weights(&input.weights).ok()?;
     let order0 = |response: &[Matrix3<Complex64>], near: Option<f64>| {
         let at = ResponseEstimate {
             response,
             offset_hz: None,
             ..*input
         };
-        let data = super::model::Prepared::new(&at, &rows);
+        let data = Prepared::new(&at, Arc::clone(rows));
         let model = match near {
             Some(near) => super::gain_delay::fit_near(&data, near, lo, hi, correlation),
             None => super::gain_delay::fit(&data, lo, hi, correlation),
@@ -153,7 +195,7 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
         let finite = model.tau.is_finite() && model.num.first()?.iter().all(|v| v.is_finite());
         finite.then_some((model, data))
     };
-    let (mut model, mut data) = order0(input.response, None)?;
+    let (mut model, mut data) = order0(input.response, near.filter(|t| t.is_finite()))?;
     let mut response = moved(input, offsets, &model.num[0], model.tau, settings.aligned_s);
     for _ in 0..PASSES {
         let Some((next, next_data)) = order0(&response, Some(model.tau)) else {
@@ -169,35 +211,20 @@ pub(super) fn moved_estimate(input: &ResponseEstimate, settings: &StructuralSett
         }
     }
     // The settled model's scatter on the response it was fitted to (the last pass's).
-    let weights = match input.weights {
+    let rows = match input.weights {
         super::Weights::RowWeight(_) if settings.narrow_to_scatter => super::scatter::narrowed(
-            &rows,
+            rows,
             &model.chi2_rows(&data),
             super::model::parameter_count(0),
             settings.bin_correlation,
         ),
         _ => None,
     };
-    Some(Aligned { response, weights })
-}
-
-/// `input` with an aligned estimate and weights in place of its own, or as it is.
-pub(super) fn at_bins<'b>(
-    input: &ResponseEstimate<'b>,
-    aligned: Option<&'b Aligned>,
-) -> ResponseEstimate<'b> {
-    match aligned {
-        Some(aligned) => ResponseEstimate {
-            response: &aligned.response,
-            offset_hz: None,
-            weights: aligned
-                .weights
-                .as_deref()
-                .map_or(input.weights, super::Weights::RowWeight),
-            ..*input
-        },
-        None => *input,
-    }
+    Some(Aligned {
+        response,
+        rows,
+        tau: model.tau,
+    })
 }
 
 #[cfg(test)]

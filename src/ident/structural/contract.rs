@@ -1,7 +1,10 @@
 //! The input contract of a structural fit: why a fit is refused ([`StructuralError`]), the checks
 //! of the input that refuse it, and the validated, precomputed input they let through.
 
-use super::{MAX_ORDER, OrderChoice, ResponseEstimate, StructuralSettings, model, order, weights};
+use std::sync::Arc;
+
+use super::weights::RowWeight;
+use super::{MAX_ORDER, OrderChoice, ResponseEstimate, StructuralSettings, model, order};
 
 /// Why a structural fit was refused.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -142,31 +145,40 @@ pub enum StructuralError {
     },
 }
 
-/// The validated, precomputed input and the highest order to fit.
+/// The validated, precomputed input with `rows` for its weights (validated: the input's own
+/// from [`super::weights::row_weights`], or narrowed from them).
 pub(super) fn prepare(
     input: &ResponseEstimate,
-    order: OrderChoice,
+    rows: Arc<[[RowWeight; 3]]>,
     settings: &StructuralSettings,
-) -> Result<(model::Prepared, usize), StructuralError> {
+) -> Result<model::Prepared, StructuralError> {
     validate(input)?;
-    let row_weights = weights::row_weights(&input.weights)?;
-    if !(settings.tau_min_s.is_finite()
+    check_tau_range(settings)?;
+    Ok(model::Prepared::new(input, rows))
+}
+
+/// Refuses a delay range that is not finite and ordered.
+pub(super) fn check_tau_range(settings: &StructuralSettings) -> Result<(), StructuralError> {
+    if settings.tau_min_s.is_finite()
         && settings.tau_max_s.is_finite()
-        && settings.tau_min_s < settings.tau_max_s)
+        && settings.tau_min_s < settings.tau_max_s
     {
-        return Err(StructuralError::BadTauRange {
+        Ok(())
+    } else {
+        Err(StructuralError::BadTauRange {
             tau_min_s: settings.tau_min_s,
             tau_max_s: settings.tau_max_s,
-        });
+        })
     }
-    let n_bins = input.frequency_hz.len();
-    let highest = match order {
-        OrderChoice::Fixed(n) if n > MAX_ORDER => {
-            return Err(StructuralError::OrderTooHigh {
-                order: n,
-                max: MAX_ORDER,
-            });
-        }
+}
+
+/// The highest order to fit for `order` on `n_bins` bins.
+pub(super) fn highest_order(order: OrderChoice, n_bins: usize) -> Result<usize, StructuralError> {
+    match order {
+        OrderChoice::Fixed(n) if n > MAX_ORDER => Err(StructuralError::OrderTooHigh {
+            order: n,
+            max: MAX_ORDER,
+        }),
         OrderChoice::Fixed(n) => {
             let required = order::required_bins(n);
             if n_bins < required {
@@ -177,7 +189,7 @@ pub(super) fn prepare(
                     bins: n_bins,
                 });
             }
-            n
+            Ok(n)
         }
         OrderChoice::Auto => {
             let supported = (0..=MAX_ORDER).rev().find(|&n| order::required_bins(n) <= n_bins);
@@ -186,14 +198,13 @@ pub(super) fn prepare(
                 parameters: model::parameter_count(0),
                 required: order::required_bins(0),
                 bins: n_bins,
-            })?
+            })
         }
-    };
-    Ok((model::Prepared::new(input, &row_weights), highest))
+    }
 }
 
 /// Checks lengths, finiteness, positivity and ordering of the input (the weights themselves in
-/// [`weights::row_weights`]).
+/// [`super::weights::row_weights`]).
 pub(super) fn validate(input: &ResponseEstimate) -> Result<(), StructuralError> {
     let (nf, nr, nv) = (
         input.frequency_hz.len(),

@@ -186,7 +186,7 @@ fn sums(data: &Prepared) -> Sums<'_> {
     let v = data
         .h
         .iter()
-        .zip(&data.rows)
+        .zip(data.rows.iter())
         .map(|(h, rows)| {
             std::array::from_fn(|e| {
                 let (i, j) = (e / 3, e % 3);
@@ -195,7 +195,7 @@ fn sums(data: &Prepared) -> Sums<'_> {
         })
         .collect();
     let mut a = [Matrix3::<f64>::zeros(); 3];
-    for rows in &data.rows {
+    for rows in data.rows.iter() {
         for i in 0..3 {
             a[i] += rows[i].omega.map(|z| z.re);
         }

@@ -16,9 +16,12 @@
 //! ([`super::fit_structure`]'s errors), need not share bins (each model is renormalised to the
 //! other half's reference frequency), and an order not fitted to both halves has no figure.
 
-use super::align::{at_bins, moved_estimate};
+use std::sync::Arc;
+
+use super::align::prepared;
 use super::order::{Starts, fit_orders};
-use super::{MAX_ORDER, OrderChoice, ResponseEstimate, StructuralError, StructuralSettings, prepare};
+use super::weights::row_weights;
+use super::{MAX_ORDER, OrderChoice, ResponseEstimate, StructuralError, StructuralSettings, highest_order};
 
 /// Each order's held-out chi2 (index = order): the models of every order `0..=4` the two
 /// estimates support, fitted cold to each, each evaluated on the other; `None` where an order
@@ -37,14 +40,15 @@ pub fn held_out_chi2(
     };
     // Halves whose columns lie off their bins are moved there, each by its own order-0 fit
     // (`super::align`).
-    let (moved_first, moved_second) = (
-        moved_estimate(first, &settings),
-        moved_estimate(second, &settings),
-    );
-    let first = at_bins(first, moved_first.as_ref());
-    let second = at_bins(second, moved_second.as_ref());
-    let (a, highest_a) = prepare(&first, OrderChoice::Auto, &settings)?;
-    let (b, highest_b) = prepare(&second, OrderChoice::Auto, &settings)?;
+    let place = |half: &ResponseEstimate| {
+        super::validate(half)?;
+        let rows = Arc::from(row_weights(&half.weights)?);
+        let (data, _) = prepared(half, rows, &settings, None)?;
+        let highest = highest_order(OrderChoice::Auto, data.bins())?;
+        Ok::<_, StructuralError>((data, highest))
+    };
+    let (a, highest_a) = place(first)?;
+    let (b, highest_b) = place(second)?;
     let highest = highest_a.min(highest_b);
     let fa = fit_orders(&a, highest, OrderChoice::Auto, &settings, Starts::Cold)?;
     let fb = fit_orders(&b, highest, OrderChoice::Auto, &settings, Starts::Cold)?;

@@ -69,6 +69,7 @@ mod holdout;
 mod model;
 mod order;
 mod phasor;
+mod placed;
 mod project;
 mod rational;
 mod report;
@@ -95,7 +96,7 @@ pub use holdout::held_out_chi2;
 pub use order::criterion_value;
 pub use warm::{FittedOrders, refit_structure};
 
-use contract::{prepare, validate};
+use contract::{highest_order, prepare, validate};
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 use serde::Serialize;
@@ -418,28 +419,28 @@ pub fn fit_structure(
     settings: &StructuralSettings,
 ) -> Result<StructuralFit, StructuralError> {
     validate(input)?;
-    let moved = align::moved_estimate(input, settings);
-    let input = align::at_bins(input, moved.as_ref());
-    let (data, highest) = prepare(&input, order, settings)?;
-    finish(&data, highest, order, settings, order::Starts::Cold, true)
+    let placed = placed::Placed::new(input, settings)?;
+    let highest = highest_order(order, placed.data.bins())?;
+    finish(placed, highest, order, settings, order::Starts::Cold, true)
 }
 
 /// Fits the orders from `starts`, selects, and assembles the result.
 fn finish(
-    data: &model::Prepared,
+    placed: std::sync::Arc<placed::Placed>,
     highest: usize,
     order: OrderChoice,
     settings: &StructuralSettings,
     starts: order::Starts,
     from_scratch: bool,
 ) -> Result<StructuralFit, StructuralError> {
+    let data = &placed.data;
     let selection = order::fit_orders(data, highest, order, settings, starts)?;
     let mut fit = report::assemble(data, &selection, settings.criterion, settings.bin_correlation);
     if report::has_nan(&fit) {
         return Err(StructuralError::NumericalFailure { order: fit.order });
     }
     fit.fitted = FittedOrders::new(
-        data,
+        placed,
         selection.models,
         selection.set_aside,
         settings,

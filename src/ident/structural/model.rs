@@ -6,6 +6,7 @@ use faer::Spec;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::no_pivoting::factor as qr;
 use std::hash::{Hash, Hasher};
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::DMatrix;
 use num_complex::Complex64;
@@ -36,8 +37,9 @@ pub(super) struct Prepared {
     /// The diagonal approximation `Re(Omega_i)_jj` of the weights (exactly `1 / variance` on
     /// the variance path), element-major within a bin: for the Sanathanan–Koerner starts only.
     pub w: Vec<[f64; ELEMENTS]>,
-    /// The row weights and their square roots, per bin and output row.
-    pub rows: Vec<[RowWeight; 3]>,
+    /// The row weights and their square roots, per bin and output row (shared: a retune on the
+    /// same weights reuses them, `super::warm`).
+    pub rows: Arc<[[RowWeight; 3]]>,
     /// The response, element-major within a bin.
     pub h: Vec<[Complex64; ELEMENTS]>,
     /// `Omega_i` of the rows, flattened as `(re, im)` pairs, row-major within each row's matrix,
@@ -45,15 +47,14 @@ pub(super) struct Prepared {
     pub omega_flat: Vec<[f64; 54]>,
     /// `(Omega_i W_i^H)_j` at element `3 i + j`, per bin (the projection's right-hand side).
     pub g: Vec<[Complex64; ELEMENTS]>,
-    /// Hash of the bits of the frequencies, the response and the row weights: what tells a refit
-    /// on the same data from one on other data ([`super::refit_structure`]).
-    pub fingerprint: u64,
+    /// [`Self::fingerprint`], computed at its first use (the move's order-0 passes never ask).
+    fingerprint: OnceLock<u64>,
 }
 
 impl Prepared {
     /// Precomputes from a validated estimate (non-empty, positive frequencies) and its
     /// validated row weights.
-    pub fn new(input: &ResponseEstimate, rows: &[[RowWeight; 3]]) -> Self {
+    pub fn new(input: &ResponseEstimate, rows: Arc<[[RowWeight; 3]]>) -> Self {
         let omega: Vec<f64> = input
             .frequency_hz
             .iter()
@@ -89,7 +90,6 @@ impl Prepared {
                 })
             })
             .collect();
-        let fingerprint = fingerprint(&omega, &h, rows);
         let omega_step = uniform_step(&omega);
         Self {
             omega_step,
@@ -97,12 +97,20 @@ impl Prepared {
             x,
             omega_ref,
             w,
-            rows: rows.to_vec(),
+            rows,
             h,
             omega_flat,
             g,
-            fingerprint,
+            fingerprint: OnceLock::new(),
         }
+    }
+
+    /// Hash of the bits of the frequencies, the response and the row weights: what tells a refit
+    /// on the same data from one on other data ([`super::refit_structure`]).
+    pub fn fingerprint(&self) -> u64 {
+        *self
+            .fingerprint
+            .get_or_init(|| fingerprint(&self.omega, &self.h, &self.rows))
     }
 
     /// `e^(-j omega_k tau)` over the bins, in order.

@@ -27,9 +27,6 @@
 //! without offsets (no move) and fits that ask not to (`StructuralSettings::narrow_to_scatter`:
 //! the stationarity stretches, whose deviations are floors) are left as they are.
 
-use nalgebra::Matrix3;
-use num_complex::Complex64;
-
 use super::weights::RowWeight;
 
 /// Bins on each side of a bin whose chi2 is pooled with its own.
@@ -48,7 +45,7 @@ pub fn narrowed(
     chi2: &[[f64; 3]],
     parameters: usize,
     bin_correlation: f64,
-) -> Option<Vec<[Matrix3<Complex64>; 3]>> {
+) -> Option<Vec<[RowWeight; 3]>> {
     let n = rows.len().min(chi2.len());
     if n == 0 {
         return None;
@@ -81,7 +78,7 @@ pub fn narrowed(
                     1.0
                 };
                 any |= scale < 1.0;
-                rows[k][i].omega.unscale(scale)
+                rows[k][i].unscaled(scale)
             })
         })
         .collect();
@@ -127,18 +124,18 @@ mod tests {
         for bin in &out[HALF_WINDOW..n - HALF_WINDOW] {
             let want = 4.0 / bound(0.1);
             assert!(
-                (bin[0][(0, 0)].re - want).abs() < 1e-9 * want,
+                (bin[0].omega[(0, 0)].re - want).abs() < 1e-9 * want,
                 "{}",
-                bin[0][(0, 0)]
+                bin[0].omega[(0, 0)]
             );
-            assert!((bin[1][(0, 0)].re - 4.0).abs() < 1e-12);
-            assert!((bin[2][(0, 0)].re - 4.0).abs() < 1e-12);
+            assert!((bin[1].omega[(0, 0)].re - 4.0).abs() < 1e-12);
+            assert!((bin[2].omega[(0, 0)].re - 4.0).abs() < 1e-12);
         }
         assert!(narrowed(&rows(n, false), &vec![[6.0, 7.0, 60.0]; n], 0, 1.0).is_none());
         // Within the bound of 1 (a window scatters): not narrowed.
         assert!(narrowed(&rows(n, false), &vec![[5.4; 3]; n], 0, 1.0).is_none());
         let out = narrowed(&rows(n, false), &vec![[0.0, 6.0, 6.0]; n], 0, 1.0).unwrap();
-        assert!((out[50][0][(0, 0)].re - 4.0 / MIN_SCALE).abs() < 1e-6);
+        assert!((out[50][0].omega[(0, 0)].re - 4.0 / MIN_SCALE).abs() < 1e-6);
     }
 
     /// A rank-1 row has two real degrees of freedom per bin: a chi2 of 2 is its expectation,
@@ -165,11 +162,17 @@ mod tests {
         let width = (2 * HALF_WINDOW + 1) as f64;
         let inside = 4.0 / bound(((width - 1.0) * 0.1 + 10.0) / width);
         for k in [100 - HALF_WINDOW, 100, 100 + HALF_WINDOW] {
-            assert!((out[k][1][(0, 0)].re - inside).abs() < 1e-9 * inside, "bin {k}");
+            assert!(
+                (out[k][1].omega[(0, 0)].re - inside).abs() < 1e-9 * inside,
+                "bin {k}"
+            );
         }
         let beyond = 4.0 / bound(0.1);
         for k in [100 - HALF_WINDOW - 1, 100 + HALF_WINDOW + 1] {
-            assert!((out[k][1][(0, 0)].re - beyond).abs() < 1e-9 * beyond, "bin {k}");
+            assert!(
+                (out[k][1].omega[(0, 0)].re - beyond).abs() < 1e-9 * beyond,
+                "bin {k}"
+            );
         }
     }
 }

@@ -114,7 +114,7 @@ fn order0_refined_near_a_known_delay_is_the_scanned_fit() {
         offset_hz: None,
     };
     let rows = weights::row_weights(&input.weights).unwrap();
-    let prepared = model::Prepared::new(&input, &rows);
+    let prepared = model::Prepared::new(&input, std::sync::Arc::from(rows));
     let (lo, hi) = (-0.02, 0.05);
     let scanned = gain_delay::fit(&prepared, lo, hi, 1.0);
     let step = 2.0 * PI / prepared.omega_ref / 16.0;

@@ -19,13 +19,19 @@
 //! An estimate with offsets is moved to its bins first, as [`fit_structure`](super::fit_structure)
 //! moves it ([`super::align`]: by the order-0 fit, whatever the order asked), with the weights
 //! that fit's residual narrows (`super::scatter`), so "same data" is the same moved estimate and
-//! weights, and an order change on it reuses the models exactly.
+//! weights, and an order change on it reuses the models exactly. What the previous fit made of
+//! its input before fitting is kept with it (`super::placed`): the same input is not moved or
+//! prepared again, and on the same weights (a change of Lambda) their eigen decompositions are
+//! reused and the move starts from the last settled delay.
 //!
 //! Units and contracts are those of the module: the same errors as `fit_structure`, for the same
 //! inputs, and no NaN in any output.
 
-use super::model::{Model, Prepared};
+use std::sync::Arc;
+
+use super::model::Model;
 use super::order::Starts;
+use super::placed::Placed;
 use super::{
     OrderChoice, ResponseEstimate, StructuralError, StructuralFit, StructuralSettings, UnstableSetAside,
 };
@@ -45,12 +51,15 @@ pub struct FittedOrders {
     settings: Option<StructuralSettings>,
     /// Whether these models are what a fit from scratch gives on these data.
     from_scratch: bool,
+    /// What the fit made of its input before fitting (`super::placed`); `None` for a fit built
+    /// some other way.
+    placed: Option<Arc<Placed>>,
 }
 
 impl FittedOrders {
     /// Keeps `models`, fitted to `data` with `settings`.
     pub(super) fn new(
-        data: &Prepared,
+        placed: Arc<Placed>,
         models: Vec<Model>,
         set_aside: Vec<Option<UnstableSetAside>>,
         settings: &StructuralSettings,
@@ -59,10 +68,11 @@ impl FittedOrders {
         Self {
             models,
             set_aside,
-            omega_ref: data.omega_ref,
-            fingerprint: data.fingerprint,
+            omega_ref: placed.data.omega_ref,
+            fingerprint: placed.data.fingerprint(),
             settings: Some(*settings),
             from_scratch,
+            placed: Some(placed),
         }
     }
 
@@ -114,22 +124,21 @@ pub fn refit_structure(
     previous: &StructuralFit,
 ) -> Result<StructuralFit, StructuralError> {
     super::validate(input)?;
-    let moved = super::align::moved_estimate(input, settings);
-    let input = super::align::at_bins(input, moved.as_ref());
-    let (data, highest) = super::prepare(&input, order, settings)?;
     let kept = &previous.fitted;
+    let placed = Placed::again(kept.placed.as_ref(), input, settings)?;
+    let highest = super::highest_order(order, placed.data.bins())?;
     if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
-        return super::finish(&data, highest, order, settings, Starts::Cold, true);
+        return super::finish(placed, highest, order, settings, Starts::Cold, true);
     }
     let same = kept.settings == Some(*settings)
-        && kept.omega_ref.to_bits() == data.omega_ref.to_bits()
-        && kept.fingerprint == data.fingerprint;
+        && kept.omega_ref.to_bits() == placed.data.omega_ref.to_bits()
+        && kept.fingerprint == placed.data.fingerprint();
     if same {
         let starts = Starts::Same(&kept.models, &kept.set_aside);
-        return super::finish(&data, highest, order, settings, starts, kept.from_scratch);
+        return super::finish(placed, highest, order, settings, starts, kept.from_scratch);
     }
-    let near = kept.rescaled(data.omega_ref);
-    super::finish(&data, highest, order, settings, Starts::Near(&near), false)
+    let near = kept.rescaled(placed.data.omega_ref);
+    super::finish(placed, highest, order, settings, Starts::Near(&near), false)
 }
 
 #[cfg(test)]
@@ -163,6 +172,7 @@ mod tests {
             fingerprint: 0,
             settings: None,
             from_scratch: true,
+            placed: None,
         };
         let rescaled = &kept.rescaled(180.0)[0];
         assert_eq!(

@@ -107,6 +107,17 @@ fn from_matrix(bin: usize, row: usize, m: &Matrix3<Complex64>) -> Result<RowWeig
 }
 
 impl RowWeight {
+    /// The weight `Omega_i / scale` (`scale > 0`), without a new eigen decomposition: its
+    /// square root is `L_i / sqrt(scale)` and its rank is unchanged.
+    #[must_use]
+    pub fn unscaled(&self, scale: f64) -> Self {
+        Self {
+            omega: self.omega.unscale(scale),
+            white: self.white.unscale(scale.sqrt()),
+            rank: self.rank,
+        }
+    }
+
     /// The whitened row `r L_i`.
     pub fn whiten(&self, r: &[Complex64; 3]) -> [Complex64; 3] {
         std::array::from_fn(|l| (0..3).map(|j| r[j] * self.white[(j, l)]).sum())
@@ -121,5 +132,43 @@ impl RowWeight {
             }
         }
         q
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Matrix3;
+    use num_complex::Complex64;
+
+    use super::from_matrix;
+    use crate::rng::Rng;
+
+    /// A weight divided by a scale without a new decomposition is the decomposition of the
+    /// divided weight: the same `Omega`, a square root with `L L^H = Omega / scale`, the same
+    /// rank (full and singular).
+    #[test]
+    fn an_unscaled_weight_is_the_weight_divided() {
+        let mut rng = Rng::new(11);
+        for singular in [false, true] {
+            let a = Matrix3::from_fn(|_, j| {
+                if singular && j == 2 {
+                    Complex64::from(0.0)
+                } else {
+                    Complex64::new(rng.normal(), rng.normal())
+                }
+            });
+            let m = a * a.adjoint();
+            let w = from_matrix(0, 0, &m).unwrap();
+            for scale in [0.01, 0.37, 5.0] {
+                let got = w.unscaled(scale);
+                let want = from_matrix(0, 0, &(m / Complex64::from(scale))).unwrap();
+                let size = want.omega.norm();
+                assert!((got.omega - want.omega).norm() < 1e-14 * size, "{scale}");
+                let square = got.white * got.white.adjoint();
+                assert!((square - want.omega).norm() < 1e-12 * size, "{scale}");
+                assert_eq!(got.rank, want.rank);
+                assert_eq!(got.rank, if singular { 2 } else { 3 });
+            }
+        }
     }
 }

@@ -14,7 +14,7 @@ use imu_attest::run::{LoadOptions, load};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = PathBuf::from(args.next().ok_or("usage: retune_profile RUN.csv [COUNT]")?);
-    let count: usize = args.next().map_or(Ok(200), |s| s.parse())?;
+    let count: usize = args.next().map_or(Ok(200), |s| s.parse())?.max(1);
     let run = load(&path, &LoadOptions::default())?;
     let settings = Settings::default().for_run(&run);
     let mut session = Session::new(Arc::new(run));

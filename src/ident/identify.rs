@@ -68,6 +68,10 @@ pub struct BlockIdentification {
     /// The stretches' fits (the stationarity check, on a shorter segment for a record too short
     /// for stretches at the settings' segment; `None` for a record too short even then).
     pub stationarity: Option<Arc<Stationarity>>,
+    /// The first-order shift of `K` were all the angle noise the colour model left out taken as
+    /// noise ([`super::left_out_noise::gain_shift`]), already in `structural`'s deviations;
+    /// `None` without a left-out part (the model file's `fit.k_shift_left_out_angle_noise`).
+    pub k_shift_left_out_angle_noise: Option<[[f64; 3]; 3]>,
     /// What was regularised or is inexact (empty when all is well).
     pub warnings: Vec<IdentWarning>,
 }
@@ -341,11 +345,14 @@ fn identify_excited(
     // across the band, so after the even gain is judged (with it in the deviations, a gain that
     // changes across the band was no longer seen to: on 30-minute real-stand runs the
     // accelerometer's `K` then read worse), and before the self-check judges the precision.
-    let structural = match spectra.left_out_noise.as_deref() {
-        Some(left_out) => {
+    let k_shift_left_out_angle_noise = spectra
+        .left_out_noise
+        .as_deref()
+        .map(|left_out| gain_shift(&spectra, &factorisation.coherence, &band, &over.fit.k, left_out));
+    let structural = match &k_shift_left_out_angle_noise {
+        Some(shift) => {
             let mut w = (*over.fit).clone();
-            let shift = gain_shift(&spectra, &factorisation.coherence, &band, &w.k, left_out);
-            widen_for_left_out_noise(&mut w, &shift);
+            widen_for_left_out_noise(&mut w, shift);
             Arc::new(w)
         }
         None => over.fit,
@@ -399,6 +406,7 @@ fn identify_excited(
         usable_band_fit,
         first_fit: over.first,
         stationarity,
+        k_shift_left_out_angle_noise,
         warnings,
     })
 }

@@ -125,11 +125,8 @@ impl LeftOutNoise {
     /// `dN_u = Re(T dN T^H)` at `f_hz`, `T = A + j w C - w^2 B`, in the inputs' units squared per
     /// Hz; `None` outside the model's bands.
     fn in_inputs(&self, f_hz: f64) -> Option<Matrix3<f64>> {
-        let b = self.psd.edges_hz.partition_point(|&e| e <= f_hz);
-        if b == 0 || b >= self.psd.edges_hz.len() {
-            return None;
-        }
-        let left = self.psd.psd.get(b - 1)?;
+        let b = crate::spectral::bands::band_holding(&self.psd.edges_hz, f_hz)?;
+        let left = self.psd.psd.get(b)?;
         let w = 2.0 * std::f64::consts::PI * f_hz;
         let [a, c, bb] = self.to_inputs;
         let t = (a - bb * (w * w)).map(Complex64::from) + c.map(|v| Complex64::new(0.0, w * v));

@@ -28,7 +28,7 @@ pub use refused::RefusedBlock;
 use crate::faults::RecordingFault;
 use crate::ident::gain_curvature::EvenGain;
 use crate::ident::identify::{BlockIdentification, RunIdentification};
-use crate::ident::left_out_noise::{gain_shift, widened_by_shift};
+use crate::ident::left_out_noise::widened_by_shift;
 use crate::ident::settings::{Estimate, Settings};
 use crate::ident::signals::channel_names;
 use crate::ident::structural::OrderCandidate;
@@ -315,11 +315,7 @@ impl BlockModel {
                 noise_factor_error: Some(f.noise_factor_error),
                 input_factor_error: causal.map(|c| c.input_factor_error),
                 causal_grid_refinement: causal.map(|c| c.input_refinement),
-                k_shift_left_out_angle_noise: b
-                    .spectra
-                    .left_out_noise
-                    .as_deref()
-                    .map(|l| gain_shift(&b.spectra, &b.factorisation.coherence, &b.band, &s.k, l)),
+                k_shift_left_out_angle_noise: b.k_shift_left_out_angle_noise,
                 warnings: b.warnings.clone(),
             },
         }

@@ -104,14 +104,8 @@ impl ReferencePsd {
     /// Its density at `f_hz`: the mean density of the band holding it, `None` outside the bands.
     #[must_use]
     pub fn at(&self, f_hz: f64) -> Option<f64> {
-        let b = self.edges_hz.partition_point(|&e| e <= f_hz);
-        if b == 0 || b >= self.edges_hz.len() {
-            // Below the first edge, or at or above the last.
-            return (self.edges_hz.last() == Some(&f_hz))
-                .then(|| self.psd.last().copied())
-                .flatten();
-        }
-        self.psd.get(b - 1).copied()
+        let b = crate::spectral::bands::band_holding(&self.edges_hz, f_hz)?;
+        self.psd.get(b).copied()
     }
 }
 

@@ -41,6 +41,7 @@
 //! # Ok::<(), imu_attest::spectral::SpectralError>(())
 //! ```
 
+pub mod bands;
 pub mod causal;
 pub mod centroid;
 pub mod cepstral;

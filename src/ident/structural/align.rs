@@ -13,9 +13,10 @@
 //! again on the moved estimate until its delay settles (a change that turns the phase at the
 //! band's top by less than [`SETTLED_RAD`], at most [`PASSES`] times; a failed pass keeps the last
 //! move). The orders are then fitted to the
-//! moved estimate as to any other. The move depends on the data and the delay range alone, not on
-//! the order asked: a refit for another order finds the same moved data (`super::warm`'s "same
-//! data"), and a cold fit is what [`super::fit_structure`] gives on them. What is left is the
+//! moved estimate as to any other. The move depends on the data and the placing settings (delay
+//! range, bins' correlation, alignment, narrowing; `super::placed`), not on the order asked: a
+//! refit for another order finds the same moved data (`super::warm`'s "same data"), and a cold
+//! fit is what [`super::fit_structure`] gives on them. What is left is the
 //! chosen model's slope less the order-0 slope, times `G`: the poles' own phase slope over a
 //! fraction of a bin, second order. The settled order-0 model's residual also tells where the
 //! weights overstate the estimate's scatter: there they are narrowed to it (`super::scatter`,

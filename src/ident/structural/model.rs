@@ -38,7 +38,7 @@ pub(super) struct Prepared {
     /// the variance path), element-major within a bin: for the Sanathanan–Koerner starts only.
     pub w: Vec<[f64; ELEMENTS]>,
     /// The row weights and their square roots, per bin and output row (shared: a retune on the
-    /// same weights reuses them, `super::warm`).
+    /// same weights, none of them narrowed, reuses them, `super::placed`).
     pub rows: Arc<[[RowWeight; 3]]>,
     /// The response, element-major within a bin.
     pub h: Vec<[Complex64; ELEMENTS]>,

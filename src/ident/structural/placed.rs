@@ -15,9 +15,10 @@
 //! - otherwise what a cold fit does.
 //!
 //! A refit's data are then what `fit_structure` gives on the same input, except that a move
-//! started from a nearby delay settles within `align::SETTLED_RAD` of where the scan's would (a
-//! refit is marked not from scratch anyway, `warm`). Units and contracts are the module's; no NaN
-//! is kept (a non-finite settled delay is not used as a start).
+//! started from a nearby delay settles on the maximum of the delay's cell, the scan's own when
+//! the delay stayed in its lobe (a refit on other data is marked not from scratch anyway,
+//! `warm`, and the app polishes it cold). Units and contracts are the module's; no NaN is kept
+//! (a non-finite settled delay is not used as a start).
 
 use std::sync::Arc;
 
@@ -56,12 +57,23 @@ struct PlacingSettings {
 
 impl PlacingSettings {
     fn of(s: &StructuralSettings) -> Self {
+        // Every field named: a new setting must be placed here or said not to place.
+        let StructuralSettings {
+            tau_min_s,
+            tau_max_s,
+            bin_correlation,
+            narrow_to_scatter,
+            aligned_s,
+            max_iterations: _,
+            criterion: _,
+            held_out_chi2: _,
+        } = *s;
         Self {
-            tau_min_s: s.tau_min_s,
-            tau_max_s: s.tau_max_s,
-            bin_correlation: s.bin_correlation,
-            narrow_to_scatter: s.narrow_to_scatter,
-            aligned_s: s.aligned_s,
+            tau_min_s,
+            tau_max_s,
+            bin_correlation,
+            narrow_to_scatter,
+            aligned_s,
         }
     }
 
@@ -208,7 +220,7 @@ impl Placed {
         } else {
             Arc::from(row_weights(&input.weights)?)
         };
-        let near = previous.moved_tau_s.filter(|_| same_settings);
+        let near = previous.moved_tau_s.filter(|_| same_settings && same_weights);
         Self::place(input, rows, settings, near)
     }
 
@@ -243,16 +255,19 @@ mod tests {
 
     const BINS: usize = 120;
 
-    /// A delayed gain's estimate with noise, its columns off their bins by up to 0.1 Hz, and full
-    /// Hermitian row weights of that noise's size (`A A^H + I / 2`, scaled).
+    /// A delayed gain's estimate with noise, its columns off their bins by up to 0.1 Hz, full
+    /// Hermitian row weights `A A^H + I / 2` over the noise's variance times `weight` (below about
+    /// 0.1 they overstate the scatter and are narrowed), and the diagonal variances of the same
+    /// size.
     struct Case {
         f: Vec<f64>,
         response: Vec<Matrix3<Complex64>>,
         offsets: Vec<Matrix3<Complex64>>,
         weights: Vec<[Matrix3<Complex64>; 3]>,
+        variance: Vec<Matrix3<f64>>,
     }
 
-    fn case(seed: u64) -> Case {
+    fn case(seed: u64, weight: f64) -> Case {
         let mut rng = Rng::new(seed);
         let k = [[1.01, 0.02, -0.015], [0.01, 0.99, 0.02], [-0.02, 0.005, 1.0]];
         let f: Vec<f64> = (1..=BINS).map(|b| 0.15 * b as f64).collect();
@@ -279,7 +294,7 @@ mod tests {
                 [0; 3].map(|_| {
                     let a = Matrix3::from_fn(|_, _| Complex64::new(rng.normal(), rng.normal()));
                     (a * a.adjoint() + Matrix3::identity() * Complex64::from(0.5))
-                        * Complex64::from(1.0 / (noise * noise))
+                        * Complex64::from(weight / (noise * noise))
                 })
             })
             .collect();
@@ -288,6 +303,7 @@ mod tests {
             response,
             offsets,
             weights,
+            variance: vec![Matrix3::from_element(noise * noise); BINS],
         }
     }
 
@@ -322,11 +338,11 @@ mod tests {
         (h, w)
     }
 
-    /// The same input again is the same placing; its weights narrowed (the case's noise is half
-    /// what its weights say at most) so that the kept rows are the input's own, not the narrowed.
+    /// The same input again is the same placing. Its weights overstate the scatter and are
+    /// narrowed: the rows kept are the input's own, not the narrowed ones the data carry.
     #[test]
     fn the_same_input_is_placed_once() {
-        let c = case(3);
+        let c = case(3, 0.02);
         let settings = StructuralSettings::default();
         let first = Placed::new(&c.input(), &settings).unwrap();
         let again = Placed::again(Some(&first), &c.input(), &settings).unwrap();
@@ -334,17 +350,18 @@ mod tests {
         assert!(first.moved_tau_s.is_some_and(|t| (t - 0.0042).abs() < 1e-5));
         let own = row_weights(&c.input().weights).unwrap();
         assert_eq!(&first.rows[..], &own[..]);
+        assert_ne!(&first.data.rows[..], &own[..], "narrowed");
     }
 
     /// A changed estimate on the same weights (a change of Lambda) keeps the validated rows and
-    /// moves from the last delay: the data are the cold placing's within the move's settling,
-    /// and the delay too.
+    /// moves from the last delay: the data (narrowed weights included) are the cold placing's
+    /// within the move's settling, and the delay too.
     #[test]
     fn a_changed_estimate_keeps_the_rows_and_moves_from_the_last_delay() {
-        let c = case(4);
+        let c = case(4, 0.02);
         let settings = StructuralSettings::default();
         let first = Placed::new(&c.input(), &settings).unwrap();
-        let mut changed = case(4);
+        let mut changed = case(4, 0.02);
         for m in &mut changed.response {
             *m *= Complex64::from(0.998);
         }
@@ -352,6 +369,7 @@ mod tests {
         let cold = Placed::new(&changed.input(), &settings).unwrap();
         assert!(!Arc::ptr_eq(&first, &again));
         assert!(Arc::ptr_eq(&first.rows, &again.rows), "the rows are reused");
+        assert_ne!(&cold.data.rows[..], &cold.rows[..], "narrowed");
         let (dh, dw) = largest_difference(&again, &cold);
         assert!(dh < 1e-9, "{dh:e}");
         assert!(dw < 1e-9, "{dw:e}");
@@ -364,31 +382,76 @@ mod tests {
         assert!(largest_difference(&again, &first).0 > 1e-4);
     }
 
-    /// Changed weights are validated again, and a changed delay range is placed as a cold fit
-    /// places it (the scan, not the last delay): bit for bit.
+    /// Anything else that places the data changed (the weights, their form, the offsets, the
+    /// delay range, the bins' correlation, the alignment, the narrowing) is placed as a cold fit
+    /// places it, bit for bit, and not taken from the previous placing (which a wider delay range
+    /// holding the same maximum may equal).
     #[test]
-    fn changed_weights_or_range_are_placed_cold() {
-        let c = case(5);
+    fn whatever_else_changed_is_placed_cold() {
+        let c = case(5, 0.02);
         let settings = StructuralSettings::default();
         let first = Placed::new(&c.input(), &settings).unwrap();
-        let mut heavier = case(5);
+        // Another shape, not only another size (narrowing undoes a common factor).
+        let mut heavier = case(5, 0.02);
         for w in heavier.weights.iter_mut().flatten() {
-            *w *= Complex64::from(2.0);
+            *w += Matrix3::identity() * Complex64::from(0.5 * w[(0, 0)].re);
         }
-        let again = Placed::again(Some(&first), &heavier.input(), &settings).unwrap();
-        assert!(!Arc::ptr_eq(&first.rows, &again.rows));
-        let own = row_weights(&heavier.input().weights).unwrap();
-        assert_eq!(&again.rows[..], &own[..]);
-        let wider = StructuralSettings {
-            tau_max_s: settings.tau_max_s * 2.0,
-            ..settings
+        let mut shifted = case(5, 0.02);
+        for g in &mut shifted.offsets {
+            *g *= Complex64::from(0.5);
+        }
+        let variance = ResponseEstimate {
+            weights: Weights::Variance(&c.variance),
+            ..c.input()
         };
-        let again = Placed::again(Some(&first), &c.input(), &wider).unwrap();
-        let cold = Placed::new(&c.input(), &wider).unwrap();
-        assert_eq!(again.data.fingerprint(), cold.data.fingerprint());
-        assert_eq!(
-            again.moved_tau_s.map(f64::to_bits),
-            cold.moved_tau_s.map(f64::to_bits)
-        );
+        let cases: [(&str, ResponseEstimate, StructuralSettings); 7] = [
+            ("weights", heavier.input(), settings),
+            ("variances", variance, settings),
+            ("offsets", shifted.input(), settings),
+            (
+                "delay range",
+                c.input(),
+                StructuralSettings {
+                    tau_max_s: settings.tau_max_s * 2.0,
+                    ..settings
+                },
+            ),
+            (
+                "correlation",
+                c.input(),
+                StructuralSettings {
+                    bin_correlation: 2.0,
+                    ..settings
+                },
+            ),
+            (
+                "alignment",
+                c.input(),
+                StructuralSettings {
+                    aligned_s: 0.001,
+                    ..settings
+                },
+            ),
+            (
+                "narrowing",
+                c.input(),
+                StructuralSettings {
+                    narrow_to_scatter: false,
+                    ..settings
+                },
+            ),
+        ];
+        for (what, input, settings) in cases {
+            let again = Placed::again(Some(&first), &input, &settings).unwrap();
+            let cold = Placed::new(&input, &settings).unwrap();
+            assert!(!Arc::ptr_eq(&first, &again), "{what}");
+            assert_eq!(again.data.fingerprint(), cold.data.fingerprint(), "{what}");
+            assert_eq!(
+                again.moved_tau_s.map(f64::to_bits),
+                cold.moved_tau_s.map(f64::to_bits),
+                "{what}"
+            );
+            assert_eq!(&again.rows[..], &cold.rows[..], "{what}");
+        }
     }
 }

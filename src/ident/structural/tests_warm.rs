@@ -182,3 +182,39 @@ fn a_narrower_band_rescales_the_previous_models() {
         fresh.chi2
     );
 }
+
+/// A refit refuses what a cold fit refuses, with the same error, after a fit it could start from:
+/// an order above the highest, too few bins for the order, a delay range not ordered, an
+/// estimate of another length.
+#[test]
+fn a_refit_refuses_what_a_cold_fit_refuses() {
+    let mut rng = Rng::new(37);
+    let data = synthesise(&lagged(&mut rng), &mut rng, 1.0);
+    let auto = cold(&data, OrderChoice::Auto);
+    let few: Data = (data.0[..2].to_vec(), data.1[..2].to_vec(), data.2[..2].to_vec());
+    let short = ResponseEstimate {
+        response: &data.1[..data.1.len() - 1],
+        ..input(&data)
+    };
+    let reversed = StructuralSettings {
+        tau_min_s: 0.01,
+        tau_max_s: -0.01,
+        ..StructuralSettings::default()
+    };
+    let default = StructuralSettings::default();
+    let cases = [
+        (input(&data), OrderChoice::Fixed(MAX_ORDER + 1), default),
+        (input(&few), OrderChoice::Fixed(MAX_ORDER), default),
+        (input(&data), OrderChoice::Auto, reversed),
+        (short, OrderChoice::Auto, default),
+    ];
+    for (estimate, order, settings) in cases {
+        let from_cold = fit_structure(&estimate, order, &settings).expect_err("cold");
+        let from_warm = refit_structure(&estimate, order, &settings, &auto).expect_err("warm");
+        assert_eq!(from_warm, from_cold, "{order:?}");
+        // And again from a refit on these very data (its placing kept).
+        let same = refit_structure(&input(&data), OrderChoice::Fixed(0), &default, &auto).unwrap();
+        let again = refit_structure(&estimate, order, &settings, &same).expect_err("again");
+        assert_eq!(again, from_cold, "{order:?}");
+    }
+}

@@ -17,7 +17,8 @@
 //!   the cold answer refit cold afterwards (the app does).
 //!
 //! An estimate with offsets is moved to its bins first, as [`fit_structure`](super::fit_structure)
-//! moves it ([`super::align`]: by the order-0 fit, whatever the order asked), with the weights
+//! moves it ([`super::align`]: by the order-0 fit, whatever the order asked; on nearby data that
+//! fit starts from the last settled delay instead of the scan), with the weights
 //! that fit's residual narrows (`super::scatter`), so "same data" is the same moved estimate and
 //! weights, and an order change on it reuses the models exactly. What the previous fit made of
 //! its input before fitting is kept with it (`super::placed`): the same input is not moved or
@@ -125,11 +126,13 @@ pub fn refit_structure(
 ) -> Result<StructuralFit, StructuralError> {
     super::validate(input)?;
     let kept = &previous.fitted;
-    let placed = Placed::again(kept.placed.as_ref(), input, settings)?;
-    let highest = super::highest_order(order, placed.data.bins())?;
     if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
+        let placed = Placed::new(input, settings)?;
+        let highest = super::highest_order(order, placed.data.bins())?;
         return super::finish(placed, highest, order, settings, Starts::Cold, true);
     }
+    let placed = Placed::again(kept.placed.as_ref(), input, settings)?;
+    let highest = super::highest_order(order, placed.data.bins())?;
     let same = kept.settings == Some(*settings)
         && kept.omega_ref.to_bits() == placed.data.omega_ref.to_bits()
         && kept.fingerprint == placed.data.fingerprint();

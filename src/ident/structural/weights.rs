@@ -111,6 +111,7 @@ impl RowWeight {
     /// square root is `L_i / sqrt(scale)` and its rank is unchanged.
     #[must_use]
     pub fn unscaled(&self, scale: f64) -> Self {
+        debug_assert!(scale.is_finite() && scale > 0.0, "scale {scale}");
         Self {
             omega: self.omega.unscale(scale),
             white: self.white.unscale(scale.sqrt()),

@@ -37,6 +37,7 @@ fn spectra(noise: impl Fn(f64) -> f64) -> BlockSpectra {
         finer_stretches: None,
         stationarity_cache: crate::ident::stretches::StationarityCache::default(),
         held_out_cache: crate::ident::holdout::HeldOutCache::default(),
+        usable_band_cache: crate::ident::band_cache::BandCache::default(),
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,
@@ -162,4 +163,35 @@ fn the_setting_reads_auto_or_two_numbers() {
     assert!(e.contains("band_hz") && e.contains("auto"), "{e}");
     assert_eq!(auto_limits(500.0), [0.1, 40.0]);
     assert_eq!(auto_limits(50.0), [0.1, 20.0]);
+}
+
+/// The auto band is found once per spectra (a retune asks again): the cached answer is the
+/// search's, with and without a usable band, and a given band is kept as given.
+#[test]
+fn the_auto_band_is_the_searchs_own_when_asked_again() {
+    use crate::block::Block;
+    use crate::ident::identify::resolve_band;
+    let sp = spectra(|f| {
+        if (15.0..=35.0).contains(&f) {
+            noise_for(0.97)
+        } else {
+            noise_for(0.5)
+        }
+    });
+    let limits = auto_limits(RATE);
+    let found = usable_band(&sp, limits).unwrap();
+    for _ in 0..2 {
+        assert_eq!(resolve_band(&sp, Block::Gyro, BandSetting::Auto).unwrap(), found);
+    }
+    assert_eq!(
+        resolve_band(&sp, Block::Gyro, BandSetting::Fixed([2.0, 9.0])).unwrap(),
+        [2.0, 9.0]
+    );
+    let none = spectra(|_| noise_for(0.6));
+    for _ in 0..2 {
+        assert!(matches!(
+            resolve_band(&none, Block::Accel, BandSetting::Auto),
+            Err(crate::ident::IdentError::NoUsableBand { .. })
+        ));
+    }
 }

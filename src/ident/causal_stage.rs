@@ -61,8 +61,9 @@ use crate::spectral::refine::refined;
 /// What the causal stage computed for one block's spectra.
 #[derive(Clone, Debug)]
 pub struct CausalStage {
-    /// `W0 = [S_xu D_u^-H]_+ D_u^-1` per one-sided bin (causal Wiener-Kolmogorov, Lambda = 0).
-    pub causal_wiener: Vec<Matrix3<Complex64>>,
+    /// `W0 = [S_xu D_u^-H]_+ D_u^-1` per one-sided bin (causal Wiener-Kolmogorov, Lambda = 0),
+    /// shared with the Wiener estimates made from it.
+    pub causal_wiener: std::sync::Arc<Vec<Matrix3<Complex64>>>,
     /// `D_u` on the whole two-sided grid of the causal stage (the spectra's, refined
     /// `input_refinement` times): the start of a refactorisation.
     pub input_factor: Vec<Matrix3<Complex64>>,
@@ -133,9 +134,11 @@ pub fn causal_stage(
     shift_lags(&mut g, lag);
     projector.causal_part(&mut g).map_err(factor_error)?;
     shift_lags(&mut g, -lag);
-    let causal_wiener = (0..spectra.frequency_hz.len())
-        .map(|k| g[k * input_refinement] * d_u_inv[k * input_refinement])
-        .collect();
+    let causal_wiener = std::sync::Arc::new(
+        (0..spectra.frequency_hz.len())
+            .map(|k| g[k * input_refinement] * d_u_inv[k * input_refinement])
+            .collect(),
+    );
     Ok(CausalStage {
         causal_wiener,
         input_refinement,

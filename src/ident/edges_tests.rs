@@ -9,7 +9,7 @@ use super::excitation::{MIN_EXCITATION, check_excitation, excitation};
 use super::factorisation::{FactorisationSettings, factorise, factorise_from};
 use super::settings::Estimate;
 use super::spectra::BlockSpectra;
-use super::warnings::{IdentWarning, Spectrum, block_warnings};
+use super::warnings::{IdentWarning, Spectrum, block_warnings, cached_block_warnings};
 use crate::block::Block;
 
 const BINS: usize = 65;
@@ -44,6 +44,7 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
         finer_stretches: None,
         stationarity_cache: crate::ident::stretches::StationarityCache::default(),
         held_out_cache: crate::ident::holdout::HeldOutCache::default(),
+        usable_band_cache: crate::ident::band_cache::BandCache::default(),
         sample_rate_hz: RATE,
         fft_len,
         segment_len: fft_len,
@@ -52,13 +53,13 @@ fn spectra(s_uu: impl Fn(usize) -> Matrix3<Complex64>, noise: f64) -> BlockSpect
 
 /// Every number of the factorisation stage is finite.
 fn all_finite(fact: &super::factorisation::Factorisation) -> bool {
-    let causal = fact.causal.as_ref().map(|c| &c.causal_wiener);
+    let causal = fact.causal.as_ref().map(|c| c.causal_wiener.as_slice());
     [
-        Some(&fact.h1),
+        Some(fact.h1.as_slice()),
         causal,
-        Some(&fact.s_uu_inv),
-        Some(&fact.noise_psd),
-        Some(&fact.shaping_filter),
+        Some(fact.s_uu_inv.as_slice()),
+        Some(fact.noise_psd.as_slice()),
+        Some(fact.shaping_filter.as_slice()),
     ]
     .iter()
     .flatten()
@@ -210,4 +211,44 @@ fn a_vanishing_residual_is_regularised_with_a_warning() {
         )),
         "{w:?}"
     );
+}
+
+/// The warnings of a retune come from counts cached per band: each band asked gives what
+/// `block_warnings` gives on it, also when asked again after another band, and a factorisation
+/// the causal stage was added to keeps them (they do not depend on it).
+#[test]
+fn cached_warnings_are_each_bands_own() {
+    let sp = spectra(
+        |k| diagonal([1.0, 1.0, if (20..24).contains(&k) { 1e-14 } else { 1.0 }]),
+        1e-2,
+    );
+    let settings = FactorisationSettings::default();
+    let h1 = factorise_from(&sp, &settings, None, Estimate::H1).unwrap();
+    let bands = [(1, BINS - 1), (1, 21), (30, BINS - 1), (1, BINS - 1)];
+    let check = |fact: &super::factorisation::Factorisation, estimate: Estimate| {
+        for (low, high) in bands {
+            let band: Vec<usize> = (low..=high).collect();
+            let band_hz = [sp.frequency_hz[low], sp.frequency_hz[high]];
+            let cached = cached_block_warnings(&sp, fact, band_hz, &band, estimate);
+            assert_eq!(
+                cached,
+                block_warnings(&sp, fact, &settings, &band, estimate),
+                "{low}-{high}"
+            );
+            let input_bins = cached.iter().find_map(|w| match w {
+                IdentWarning::Regularised {
+                    spectrum: Spectrum::Input,
+                    bins,
+                    ..
+                } => Some(*bins),
+                _ => None,
+            });
+            let expected = (low..=high).filter(|k| (20..24).contains(k)).count();
+            assert_eq!(input_bins.unwrap_or(0), expected, "{low}-{high}");
+        }
+    };
+    check(&h1, Estimate::H1);
+    // Added after the counts were cached: the causal estimate's warnings are still its own.
+    let causal = h1.with_causal_stage(super::causal_stage::causal_stage(&sp, &settings, None).unwrap());
+    check(&causal, Estimate::CausalWiener);
 }

@@ -74,8 +74,9 @@ impl Default for FactorisationSettings {
 /// Results of the factorisation stage, one-sided grid unless said otherwise.
 #[derive(Clone, Debug)]
 pub struct Factorisation {
-    /// `S_xu S_uu^-1` per bin (the unconstrained, non-causal estimate).
-    pub h1: Vec<Matrix3<Complex64>>,
+    /// `S_xu S_uu^-1` per bin (the unconstrained, non-causal estimate), shared with the Wiener
+    /// estimates made from it.
+    pub h1: Arc<Vec<Matrix3<Complex64>>>,
     /// `S_uu^-1` per bin (floored).
     pub s_uu_inv: Vec<Matrix3<Complex64>>,
     /// One-sided disturbance spectral density `S_psi`, output units^2/Hz.
@@ -103,6 +104,10 @@ pub struct Factorisation {
     /// The causal stage (`D_u`, `W0`), computed only when the causal estimate is asked for
     /// ([`factorise_from`]); shared between the factorisations it was added to.
     pub causal: Option<Arc<CausalStage>>,
+    /// The near-singular bins of `S_uu` and `S_psi` per band
+    /// ([`super::warnings::cached_block_warnings`]): they do not depend on the causal stage, so a
+    /// factorisation it is added to keeps them.
+    pub near_singular_cache: super::band_cache::BandCache<[usize; 2]>,
 }
 
 impl Factorisation {
@@ -137,13 +142,13 @@ impl Factorisation {
     /// # Errors
     /// [`FactorStageError::NoCausalStage`] for the causal estimate of a factorisation computed
     /// without its causal stage.
-    pub fn estimate(&self, estimate: Estimate) -> Result<&[Matrix3<Complex64>], IdentError> {
+    pub fn estimate(&self, estimate: Estimate) -> Result<&Arc<Vec<Matrix3<Complex64>>>, IdentError> {
         match estimate {
             Estimate::H1 => Ok(&self.h1),
             Estimate::CausalWiener => self
                 .causal
                 .as_deref()
-                .map(|c| c.causal_wiener.as_slice())
+                .map(|c| &c.causal_wiener)
                 .ok_or(IdentError::Factor(FactorStageError::NoCausalStage)),
         }
     }
@@ -196,12 +201,14 @@ pub fn factorise_from(
         let residual = eig.residual(&spectra.s_xx[k], &spectra.s_xu[k]);
         noise_psd.push(residual.ok_or_else(|| factor_error(NonFiniteResidual { bin: k }))?);
     }
-    let h1: Vec<Matrix3<Complex64>> = spectra
-        .s_xu
-        .iter()
-        .zip(&s_uu_inv)
-        .map(|(sxu, inv)| sxu * inv)
-        .collect();
+    let h1: Arc<Vec<Matrix3<Complex64>>> = Arc::new(
+        spectra
+            .s_xu
+            .iter()
+            .zip(&s_uu_inv)
+            .map(|(sxu, inv)| sxu * inv)
+            .collect(),
+    );
 
     // The disturbance's factorisation and the causal stage (the input's) are independent: one per
     // core when both are computed.
@@ -236,6 +243,7 @@ pub fn factorise_from(
         noise_from_scratch: !w_psi.from_start,
         noise_factor: Arc::new(w_psi.factor),
         causal,
+        near_singular_cache: super::band_cache::BandCache::default(),
     })
 }
 

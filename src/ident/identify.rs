@@ -21,7 +21,7 @@ use super::band_top::misfit_edge;
 use super::delay_scatter::delay_scatter;
 use super::even_gain::over_even_gain;
 use super::excitation::check_excitation;
-use super::factorisation::{Factorisation, FactorisationSettings};
+use super::factorisation::Factorisation;
 use super::gain_curvature::EvenGain;
 use super::holdout::{HeldOut, cached_held_out};
 use super::left_out_noise::{gain_shift, widen_for_left_out_noise};
@@ -34,7 +34,7 @@ use super::stretches::{Stationarity, cached_stationarity, widen};
 use super::structural::{
     OrderChoice, ResponseEstimate, StructuralFit, StructuralSettings, Weights, fit_structure, refit_structure,
 };
-use super::warnings::{IdentWarning, block_warnings};
+use super::warnings::{IdentWarning, cached_block_warnings};
 use super::wiener::{WienerEstimate, regularised_wiener};
 use super::witness_noise::{bias_estimate, widen_for_witness_noise};
 use crate::block::Block;
@@ -304,13 +304,7 @@ fn identify_excited(
         }
     }
     let (band_hz, wiener, band, structural) = fitted;
-    let mut warnings = block_warnings(
-        &spectra,
-        &factorisation,
-        &FactorisationSettings::default(),
-        &band,
-        settings.estimate,
-    );
+    let mut warnings = cached_block_warnings(&spectra, &factorisation, band_hz, &band, settings.estimate);
     warnings.extend(trimmed);
     let stationarity = cached_stationarity(&spectra, band_hz);
     // The gyro's own noise in the angle-noise model: its gains' deviations carry the bias that
@@ -420,7 +414,10 @@ pub fn resolve_band(spectra: &BlockSpectra, block: Block, band: BandSetting) -> 
         BandSetting::Fixed(given) => Ok(given),
         BandSetting::Auto => {
             let limits = auto_limits(spectra.sample_rate_hz);
-            usable_band(spectra, limits).ok_or_else(|| IdentError::NoUsableBand {
+            let found = spectra
+                .usable_band_cache
+                .get_or(limits, || usable_band(spectra, limits));
+            found.map(|band| *band).ok_or_else(|| IdentError::NoUsableBand {
                 block: block.name(),
                 low_hz: limits[0],
                 high_hz: limits[1],
@@ -491,7 +488,7 @@ pub fn structural_fit(
     let response: Vec<Matrix3<Complex64>> = band
         .iter()
         .zip(&g)
-        .map(|(&k, g)| wiener.w_u[k] / Complex64::from(*g))
+        .map(|(&k, g)| wiener.w_u(k) / Complex64::from(*g))
         .collect();
     let dof = (spectra.equivalent_averages - 3.0).max(1.0);
     let row_weight: Vec<[Matrix3<Complex64>; 3]> = band

@@ -100,7 +100,7 @@ pub fn band_bins(
                     spectra.fit_offset_hz(k, wiener.estimate).as_ref(),
                     spectra.aligned_s(),
                 ),
-                estimate: wiener.w_u[k],
+                estimate: wiener.w_u(k),
                 weights: row_weights(&spectra.s_uu[k], &noise[k], dof),
             }
         })

@@ -44,6 +44,8 @@ pub struct BlockSpectra {
     pub stationarity_cache: StationarityCache,
     /// The held-out figures for the last band asked ([`super::holdout::cached_held_out`]).
     pub held_out_cache: super::holdout::HeldOutCache,
+    /// The usable band found inside the auto limits asked ([`super::identify::resolve_band`]).
+    pub usable_band_cache: super::band_cache::BandCache<[f64; 2]>,
     /// Variance inflation from the correlation of neighbouring native bins ([`bin_correlation`]).
     pub bin_correlation: f64,
     /// Per native bin, the inputs' power centroid ([`crate::spectral::centroid`]), Hz: the
@@ -276,6 +278,7 @@ pub fn block_spectra(
         finer_stretches,
         stationarity_cache: StationarityCache::default(),
         held_out_cache: super::holdout::HeldOutCache::default(),
+        usable_band_cache: super::band_cache::BandCache::default(),
         frequency_hz: m.frequency_hz.clone(),
         s_uu,
         s_xu,

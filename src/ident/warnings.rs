@@ -668,8 +668,41 @@ pub fn block_warnings(
     band: &[usize],
     estimate: Estimate,
 ) -> Vec<IdentWarning> {
-    let causal = fact.causal_for(estimate);
-    let mut warnings = Vec::new();
+    let near_singular = near_singular_bins(spectra, fact, settings, band);
+    warnings_of(fact, settings, band.len(), near_singular, estimate)
+}
+
+/// [`block_warnings`] with the default settings over the native bins of `band_hz`, the
+/// near-singular counts cached in `fact` per band (they depend on the spectra, the residual and
+/// the band alone, so a retune, a change of A, Lambda or the order, reuses them).
+#[must_use]
+pub fn cached_block_warnings(
+    spectra: &BlockSpectra,
+    fact: &Factorisation,
+    band_hz: [f64; 2],
+    band: &[usize],
+    estimate: Estimate,
+) -> Vec<IdentWarning> {
+    let settings = FactorisationSettings::default();
+    let near_singular = fact
+        .near_singular_cache
+        .get_or(band_hz, || {
+            Some(near_singular_bins(spectra, fact, &settings, band))
+        })
+        .map_or_else(|| near_singular_bins(spectra, fact, &settings, band), |n| *n);
+    warnings_of(fact, &settings, band.len(), near_singular, estimate)
+}
+
+/// The bins of `band` where `S_uu` (first) and the residual `S_psi` (second) are near-singular:
+/// the smallest eigenvalue of the Hermitian part below the input floor, or below the residual's
+/// loading (at least the rounding of the outputs' power); a NaN eigenvalue counts.
+#[must_use]
+pub fn near_singular_bins(
+    spectra: &BlockSpectra,
+    fact: &Factorisation,
+    settings: &FactorisationSettings,
+    band: &[usize],
+) -> [usize; 2] {
     let near_singular = |s: &[Matrix3<Complex64>], floor: &dyn Fn(usize) -> f64| {
         band.iter()
             .filter(|&&k| {
@@ -691,15 +724,31 @@ pub fn block_warnings(
             .map_or(0.0, |m| (0..3).map(|i| m[(i, i)].re).fold(0.0, f64::max));
         loading.max(2.0 * super::explained::RESOLUTION * power)
     };
+    [
+        near_singular(&spectra.s_uu, &|_| floor),
+        near_singular(&fact.noise_psd, &residual_floor),
+    ]
+}
+
+/// The warnings of [`block_warnings`] from the near-singular counts over `band_bins` bins.
+fn warnings_of(
+    fact: &Factorisation,
+    settings: &FactorisationSettings,
+    band_bins: usize,
+    near_singular: [usize; 2],
+    estimate: Estimate,
+) -> Vec<IdentWarning> {
+    let causal = fact.causal_for(estimate);
+    let mut warnings = Vec::new();
     for (spectrum, bins, factor) in [
         (
             Spectrum::Input,
-            near_singular(&spectra.s_uu, &|_| floor),
+            near_singular[0],
             causal.map(|c| (c.input_factor_error, c.input_factor_converged)),
         ),
         (
             Spectrum::Residual,
-            near_singular(&fact.noise_psd, &residual_floor),
+            near_singular[1],
             Some((fact.noise_factor_error, fact.noise_factor_converged)),
         ),
     ] {
@@ -707,7 +756,7 @@ pub fn block_warnings(
             warnings.push(IdentWarning::Regularised {
                 spectrum,
                 bins,
-                band_bins: band.len(),
+                band_bins,
                 factor_error: factor.map(|(error, _)| error),
             });
         }

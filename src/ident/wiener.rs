@@ -52,9 +52,12 @@ pub struct WienerEstimate {
     pub lambda_auto: bool,
     /// The estimate regularised.
     pub estimate: Estimate,
-    /// `W_u` per bin.
+    /// `I - A^-1 Lambda`: `W_u = regularisation W` at every bin ([`Self::w_u`]).
     #[serde(skip)]
-    pub w_u: Vec<Matrix3<Complex64>>,
+    regularisation: Matrix3<f64>,
+    /// The estimate `W` per bin (the factorisation's `H1` or `W0`, shared).
+    #[serde(skip)]
+    unregularised: Arc<Vec<Matrix3<Complex64>>>,
     /// Standard deviation of each element of `W_u` per bin (complex magnitude): the
     /// factorisation's [`Factorisation::estimate_std`], shared.
     #[serde(skip)]
@@ -66,6 +69,25 @@ pub struct WienerEstimate {
     pub constraint_residual: f64,
     /// The same for `Lambda = 0`, for comparison.
     pub constraint_residual_unregularised: f64,
+}
+
+impl WienerEstimate {
+    /// `W_u` at bin `k` of the one-sided grid, `k < self.bins()`, computed when asked (a real
+    /// 3x3 product): the fit and the model read it at the band's native bins alone, and a retune
+    /// no longer fills the whole padded grid.
+    ///
+    /// # Panics
+    /// For `k` past the grid, as indexing does.
+    #[must_use]
+    pub fn w_u(&self, k: usize) -> Matrix3<Complex64> {
+        real_times(&self.regularisation, &self.unregularised[k])
+    }
+
+    /// Number of bins of the one-sided grid.
+    #[must_use]
+    pub fn bins(&self) -> usize {
+        self.unregularised.len()
+    }
 }
 
 /// Indices of the bins inside `[low, high]` Hz.
@@ -109,7 +131,6 @@ pub fn regularised_wiener(
         LambdaSetting::Auto => (solve_lambda(&e, &f, &a_inv)?, true),
     };
     let scale = Matrix3::identity() - a_inv * Matrix3::from_diagonal(&Vector3::from(values));
-    let w_u: Vec<Matrix3<Complex64>> = base.iter().map(|w| real_times(&scale, w)).collect();
     let den: f64 = band
         .iter()
         .map(|&k| weighted_square(weight_a, &spectra.s_xu[k]))
@@ -127,7 +148,8 @@ pub fn regularised_wiener(
         lambda: values,
         lambda_auto: auto,
         estimate,
-        w_u,
+        regularisation: scale,
+        unregularised: Arc::clone(base),
         w_u_std: Arc::clone(&fact.estimate_std),
         coherence: Arc::clone(&fact.coherence),
         constraint_residual: residual(values),

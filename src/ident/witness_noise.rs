@@ -149,6 +149,7 @@ pub(super) mod tests_support {
             finer_stretches: None,
             stationarity_cache: super::super::stretches::StationarityCache::default(),
             held_out_cache: super::super::holdout::HeldOutCache::default(),
+            usable_band_cache: super::super::band_cache::BandCache::default(),
             bin_correlation: 1.0,
             centroid_hz: Vec::new(),
             centroid_offset_hz: Vec::new(),

@@ -282,7 +282,7 @@ impl BlockModel {
             numerator: s.numerator.clone(),
             poles: s.poles.clone(),
             frequency_hz: band.iter().map(|&k| b.spectra.frequency_hz[k]).collect(),
-            w_u: ComplexArray::from_bins(band.iter().map(|&k| w.w_u[k])),
+            w_u: ComplexArray::from_bins(band.iter().map(|&k| w.w_u(k))),
             w_u_std: band
                 .iter()
                 .map(|&k| std::array::from_fn(|i| std::array::from_fn(|j| w.w_u_std[k][(i, j)])))

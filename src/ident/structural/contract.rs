@@ -153,23 +153,17 @@ pub(super) fn prepare(
     settings: &StructuralSettings,
 ) -> Result<model::Prepared, StructuralError> {
     validate(input)?;
-    check_tau_range(settings)?;
-    Ok(model::Prepared::new(input, rows))
-}
-
-/// Refuses a delay range that is not finite and ordered.
-pub(super) fn check_tau_range(settings: &StructuralSettings) -> Result<(), StructuralError> {
-    if settings.tau_min_s.is_finite()
+    // A delay range that is not finite and ordered is refused.
+    if !(settings.tau_min_s.is_finite()
         && settings.tau_max_s.is_finite()
-        && settings.tau_min_s < settings.tau_max_s
+        && settings.tau_min_s < settings.tau_max_s)
     {
-        Ok(())
-    } else {
-        Err(StructuralError::BadTauRange {
+        return Err(StructuralError::BadTauRange {
             tau_min_s: settings.tau_min_s,
             tau_max_s: settings.tau_max_s,
-        })
+        });
     }
+    Ok(model::Prepared::new(input, rows))
 }
 
 /// The highest order to fit for `order` on `n_bins` bins.

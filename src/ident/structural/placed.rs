@@ -203,13 +203,10 @@ impl Placed {
     /// # Errors
     /// Those of [`Self::new`].
     pub(super) fn again(
-        previous: Option<&Arc<Self>>,
+        previous: &Arc<Self>,
         input: &ResponseEstimate,
         settings: &StructuralSettings,
     ) -> Result<Arc<Self>, StructuralError> {
-        let Some(previous) = previous else {
-            return Self::new(input, settings);
-        };
         let same_settings = previous.settings.same(&PlacingSettings::of(settings));
         let same_weights = previous.input.same_weights(input.weights);
         if same_settings && same_weights && previous.input.same_estimate(input) {
@@ -345,7 +342,7 @@ mod tests {
         let c = case(3, 0.02);
         let settings = StructuralSettings::default();
         let first = Placed::new(&c.input(), &settings).unwrap();
-        let again = Placed::again(Some(&first), &c.input(), &settings).unwrap();
+        let again = Placed::again(&first, &c.input(), &settings).unwrap();
         assert!(Arc::ptr_eq(&first, &again));
         assert!(first.moved_tau_s.is_some_and(|t| (t - 0.0042).abs() < 1e-5));
         let own = row_weights(&c.input().weights).unwrap();
@@ -365,7 +362,7 @@ mod tests {
         for m in &mut changed.response {
             *m *= Complex64::from(0.998);
         }
-        let again = Placed::again(Some(&first), &changed.input(), &settings).unwrap();
+        let again = Placed::again(&first, &changed.input(), &settings).unwrap();
         let cold = Placed::new(&changed.input(), &settings).unwrap();
         assert!(!Arc::ptr_eq(&first, &again));
         assert!(Arc::ptr_eq(&first.rows, &again.rows), "the rows are reused");
@@ -442,7 +439,7 @@ mod tests {
             ),
         ];
         for (what, input, settings) in cases {
-            let again = Placed::again(Some(&first), &input, &settings).unwrap();
+            let again = Placed::again(&first, &input, &settings).unwrap();
             let cold = Placed::new(&input, &settings).unwrap();
             assert!(!Arc::ptr_eq(&first, &again), "{what}");
             assert_eq!(again.data.fingerprint(), cold.data.fingerprint(), "{what}");

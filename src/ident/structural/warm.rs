@@ -40,20 +40,17 @@ use super::{
 /// Every order's model as fitted, with what identifies the data they were fitted to.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FittedOrders {
-    /// Orders `0..`, normalised with `omega_ref`.
+    /// Orders `0..`, normalised with the placed data's `omega_ref` (the band's top, rad/s).
     models: Vec<Model>,
     /// Per order, its unstable fit set aside for the model kept (`rational::Fitted::preferred`).
     set_aside: Vec<Option<UnstableSetAside>>,
-    /// The band's top, rad/s, the models' normalisation.
-    omega_ref: f64,
-    /// Hash of the prepared data's bits.
-    fingerprint: u64,
     /// The settings of the fit.
     settings: Option<StructuralSettings>,
     /// Whether these models are what a fit from scratch gives on these data.
     from_scratch: bool,
-    /// What the fit made of its input before fitting (`super::placed`); `None` for a fit built
-    /// some other way.
+    /// What the fit made of its input before fitting (`super::placed`): the data the models were
+    /// fitted to (their normalisation and fingerprint); `None` for a fit built some other way,
+    /// which a refit cannot start from.
     placed: Option<Arc<Placed>>,
 }
 
@@ -69,8 +66,6 @@ impl FittedOrders {
         Self {
             models,
             set_aside,
-            omega_ref: placed.data.omega_ref,
-            fingerprint: placed.data.fingerprint(),
             settings: Some(*settings),
             from_scratch,
             placed: Some(placed),
@@ -103,10 +98,10 @@ impl FittedOrders {
         self.models.is_empty()
     }
 
-    /// The models rescaled to `omega_ref`: `den[m]` multiplies `sigma^(m + 1)` and `num[m]`
-    /// multiplies `sigma^m`, `sigma = s / omega_ref`.
-    fn rescaled(&self, omega_ref: f64) -> Vec<Model> {
-        let ratio = omega_ref / self.omega_ref;
+    /// The models, normalised with `from`, rescaled to `omega_ref`: `den[m]` multiplies
+    /// `sigma^(m + 1)` and `num[m]` multiplies `sigma^m`, `sigma = s / omega_ref`.
+    fn rescaled(&self, from: f64, omega_ref: f64) -> Vec<Model> {
+        let ratio = omega_ref / from;
         self.models.iter().map(|m| m.rescaled(ratio)).collect()
     }
 }
@@ -126,21 +121,26 @@ pub fn refit_structure(
 ) -> Result<StructuralFit, StructuralError> {
     super::validate(input)?;
     let kept = &previous.fitted;
-    if kept.is_empty() || !(kept.omega_ref.is_finite() && kept.omega_ref > 0.0) {
+    let Some(before) = kept
+        .placed
+        .as_ref()
+        .filter(|p| !kept.is_empty() && p.data.omega_ref.is_finite() && p.data.omega_ref > 0.0)
+    else {
         let placed = Placed::new(input, settings)?;
         let highest = super::highest_order(order, placed.data.bins())?;
         return super::finish(placed, highest, order, settings, Starts::Cold, true);
-    }
-    let placed = Placed::again(kept.placed.as_ref(), input, settings)?;
+    };
+    let placed = Placed::again(before, input, settings)?;
     let highest = super::highest_order(order, placed.data.bins())?;
     let same = kept.settings == Some(*settings)
-        && kept.omega_ref.to_bits() == placed.data.omega_ref.to_bits()
-        && kept.fingerprint == placed.data.fingerprint();
+        && (Arc::ptr_eq(before, &placed)
+            || before.data.omega_ref.to_bits() == placed.data.omega_ref.to_bits()
+                && before.data.fingerprint() == placed.data.fingerprint());
     if same {
         let starts = Starts::Same(&kept.models, &kept.set_aside);
         return super::finish(placed, highest, order, settings, starts, kept.from_scratch);
     }
-    let near = kept.rescaled(placed.data.omega_ref);
+    let near = kept.rescaled(before.data.omega_ref, placed.data.omega_ref);
     super::finish(placed, highest, order, settings, Starts::Near(&near), false)
 }
 
@@ -171,13 +171,11 @@ mod tests {
         let kept = FittedOrders {
             models: vec![model],
             set_aside: vec![None],
-            omega_ref: 250.0,
-            fingerprint: 0,
             settings: None,
             from_scratch: true,
             placed: None,
         };
-        let rescaled = &kept.rescaled(180.0)[0];
+        let rescaled = &kept.rescaled(250.0, 180.0)[0];
         assert_eq!(
             rescaled.tau.to_bits(),
             0.002_f64.to_bits(),

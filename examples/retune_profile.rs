@@ -13,15 +13,18 @@ use imu_attest::run::{LoadOptions, load};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = PathBuf::from(args.next().ok_or("usage: retune_profile RUN.csv [COUNT]")?);
+    let path = PathBuf::from(args.next().ok_or("usage: retune_profile RUN.csv [COUNT] [LAMBDA_STEP]")?);
     let count: usize = args.next().map_or(Ok(200), |s| s.parse())?.max(1);
+    // The Lambda step between retunes: `bench`'s is 0.005 (its nine retunes 0.005 apart); the
+    // steps cycle over nine values so that every retune moves Lambda by about as much.
+    let step: f64 = args.next().map_or(Ok(1e-4), |s| s.parse())?;
     let run = load(&path, &LoadOptions::default())?;
     let settings = Settings::default().for_run(&run);
     let mut session = Session::new(Arc::new(run));
     session.identify(&settings, Start::Cold, &mut |_| {})?;
     let mut times = Vec::with_capacity(count);
     for i in 1..=count {
-        let l = 0.005 + 1e-4 * i as f64;
+        let l = 0.005 + step * (i % 9) as f64 + 1e-9 * i as f64;
         let s = Settings {
             lambda: LambdaSetting::Values([l, 0.5 * l, 0.25 * l]),
             ..settings.clone()

@@ -13,7 +13,10 @@ use imu_attest::run::{LoadOptions, load};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = PathBuf::from(args.next().ok_or("usage: retune_profile RUN.csv [COUNT] [LAMBDA_STEP]")?);
+    let path = PathBuf::from(
+        args.next()
+            .ok_or("usage: retune_profile RUN.csv [COUNT] [LAMBDA_STEP]")?,
+    );
     let count: usize = args.next().map_or(Ok(200), |s| s.parse())?.max(1);
     // The Lambda step between retunes: `bench`'s is 0.005 (its nine retunes 0.005 apart); the
     // steps cycle over nine values so that every retune moves Lambda by about as much.

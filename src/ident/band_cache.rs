@@ -1,9 +1,12 @@
-//! A value derived from a block's spectra for one band, kept with the spectra for the last
-//! [`BANDS_KEPT`] bands asked: it does not depend on A, Lambda or the order, so a retune reuses
-//! it. More than one band because one identification may ask for two (the usable band, then the
-//! band ended at a misfit at its top, `super::band_top`): with one entry each would evict the
+//! A value derived from a block's spectra (or their factorisation) for one band, kept with them
+//! for the last [`BANDS_KEPT`] bands asked: it does not depend on A, Lambda or the order, so a
+//! retune reuses it. Kept with the spectra: the stretches' fits, the held-out figures, the usable
+//! band (keyed by the auto search's limits); with the factorisation: the warnings' near-singular
+//! counts. More than one band because one identification may ask for two (the usable band, then
+//! the band ended at a misfit at its top, `super::band_top`): with one entry each would evict the
 //! other, and every retune would recompute both. The key is the band's exact bits; a poisoned
-//! lock is a miss (the value is recomputed, never lost to a panic).
+//! lock is a miss (the value is recomputed, never lost to a panic). A copy of the spectra or the
+//! factorisation carries its caches: one whose data are then changed needs empty ones.
 
 use std::sync::{Arc, Mutex};
 

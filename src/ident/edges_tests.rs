@@ -215,7 +215,8 @@ fn a_vanishing_residual_is_regularised_with_a_warning() {
 
 /// The warnings of a retune come from counts cached per band: each band asked gives what
 /// `block_warnings` gives on it, also when asked again after another band, and a factorisation
-/// the causal stage was added to keeps them (they do not depend on it).
+/// the causal stage was added to after the counts were cached (it carries them) still gives its
+/// own estimate's warnings.
 #[test]
 fn cached_warnings_are_each_bands_own() {
     let sp = spectra(
@@ -229,7 +230,7 @@ fn cached_warnings_are_each_bands_own() {
         for (low, high) in bands {
             let band: Vec<usize> = (low..=high).collect();
             let band_hz = [sp.frequency_hz[low], sp.frequency_hz[high]];
-            let cached = cached_block_warnings(&sp, fact, band_hz, &band, estimate);
+            let cached = cached_block_warnings(&sp, fact, band_hz, estimate);
             assert_eq!(
                 cached,
                 block_warnings(&sp, fact, &settings, &band, estimate),

@@ -104,10 +104,11 @@ pub struct Factorisation {
     /// The causal stage (`D_u`, `W0`), computed only when the causal estimate is asked for
     /// ([`factorise_from`]); shared between the factorisations it was added to.
     pub causal: Option<Arc<CausalStage>>,
-    /// The near-singular bins of `S_uu` and `S_psi` per band
+    /// The near-singular bins of `S_uu` and `S_psi` and the band's size, per band
     /// ([`super::warnings::cached_block_warnings`]): they do not depend on the causal stage, so a
-    /// factorisation it is added to keeps them.
-    pub near_singular_cache: super::band_cache::BandCache<[usize; 2]>,
+    /// factorisation it is added to keeps them. A copy whose `noise_psd` (or whose spectra) is
+    /// then changed must be given an empty cache (`BandCache::default()`).
+    pub near_singular_cache: super::band_cache::BandCache<[usize; 3]>,
 }
 
 impl Factorisation {

@@ -166,6 +166,11 @@ fn the_h1_estimate_meets_the_constraint_and_lambda_shrinks_it() {
     let auto = regularised_wiener(&sp, &fact, Estimate::H1, &a, LambdaSetting::Auto, [1.0, 80.0]).unwrap();
     assert!(auto.constraint_residual < 1e-12, "{}", auto.constraint_residual);
     assert!(auto.lambda.iter().all(|l| l.abs() < 1e-12), "{:?}", auto.lambda);
+    assert_eq!(
+        auto.bins(),
+        sp.frequency_hz.len(),
+        "W_u on the whole one-sided grid"
+    );
     // The same bins by a direct solve (a naive reference: S_uu^-1 by nalgebra's LU).
     let band = band_bins(&sp.frequency_hz, [1.0, 80.0]);
     for &b in &band {
@@ -268,12 +273,12 @@ fn refactorising_after_an_overlap_change_starts_from_the_previous_factors() {
     assert!(moved > 1e-4, "{moved:e}");
 }
 
-/// The causal stage [`factorise`] computed.
 /// `W_u` at every bin of the grid.
 fn every_bin(w: &WienerEstimate) -> Vec<Matrix3<Complex64>> {
     (0..w.bins()).map(|k| w.w_u(k)).collect()
 }
 
+/// The causal stage [`factorise`] computed.
 fn causal(f: &Factorisation) -> &CausalStage {
     f.causal.as_deref().expect("factorise computes the causal stage")
 }

@@ -304,7 +304,7 @@ fn identify_excited(
         }
     }
     let (band_hz, wiener, band, structural) = fitted;
-    let mut warnings = cached_block_warnings(&spectra, &factorisation, band_hz, &band, settings.estimate);
+    let mut warnings = cached_block_warnings(&spectra, &factorisation, band_hz, settings.estimate);
     warnings.extend(trimmed);
     let stationarity = cached_stationarity(&spectra, band_hz);
     // The gyro's own noise in the angle-noise model: its gains' deviations carry the bias that

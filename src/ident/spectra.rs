@@ -45,6 +45,8 @@ pub struct BlockSpectra {
     /// The held-out figures for the last band asked ([`super::holdout::cached_held_out`]).
     pub held_out_cache: super::holdout::HeldOutCache,
     /// The usable band found inside the auto limits asked ([`super::identify::resolve_band`]).
+    /// This and the two caches above belong to these spectra: a copy whose spectral matrices are
+    /// then changed must be given empty ones (`Default::default()`).
     pub usable_band_cache: super::band_cache::BandCache<[f64; 2]>,
     /// Variance inflation from the correlation of neighbouring native bins ([`bin_correlation`]).
     pub bin_correlation: f64,

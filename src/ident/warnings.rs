@@ -672,25 +672,29 @@ pub fn block_warnings(
     warnings_of(fact, settings, band.len(), near_singular, estimate)
 }
 
-/// [`block_warnings`] with the default settings over the native bins of `band_hz`, the
-/// near-singular counts cached in `fact` per band (they depend on the spectra, the residual and
-/// the band alone, so a retune, a change of A, Lambda or the order, reuses them).
+/// [`block_warnings`] with the default settings over the native bins of `band_hz`
+/// ([`super::band::native_bins`]), the near-singular counts and the band's size cached in `fact`
+/// per band (they depend on the spectra, the residual and the band alone, so a retune, a change
+/// of A, Lambda or the order, reuses them; the band's bins are found here, so the key is all the
+/// counts depend on).
 #[must_use]
 pub fn cached_block_warnings(
     spectra: &BlockSpectra,
     fact: &Factorisation,
     band_hz: [f64; 2],
-    band: &[usize],
     estimate: Estimate,
 ) -> Vec<IdentWarning> {
     let settings = FactorisationSettings::default();
-    let near_singular = fact
+    let counts = || {
+        let band = super::band::native_bins(spectra, band_hz);
+        let [input, residual] = near_singular_bins(spectra, fact, &settings, &band);
+        [input, residual, band.len()]
+    };
+    let [input, residual, band_bins] = fact
         .near_singular_cache
-        .get_or(band_hz, || {
-            Some(near_singular_bins(spectra, fact, &settings, band))
-        })
-        .map_or_else(|| near_singular_bins(spectra, fact, &settings, band), |n| *n);
-    warnings_of(fact, &settings, band.len(), near_singular, estimate)
+        .get_or(band_hz, || Some(counts()))
+        .map_or_else(counts, |c| *c);
+    warnings_of(fact, &settings, band_bins, [input, residual], estimate)
 }
 
 /// The bins of `band` where `S_uu` (first) and the residual `S_psi` (second) are near-singular:

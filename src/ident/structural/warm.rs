@@ -108,8 +108,8 @@ impl FittedOrders {
 
 /// [`fit_structure`](super::fit_structure), starting from `previous` (see the module docs):
 /// instant for a change of the order choice alone, a few refinement steps per order for nearby
-/// data. A `previous` without kept models (or with a different band size in the rational
-/// orders' parameters) is no help and the fit runs cold.
+/// data. A `previous` without kept models or without their placing (or with a different band
+/// size in the rational orders' parameters) is no help and the fit runs cold.
 ///
 /// # Errors
 /// Those of [`fit_structure`](super::fit_structure), for the same reasons.

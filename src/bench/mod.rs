@@ -72,6 +72,9 @@ pub struct Stage<'a> {
     pub name: &'static str,
     /// How many times it runs; the median time is reported (at least 1).
     pub repeats: usize,
+    /// Whether it runs once more, untimed, before the timed repeats: a retune follows an
+    /// identification in the app, and the session's first retune is that identification.
+    pub warm_up: bool,
     /// The work.
     pub run: StageFn<'a>,
 }
@@ -82,6 +85,7 @@ impl<'a> Stage<'a> {
         Self {
             name,
             repeats: 1,
+            warm_up: false,
             run: Box::new(run),
         }
     }
@@ -95,7 +99,17 @@ impl<'a> Stage<'a> {
         Self {
             name,
             repeats: repeats.max(1),
+            warm_up: false,
             run: Box::new(run),
+        }
+    }
+
+    /// This stage, run once untimed before its timed repeats.
+    #[must_use]
+    pub fn after_warm_up(self) -> Self {
+        Self {
+            warm_up: true,
+            ..self
         }
     }
 }
@@ -105,6 +119,7 @@ impl std::fmt::Debug for Stage<'_> {
         f.debug_struct("Stage")
             .field("name", &self.name)
             .field("repeats", &self.repeats)
+            .field("warm_up", &self.warm_up)
             .finish_non_exhaustive()
     }
 }
@@ -121,6 +136,9 @@ pub fn time_stages(
     let mut times = Vec::with_capacity(stages.len());
     for mut stage in stages {
         on_stage(stage.name);
+        if stage.warm_up {
+            (stage.run)(state)?;
+        }
         let mut samples = Vec::with_capacity(stage.repeats);
         let cpu_start = cpu::process_cpu_s();
         for _ in 0..stage.repeats {
@@ -222,6 +240,20 @@ mod tests {
         assert_eq!(seen, vec!["count"]);
         assert_eq!(times[0].repeats, 3);
         assert!(times[0].seconds >= 0.0);
+        // A warm-up runs once more, untimed: four calls, three samples, the slow first call not
+        // among them.
+        let mut calls = 0;
+        let slow_first = Stage::repeated("warmed", 3, |_| {
+            calls += 1;
+            if calls == 1 {
+                std::thread::sleep(std::time::Duration::from_millis(300));
+            }
+            Ok(())
+        })
+        .after_warm_up();
+        let warmed = time_stages(&mut state, vec![slow_first], &mut |_| {}).unwrap();
+        assert_eq!((calls, warmed[0].repeats), (4, 3));
+        assert!(warmed[0].seconds < 0.15, "{}", warmed[0].seconds);
         let err = time_stages(&mut state, standard_stages().split_off(1), &mut |_| {}).unwrap_err();
         assert!(
             matches!(

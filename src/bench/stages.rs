@@ -10,7 +10,7 @@
 //! | `factorisation` | the factorisation stage of every block (the blocks in parallel) |
 //! | `identify` | the regularised Wiener estimate `W_u` (A, Lambda) of every block |
 //! | `structural_fit` | the structural fit (order) of every block |
-//! | `retune` | a change of Lambda, as the app does it: Wiener and structural fit of every block from cached spectra and factorisation, the fit starting from the previous one ([`Session::identify`] with [`Start::Warm`]), median of [`RETUNES`] successive changes |
+//! | `retune` | a change of Lambda, as the app does it: Wiener and structural fit of every block from cached spectra and factorisation, the fit starting from the previous one ([`Session::identify`] with [`Start::Warm`]), median of [`RETUNES`] successive changes after one untimed (the session's first identification, from scratch, as the app's on opening) |
 //! | `retune_order` | a change of the model order (cycling through `0..=4` and `auto`) on unchanged data, from the previous fit |
 //! | `retune_cold` | `retune` with the structural fit from scratch (what `identify` does) |
 //! | `retune_order0` | `retune_cold` with the order fixed at 0 (`K e^(-tau s)`) instead of the settings' order |
@@ -349,7 +349,7 @@ pub fn standard_stages() -> Vec<Stage<'static>> {
         Stage::once("factorisation", factorisation_stage),
         Stage::once("identify", identify_stage),
         Stage::once("structural_fit", structural_stage),
-        Stage::repeated("retune", RETUNES, retune_stage),
+        Stage::repeated("retune", RETUNES, retune_stage).after_warm_up(),
         Stage::repeated("retune_order", RETUNES, retune_order_stage),
         Stage::repeated("retune_cold", RETUNES, retune_cold_stage),
         Stage::repeated("retune_order0", RETUNES, retune_order0_stage),

@@ -20,6 +20,7 @@ pub mod even_gain;
 pub mod excitation;
 pub mod explained;
 pub mod factorisation;
+pub mod factorisation_warnings;
 pub mod gain_curvature;
 pub mod gain_pattern;
 pub mod holdout;

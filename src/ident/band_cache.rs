@@ -38,21 +38,43 @@ impl<T> BandCache<T> {
     /// `compute()` (kept for the next calls, the oldest band dropped).
     pub fn get_or(&self, band_hz: [f64; 2], compute: impl FnOnce() -> Option<T>) -> Option<Arc<T>> {
         let key = band_hz.map(f64::to_bits);
-        if let Ok(mut guard) = self.0.lock()
-            && let Some(i) = guard.iter().position(|(k, _)| *k == key)
-        {
-            let entry = guard.remove(i);
-            let value = entry.1.clone();
-            guard.insert(0, entry);
+        if let Some(value) = self.hit(key) {
             return value;
         }
         let value = compute().map(Arc::new);
+        self.keep(key, value.clone());
+        value
+    }
+
+    /// [`Self::get_or`] for a value that can always be computed: a band cached as "nothing"
+    /// (by `get_or`) is computed again.
+    pub fn get_or_insert_with(&self, band_hz: [f64; 2], compute: impl FnOnce() -> T) -> Arc<T> {
+        let key = band_hz.map(f64::to_bits);
+        if let Some(Some(value)) = self.hit(key) {
+            return value;
+        }
+        let value = Arc::new(compute());
+        self.keep(key, Some(Arc::clone(&value)));
+        value
+    }
+
+    /// The entry for `key`, moved to the front; `None` on a miss or a poisoned lock.
+    fn hit(&self, key: [u64; 2]) -> Option<Option<Arc<T>>> {
+        let mut guard = self.0.lock().ok()?;
+        let i = guard.iter().position(|(k, _)| *k == key)?;
+        let entry = guard.remove(i);
+        let value = entry.1.clone();
+        guard.insert(0, entry);
+        Some(value)
+    }
+
+    /// Keeps `value` for `key` in front, the oldest band dropped past [`BANDS_KEPT`].
+    fn keep(&self, key: [u64; 2], value: Option<Arc<T>>) {
         if let Ok(mut guard) = self.0.lock() {
             guard.retain(|(k, _)| *k != key);
-            guard.insert(0, (key, value.clone()));
+            guard.insert(0, (key, value));
             guard.truncate(BANDS_KEPT);
         }
-        value
     }
 }
 
@@ -88,5 +110,23 @@ mod tests {
         }
         assert_eq!(calls.get(), 2 + super::BANDS_KEPT);
         assert_eq!(cache.get_or([0.1, 10.0], || compute(8.0)).as_deref(), Some(&8.0));
+    }
+
+    #[test]
+    fn an_always_computed_value_is_computed_once_and_replaces_nothing() {
+        let cache = BandCache::<usize>::default();
+        let calls = Cell::new(0);
+        let compute = |v: usize| {
+            calls.set(calls.get() + 1);
+            v
+        };
+        assert_eq!(*cache.get_or_insert_with([0.1, 10.0], || compute(1)), 1);
+        assert_eq!(*cache.get_or_insert_with([0.1, 10.0], || compute(2)), 1);
+        assert_eq!(calls.get(), 1, "the same band is not recomputed");
+        // A band kept as "nothing" by get_or is computed when a value is required.
+        assert_eq!(cache.get_or([0.2, 5.0], || None), None);
+        assert_eq!(*cache.get_or_insert_with([0.2, 5.0], || compute(3)), 3);
+        assert_eq!(cache.get_or([0.2, 5.0], || Some(4)).as_deref(), Some(&3));
+        assert_eq!(calls.get(), 2);
     }
 }

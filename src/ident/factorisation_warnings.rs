@@ -51,15 +51,11 @@ pub fn cached_block_warnings(
     estimate: Estimate,
 ) -> Vec<IdentWarning> {
     let settings = FactorisationSettings::default();
-    let counts = || {
+    let [input, residual, band_bins] = *fact.near_singular_cache.get_or_insert_with(band_hz, || {
         let band = super::band::native_bins(spectra, band_hz);
         let [input, residual] = near_singular_bins(spectra, fact, &settings, &band);
         [input, residual, band.len()]
-    };
-    let [input, residual, band_bins] = fact
-        .near_singular_cache
-        .get_or(band_hz, || Some(counts()))
-        .map_or_else(counts, |c| *c);
+    });
     warnings_of(fact, &settings, band_bins, [input, residual], estimate)
 }
 

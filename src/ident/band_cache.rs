@@ -38,7 +38,7 @@ impl<T> BandCache<T> {
     /// `compute()` (kept for the next calls, the oldest band dropped).
     pub fn get_or(&self, band_hz: [f64; 2], compute: impl FnOnce() -> Option<T>) -> Option<Arc<T>> {
         let key = band_hz.map(f64::to_bits);
-        if let Some(value) = self.hit(key) {
+        if let Lookup::Found(value) = self.hit(key) {
             return value;
         }
         let value = compute().map(Arc::new);
@@ -50,7 +50,7 @@ impl<T> BandCache<T> {
     /// (by `get_or`) is computed again.
     pub fn get_or_insert_with(&self, band_hz: [f64; 2], compute: impl FnOnce() -> T) -> Arc<T> {
         let key = band_hz.map(f64::to_bits);
-        if let Some(Some(value)) = self.hit(key) {
+        if let Lookup::Found(Some(value)) = self.hit(key) {
             return value;
         }
         let value = Arc::new(compute());
@@ -58,14 +58,18 @@ impl<T> BandCache<T> {
         value
     }
 
-    /// The entry for `key`, moved to the front; `None` on a miss or a poisoned lock.
-    fn hit(&self, key: [u64; 2]) -> Option<Option<Arc<T>>> {
-        let mut guard = self.0.lock().ok()?;
-        let i = guard.iter().position(|(k, _)| *k == key)?;
+    /// The entry for `key`, moved to the front; a miss on a band not kept or a poisoned lock.
+    fn hit(&self, key: [u64; 2]) -> Lookup<T> {
+        let Ok(mut guard) = self.0.lock() else {
+            return Lookup::Miss;
+        };
+        let Some(i) = guard.iter().position(|(k, _)| *k == key) else {
+            return Lookup::Miss;
+        };
         let entry = guard.remove(i);
         let value = entry.1.clone();
         guard.insert(0, entry);
-        Some(value)
+        Lookup::Found(value)
     }
 
     /// Keeps `value` for `key` in front, the oldest band dropped past [`BANDS_KEPT`].
@@ -76,6 +80,12 @@ impl<T> BandCache<T> {
             guard.truncate(BANDS_KEPT);
         }
     }
+}
+
+/// What the cache holds for a band: not kept (a miss), or kept, as a value or as "nothing".
+enum Lookup<T> {
+    Miss,
+    Found(Option<Arc<T>>),
 }
 
 #[cfg(test)]

@@ -15,6 +15,7 @@ mod binary;
 mod common;
 
 mod accept_effects;
+mod accept_judged;
 mod angle_noise_declared;
 mod cli_bad_input;
 mod cli_batch;

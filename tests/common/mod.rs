@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests: the spectral ones here, the others in their own
-//! modules (`sim` simulated runs, `real` the real recordings, `loader` CSV texts, `poles` a warning
-//! read, `gui` the app's harness).
+//! modules (`accept` models with accepted effects, `sim` simulated runs, `real` the real
+//! recordings, `loader` CSV texts, `poles` a warning read, `gui` the app's harness).
 
+pub mod accept;
 #[cfg(feature = "gui")]
 pub mod gui;
 pub mod loader;

@@ -1,5 +1,5 @@
 use super::glitch::{Glitch, find_glitches};
-use super::hold::{find_clipping, find_held};
+use super::hold::{HELD_RUN, find_clipping, find_held};
 use super::*;
 use crate::rng::Rng;
 
@@ -185,4 +185,39 @@ fn held_or_clipped_channels_are_no_witness_and_a_gyros_words_say_so() {
         "results using gy are unreliable; the gyro is then no witness of the angles' noise, taken white for every block"
     ));
     assert!(words(Channel::Ay).ends_with("results using ay are unreliable"));
+}
+
+/// A quantised angle turning every two seconds (0.25 Hz, 0.1 rad, quantum 2e-5, noise 3e-6 rad,
+/// 400 Hz, as a slow stand's encoder) stays within one quantum for several samples at each turn and
+/// then steps by one: runs of 5 and more repeats by chance, not held samples. A logger holding
+/// the same channel for 6 samples where it moves is still found.
+#[test]
+fn runs_of_repeats_at_the_motion_s_turns_are_chance() {
+    let q = 2e-5;
+    let mut rng = Rng::new(21);
+    let turning: Vec<f64> = (0..48_000)
+        .map(|i| {
+            let t = f64::from(i) / 400.0;
+            ((0.1 * (0.5 * std::f64::consts::PI * t).sin() + 3e-6 * rng.normal()) / q).round() * q
+        })
+        .collect();
+    let mut run = 0;
+    let mut longest = 0;
+    for w in turning.windows(2) {
+        run = if w[0].to_bits() == w[1].to_bits() {
+            run + 1
+        } else {
+            0
+        };
+        longest = longest.max(run);
+    }
+    assert!(longest >= HELD_RUN, "the case: runs of {longest}");
+    assert_eq!(find_held(&turning, &[]), None);
+    // Held where the channel moves (a quarter period from a turn): the release steps by the run.
+    let mut held = turning.clone();
+    for i in 10_101..10_107 {
+        held[i] = held[10_100];
+    }
+    let h = find_held(&held, &[]).expect("a held run where the channel moves");
+    assert!(h.longest >= 6, "{h:?}");
 }
